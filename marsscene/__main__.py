@@ -1,0 +1,5 @@
+"""``python -m marsscene`` runs the command line."""
+
+from marsscene.cli import main
+
+main()

@@ -1,0 +1,56 @@
+"""The ``marsscene`` command line (click; this subpackage is the only importer of click).
+
+Commands are thin: they parse options into a :class:`~marsscene.SceneConfig` and call one
+library function. Library errors (:class:`~marsscene.MarsSceneError`) become one-line messages
+with exit code 1; bad option values exit with code 2 (click's usage errors).
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+
+import click
+
+from marsscene._version import __version__
+
+__all__ = ["main"]
+
+
+class _StderrFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        return f"marsscene: {record.getMessage()}"
+
+
+def configure_logging(verbosity: int) -> None:
+    """Attach a stderr handler to the ``marsscene`` logger (the library adds only NullHandler)."""
+    level = logging.WARNING if verbosity < 0 else logging.INFO if verbosity == 0 else logging.DEBUG
+    logger = logging.getLogger("marsscene")
+    for h in list(logger.handlers):
+        if getattr(h, "_marsscene_cli", False):
+            logger.removeHandler(h)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(_StderrFormatter())
+    handler._marsscene_cli = True  # type: ignore[attr-defined]
+    logger.addHandler(handler)
+    logger.setLevel(level)
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="marsscene")
+@click.option("-v", "--verbose", count=True, help="More output (repeatable).")
+@click.option("-q", "--quiet", count=True, help="Less output (warnings and errors only).")
+def main(verbose: int, quiet: int) -> None:
+    """Author seeded, reproducible Mars worlds (USD + MuJoCo MJCF)."""
+    configure_logging(verbose - quiet)
+
+
+def _register() -> None:
+    from marsscene.cli.build import build
+    from marsscene.cli.info import info
+
+    main.add_command(build)
+    main.add_command(info)
+
+
+_register()

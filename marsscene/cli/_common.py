@@ -1,0 +1,35 @@
+"""Helpers shared by the commands."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any, TypeVar
+
+import click
+
+from marsscene.errors import MarsSceneError
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+@contextmanager
+def user_errors() -> Iterator[None]:
+    """Turn library errors into one-line click errors (exit 1, no traceback)."""
+    try:
+        yield
+    except MarsSceneError as err:
+        raise click.ClickException(str(err)) from err
+    except MemoryError as err:
+        raise click.ClickException(f"out of memory: {err}") from err
+
+
+def compose(*decorators: Callable[[F], F]) -> Callable[[F], F]:
+    """Apply several click option decorators in order."""
+
+    def wrap(func: F) -> F:
+        for dec in reversed(decorators):
+            func = dec(func)
+        return func
+
+    return wrap

@@ -1,0 +1,85 @@
+"""``marsscene build``: DEM or procedural terrain -> craters -> rocks -> lighting -> USD + MJCF."""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from pathlib import Path
+from typing import Any
+
+import click
+
+from marsscene.cli import options_dem, options_lighting
+from marsscene.cli._common import user_errors
+
+log = logging.getLogger("marsscene")
+
+_FORMATS = ("usda", "usdc", "usdz", "mjcf")
+
+
+def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[str, ...]) -> Any:
+    terrain = cfg.terrain
+    if dem is not None and procedural:
+        raise click.UsageError("--dem and --procedural are mutually exclusive")
+    if dem is not None:
+        terrain = dataclasses.replace(terrain, source="dem", dem_path=str(dem))
+    elif procedural:
+        terrain = dataclasses.replace(terrain, source="procedural", dem_path=None)
+    export = cfg.export
+    if formats:
+        usd = [f for f in formats if f != "mjcf"]
+        if len(set(usd)) > 1:
+            raise click.UsageError(f"give at most one USD encoding; got {usd}")
+        kinds = (["usd"] if usd else []) + (["mjcf"] if "mjcf" in formats else [])
+        export = dataclasses.replace(
+            export, formats=tuple(kinds), usd_format=usd[0] if usd else export.usd_format
+        )
+    return cfg.replace(terrain=terrain, export=export)
+
+
+@click.command(short_help="Build a Mars scene (USD + MJCF + manifest).")
+@click.option("--dem", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="DEM: PDS3 .IMG/.LBL, ISIS3 .cub or GeoTIFF. Default: bundled Gale crater DEM.")
+@click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False,
+              path_type=Path), help="TOML scene config; command-line options override it.")
+@click.option("--seed", type=click.IntRange(min=0), default=None,
+              help="Random seed (default: config's seed, else 0).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("scenes/default"), show_default=True, help="Output folder.")
+@click.option("--format", "formats", type=click.Choice(_FORMATS), multiple=True,
+              help="Output(s); repeatable. Default: usda and mjcf.")
+@click.option("--procedural", is_flag=True, help="Synthesise terrain instead of reading a DEM.")
+@options_dem.options
+@options_lighting.options
+def build(
+    dem: Path | None,
+    config_path: Path | None,
+    seed: int | None,
+    out_dir: Path,
+    formats: tuple[str, ...],
+    procedural: bool,
+    **stage_options: Any,
+) -> None:
+    """Build a scene and write OUT/scene.usda, OUT/mjcf/scene.xml and OUT/manifest.json.
+
+    \b
+    Examples:
+      marsscene build --seed 7 --out scenes/demo
+      marsscene build --dem jezero.img --seed 7
+      marsscene build --procedural --format usdc --format mjcf
+    """
+    from marsscene import SceneConfig, build_scene, write_scene
+
+    with user_errors():
+        cfg = SceneConfig.from_toml(config_path) if config_path else SceneConfig()
+        cfg = _apply_core(cfg, dem=dem, procedural=procedural, formats=formats)
+        cfg = options_dem.apply(cfg, stage_options)
+        cfg = options_lighting.apply(cfg, stage_options)
+        use_seed = seed if seed is not None else (cfg.seed if cfg.seed is not None else 0)
+        scene = build_scene(cfg, seed=use_seed)
+        log.info("[export] writing %s", ", ".join(cfg.export.formats))
+        written = write_scene(scene, out_dir)
+    for kind, paths in written.items():
+        for p in paths:
+            if p.name in ("scene.usda", "scene.usdc", "scene.usdz", "scene.xml", "manifest.json"):
+                click.echo(f"{kind:>8}: {p}")

@@ -1,0 +1,100 @@
+"""``SceneConfig``: the frozen configuration of a whole build, one table per stage.
+
+TOML layout::
+
+    seed = 7
+    [terrain]   source = "default" | "procedural" | "dem", dem_path, size_m, post_m, hurst, ...
+    [craters]   enabled = true, ...
+    [rocks]     enabled = true, ...
+    [lighting]  enabled = true, ...
+    [export]    formats = ["usd", "mjcf"], usd_format = "usda"
+
+Unknown keys and out-of-range values raise :class:`~marsscene.errors.ConfigError` naming the
+key, the value and the allowed range.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from marsscene._validate import dataclass_from_mapping
+from marsscene.craters.config import CraterConfig
+from marsscene.errors import ConfigError
+from marsscene.export.config import ExportConfig
+from marsscene.lighting.config import LightingConfig
+from marsscene.rocks.config import RockConfig
+from marsscene.terrain.config import TerrainConfig
+
+__all__ = ["SceneConfig"]
+
+
+def _jsonable(value: Any) -> Any:
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, tuple | list):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    return value
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SceneConfig:
+    """Configuration of a scene build (every stage's parameters; the seed is passed separately
+    to :func:`marsscene.build_scene` but may also be given here as ``seed``)."""
+
+    seed: int | None = None
+    terrain: TerrainConfig = field(default_factory=TerrainConfig)
+    craters: CraterConfig = field(default_factory=CraterConfig)
+    rocks: RockConfig = field(default_factory=RockConfig)
+    lighting: LightingConfig = field(default_factory=LightingConfig)
+    export: ExportConfig = field(default_factory=ExportConfig)
+
+    def __post_init__(self) -> None:
+        if self.seed is not None and (
+            isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0
+        ):
+            raise ConfigError(f"seed = {self.seed!r}; must be a non-negative integer")
+
+    @classmethod
+    def from_dict(cls, mapping: dict[str, Any]) -> SceneConfig:
+        """Build from a nested mapping (as parsed from TOML)."""
+        return dataclass_from_mapping(cls, mapping, "config")
+
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike[str]) -> SceneConfig:
+        """Read a TOML config file; relative ``dem_path`` values resolve against its folder."""
+        p = Path(path)
+        try:
+            data = tomllib.loads(p.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ConfigError(f"config file not found: {p}") from None
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+            raise ConfigError(f"{p}: not valid TOML ({err})") from None
+        terrain = data.get("terrain")
+        if isinstance(terrain, dict):
+            for key in ("dem_path", "ortho_path"):
+                if isinstance(terrain.get(key), str) and not Path(terrain[key]).is_absolute():
+                    terrain[key] = str((p.parent / terrain[key]).resolve())
+        return cls.from_dict(data)
+
+    def replace(self, **changes: Any) -> SceneConfig:
+        """A copy with some top-level fields replaced (stage configs are replaced whole)."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (JSON/TOML-serialisable)."""
+        out: dict[str, Any] = _jsonable(self)
+        return out
+
+    def config_hash(self) -> str:
+        """SHA-256 of the canonical JSON of :meth:`to_dict` (stable across runs)."""
+        blob = json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(blob.encode("utf-8")).hexdigest()

@@ -1,0 +1,73 @@
+"""One error hierarchy for marsscene.
+
+Every error derives from :class:`MarsSceneError` and also from the matching builtin, so callers can
+catch either (``except ValueError`` still works for a bad config). Non-fatal conditions are
+:class:`Warning` subclasses so users can filter them and tests can assert on them.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CRSError",
+    "ConfigError",
+    "DEMReadError",
+    "ExportError",
+    "ExtrapolationWarning",
+    "MarsSceneError",
+    "MarsSceneWarning",
+    "MemoryBudgetError",
+    "MissingDependencyError",
+    "NodataFilledWarning",
+    "RuntimeSimError",
+]
+
+
+class MarsSceneError(Exception):
+    """Root of every error raised by marsscene."""
+
+
+class ConfigError(MarsSceneError, ValueError):
+    """A configuration key or value is invalid (message names key, value and allowed range)."""
+
+
+class DEMReadError(MarsSceneError, OSError):
+    """A DEM or orthoimage cannot be opened, parsed or is inconsistent."""
+
+
+class CRSError(MarsSceneError, ValueError):
+    """A coordinate reference system is unusable (e.g. geographic where metres are needed)."""
+
+
+class MemoryBudgetError(MarsSceneError, MemoryError):
+    """A requested grid would not fit in the memory budget (message gives the estimate)."""
+
+
+class ExportError(MarsSceneError):
+    """Writing USD, MJCF or the manifest failed."""
+
+
+class MissingDependencyError(MarsSceneError, ImportError):
+    """An optional dependency is not installed (message names the extra to install)."""
+
+
+class RuntimeSimError(MarsSceneError, RuntimeError):
+    """The MuJoCo runtime cannot load a scene, a route or a log."""
+
+
+class MarsSceneWarning(UserWarning):
+    """Root of marsscene warnings."""
+
+
+class NodataFilledWarning(MarsSceneWarning):
+    """Missing DEM posts were filled by interpolation."""
+
+
+class ExtrapolationWarning(MarsSceneWarning):
+    """A model is evaluated outside its published validity range."""
+
+
+def missing_dependency(module: str, extra: str) -> MissingDependencyError:
+    """Build the error raised when an optional dependency cannot be imported."""
+    return MissingDependencyError(
+        f"{module!r} is not installed; install it with: pip install \"marsscene[{extra}]\""
+    )

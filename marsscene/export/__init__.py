@@ -1,0 +1,94 @@
+"""Export a :class:`~marsscene.Scene`: USD, MJCF and ``manifest.json``, written atomically.
+
+Everything is first written into a temporary sibling folder; only when every writer succeeded is
+it renamed into place, so a failed build never leaves a half-written scene.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any
+
+from marsscene.errors import ExportError, MarsSceneError
+
+__all__ = ["WRITERS", "write_scene"]
+
+
+def _write_usd(scene: Any, out: Path) -> list[Path]:
+    from marsscene.export.usd import write_usd
+
+    return write_usd(scene, out, usd_format=scene.config.export.usd_format)
+
+
+def _write_mjcf(scene: Any, out: Path) -> list[Path]:
+    from marsscene.export.mjcf import write_mjcf
+
+    return write_mjcf(scene, out)
+
+
+#: Format name -> writer(scene, out_dir) -> written paths. Extend to add a format.
+WRITERS: dict[str, Callable[[Any, Path], list[Path]]] = {"usd": _write_usd, "mjcf": _write_mjcf}
+
+
+def write_scene(
+    scene: Any,
+    out_dir: str | os.PathLike[str],
+    *,
+    formats: Iterable[str] | None = None,
+    overwrite: bool = True,
+) -> dict[str, list[Path]]:
+    """Write a scene folder: ``scene.usda`` (+assets), ``mjcf/scene.xml`` (+assets), manifest.
+
+    Parameters
+    ----------
+    scene : Scene
+    out_dir : path-like
+        Output folder; replaced as a whole if it exists and ``overwrite`` is true.
+    formats : iterable of str, optional
+        Keys of :data:`WRITERS`; default ``scene.config.export.formats``.
+
+    Returns
+    -------
+    dict
+        Format -> final paths written (plus ``"manifest"``).
+    """
+    from marsscene.export.manifest import manifest_bytes
+
+    fmts = tuple(formats) if formats is not None else tuple(scene.config.export.formats)
+    unknown = [f for f in fmts if f not in WRITERS]
+    if unknown:
+        raise ExportError(f"unknown export format(s) {unknown}; known: {sorted(WRITERS)}")
+    final = Path(out_dir).resolve()
+    if final.exists() and not overwrite:
+        raise ExportError(f"{final} exists; pass overwrite=True to replace it")
+    final.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
+    try:
+        written: dict[str, list[Path]] = {}
+        timings = dict(scene.provenance.timings_s)
+        for fmt in fmts:
+            t0 = time.perf_counter()
+            written[fmt] = WRITERS[fmt](scene, tmp)
+            timings[f"export_{fmt}"] = round(time.perf_counter() - t0, 4)
+        rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
+        (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
+        written["manifest"] = [tmp / "manifest.json"]
+        if final.exists():
+            old = final.with_name(f".{final.name}.old-{os.getpid()}")
+            final.rename(old)
+            tmp.rename(final)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            tmp.rename(final)
+    except MarsSceneError:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    except Exception as err:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise ExportError(f"writing {final} failed: {err}") from err
+    return {k: [final / p.relative_to(tmp) for p in v] for k, v in written.items()}

@@ -1,0 +1,62 @@
+"""Assemble the MJCF element tree of a scene (terrain, gravity, ground material, stages)."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable
+from typing import Any
+
+from marsscene._version import __version__
+from marsscene.export.mjcf.hfield import hfield_spec
+from marsscene.export.mjcf.lighting import add_lighting
+from marsscene.export.mjcf.rocks import add_rocks
+from marsscene.units import MARS_GRAVITY_M_S2
+
+__all__ = ["build_mjcf", "fmt"]
+
+#: Regolith friction (sliding, torsional, rolling). Sliding 0.8 ~ tan(38 deg), within the
+#: 30-40 deg internal friction angles measured for Martian soils (Sullivan et al. 2011,
+#: doi:10.1029/2010JE003625).
+REGOLITH_FRICTION = (0.8, 0.02, 0.002)
+HFIELD_ASSET = "assets/terrain.bin"
+
+
+def fmt(values: float | Iterable[float], digits: int = 6) -> str:
+    """Format numbers for MJCF deterministically (fixed significant digits, no ``-0``)."""
+    vals = [values] if isinstance(values, int | float) else list(values)
+    out = []
+    for v in vals:
+        s = f"{float(v):.{digits}g}"
+        out.append("0" if s in ("-0", "0") else s)
+    return " ".join(out)
+
+
+def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
+    """Return the ``<mujoco>`` root element and the assets it references."""
+    root = ET.Element("mujoco", model="marsscene")
+    ET.SubElement(root, "compiler", angle="radian", autolimits="true")
+    ET.SubElement(
+        root, "option", timestep="0.002", gravity=fmt((0.0, 0.0, -MARS_GRAVITY_M_S2)),
+        integrator="implicitfast",
+    )
+    size_info = ET.SubElement(root, "custom")
+    ET.SubElement(size_info, "text", name="marsscene", data=f"marsscene {__version__} seed {scene.seed}")
+    ET.SubElement(root, "visual")
+    asset = ET.SubElement(root, "asset")
+    world = ET.SubElement(root, "worldbody")
+
+    spec = hfield_spec(scene.heightfield)
+    ET.SubElement(asset, "hfield", name="terrain", file=HFIELD_ASSET, size=fmt(spec.size, 9))
+    ET.SubElement(asset, "texture", name="regolith_tex", type="2d", builtin="flat",
+                  rgb1="0.62 0.42 0.28", width="16", height="16")
+    ET.SubElement(asset, "material", name="regolith", texture="regolith_tex", rgba="1 1 1 1",
+                  specular="0.05", shininess="0.1")
+    ET.SubElement(
+        world, "geom", name="terrain", type="hfield", hfield="terrain",
+        pos=fmt(spec.pos, 9), material="regolith", friction=fmt(REGOLITH_FRICTION),
+        condim="3", contype="1", conaffinity="1",
+    )
+    assets = {HFIELD_ASSET: spec.bin_bytes}
+    for add in (add_rocks, add_lighting):
+        add(root, assets, scene)
+    return root, assets

@@ -1,0 +1,91 @@
+"""USD export (usd-core; this subpackage is the only importer of ``pxr``).
+
+:func:`to_stage` builds an in-memory stage plus its assets; :func:`write_usd` writes
+``scene.usda|usdc|usdz`` and the assets (textures) beside it. Layout::
+
+    /World                      default prim (Xform), Z-up, metres, kilograms
+      /PhysicsScene             UsdPhysics.Scene, gravity 3.72 m/s^2
+      /Looks/Regolith           UsdPreviewSurface (+ UsdUVTexture of the orthoimage)
+      /Terrain/tile_i_j         UsdGeom.Mesh tiles with normals, st, CollisionAPI
+      /Craters, /Rocks, /Lights (when those stages are enabled)
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from marsscene.errors import missing_dependency
+
+__all__ = ["to_stage", "validate_stage", "write_usd"]
+
+
+def _pxr() -> None:
+    try:
+        import pxr  # noqa: F401
+    except ImportError as err:
+        raise missing_dependency("usd-core", "usd") from err
+
+
+def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
+    """Build the scene's USD stage in memory.
+
+    Returns
+    -------
+    stage : pxr.Usd.Stage
+    assets : dict of str to bytes
+        Files the stage references, by path relative to the stage file.
+    """
+    _pxr()
+    from marsscene.export.usd.craters import author_craters
+    from marsscene.export.usd.lighting import author_lighting
+    from marsscene.export.usd.rocks import author_rocks
+    from marsscene.export.usd.stage import create_stage
+    from marsscene.export.usd.terrain import author_terrain
+
+    stage = create_stage(scene)
+    assets: dict[str, bytes] = {}
+    for author in (author_terrain, author_craters, author_rocks, author_lighting):
+        author(stage, scene, assets)
+    return stage, assets
+
+
+def validate_stage(stage: Any) -> list[str]:
+    """Run every registered ``pxr.UsdValidation`` validator; return the error messages."""
+    _pxr()
+    from pxr import UsdValidation
+
+    registry = UsdValidation.ValidationRegistry()
+    context = UsdValidation.ValidationContext(registry.GetOrLoadAllValidators())
+    return [err.GetMessage() for err in context.Validate(stage)]
+
+
+def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda") -> list[Path]:
+    """Write ``out_dir/scene.<usd_format>`` and its assets; return the written paths."""
+    stage, assets = to_stage(scene)
+    out = Path(out_dir)
+    written = []
+    for rel, blob in sorted(assets.items()):
+        p = out / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_bytes(blob)
+        written.append(p)
+    layer = stage.GetRootLayer()
+    if usd_format == "usdz":
+        from pxr import UsdUtils
+
+        tmp = out / "scene.usdc"
+        layer.Export(str(tmp))
+        target = out / "scene.usdz"
+        if not UsdUtils.CreateNewUsdzPackage(str(tmp), str(target)):
+            raise OSError(f"could not package {target}")
+        tmp.unlink()
+        for p in written:  # packaged inside the .usdz
+            p.unlink()
+        written = [target]
+    else:
+        target = out / f"scene.{usd_format}"
+        if not layer.Export(str(target)):
+            raise OSError(f"could not write {target}")
+        written.append(target)
+    return written

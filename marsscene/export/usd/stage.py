@@ -1,0 +1,86 @@
+"""Stage creation: metrics, default prim, provenance and the physics scene (cf. usd-exchange
+``createStage``/``configureStage``: always author upAxis, metersPerUnit, kilogramsPerUnit and
+the default prim)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics, Vt
+
+from marsscene._version import __version__
+from marsscene.units import MARS_GRAVITY_M_S2
+
+__all__ = ["WORLD", "crate_bytes", "create_asset_stage", "create_stage", "provenance_layer_data"]
+
+WORLD = "/World"
+
+
+def provenance_layer_data(scene: Any) -> dict[str, Any]:
+    """The provenance stored in the root layer's ``customLayerData`` (no timings: stable)."""
+    prov = scene.provenance
+    frame = prov.frame
+    data: dict[str, Any] = {
+        "creator": f"marsscene {__version__}",
+        "marsscene:seed": int(scene.seed),
+        "marsscene:configHash": scene.config.config_hash(),
+        "marsscene:datum_m": float(frame.datum_m),
+        "marsscene:zScale": float(frame.z_scale),
+        "marsscene:models": Vt.StringArray(
+            [f"{m.stage}: {m.name} — {m.citation}" for m in prov.models]
+        ),
+    }
+    if frame.origin_lonlat_deg is not None:
+        data["marsscene:originLonLat_deg"] = Gf.Vec2d(*frame.origin_lonlat_deg)
+    if frame.origin_projected_xy_m is not None:
+        data["marsscene:originProjectedXY_m"] = Gf.Vec2d(*frame.origin_projected_xy_m)
+    if frame.crs_wkt:
+        data["marsscene:crsWkt"] = frame.crs_wkt
+    return data
+
+
+def create_stage(scene: Any) -> Usd.Stage:
+    """An in-memory stage: Z-up, metres, kilograms, ``/World`` default prim, provenance,
+    and a ``UsdPhysics.Scene`` with Mars gravity."""
+    stage = Usd.Stage.CreateInMemory(load=Usd.Stage.LoadNone)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
+    world = UsdGeom.Xform.Define(stage, Sdf.Path(WORLD))
+    stage.SetDefaultPrim(world.GetPrim())
+    layer = stage.GetRootLayer()
+    layer.customLayerData = provenance_layer_data(scene)
+    layer.documentation = "Mars scene authored by marsscene (x east, y north, z up; metres)"
+    physics = UsdPhysics.Scene.Define(stage, Sdf.Path(f"{WORLD}/PhysicsScene"))
+    physics.CreateGravityDirectionAttr(Gf.Vec3f(0.0, 0.0, -1.0))
+    physics.CreateGravityMagnitudeAttr(MARS_GRAVITY_M_S2)
+    return stage
+
+
+def create_asset_stage(default_prim: str) -> Usd.Stage:
+    """An in-memory stage for a heavy asset layer (written as ``.usdc`` and referenced from the
+    root layer), with the same metrics as the root stage."""
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
+    root = UsdGeom.Xform.Define(stage, Sdf.Path(f"/{default_prim}"))
+    stage.SetDefaultPrim(root.GetPrim())
+    stage.GetRootLayer().customLayerData = {"creator": f"marsscene {__version__}"}
+    return stage
+
+
+def crate_bytes(stage: Usd.Stage) -> bytes:
+    """Serialise a stage's root layer as ``.usdc`` bytes (deterministic for the same content)."""
+    import os
+    import tempfile
+
+    fd, tmp = tempfile.mkstemp(suffix=".usdc")
+    os.close(fd)
+    try:
+        if not stage.GetRootLayer().Export(tmp):
+            raise OSError("could not serialise a USD layer")
+        with open(tmp, "rb") as fh:
+            return fh.read()
+    finally:
+        os.unlink(tmp)

@@ -1,0 +1,103 @@
+"""Terrain tiles as ``UsdGeom.Mesh`` prims with normals, UVs, a material and collision."""
+
+from __future__ import annotations
+
+import io
+from typing import Any
+
+import numpy as np
+from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
+
+from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
+from marsscene.terrain.mesh import heightfield_tiles
+
+__all__ = ["REGOLITH_ALBEDO_RGB", "author_terrain"]
+
+#: Mars regolith base colour (linear sRGB) when no orthoimage is given. Bright dusty soil has a
+#: visible albedo of ~0.25 with a red slope (Bell et al. 2008, "Mars surface colour", in *The
+#: Martian Surface*, CUP, doi:10.1017/CBO9780511536076.004).
+REGOLITH_ALBEDO_RGB = (0.42, 0.24, 0.14)
+
+TEXTURE_PATH = "textures/terrain_albedo.png"
+TERRAIN_ASSET = "assets/terrain.usdc"
+
+
+def _png_bytes(rgb: np.ndarray) -> bytes:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(rgb), mode="RGB").save(buf, format="PNG", optimize=False)
+    return buf.getvalue()
+
+
+def _material(stage: Any, scene: Any, assets: dict[str, bytes]) -> UsdShade.Material:
+    looks = "/Terrain/Looks"
+    UsdGeom.Scope.Define(stage, Sdf.Path(looks))
+    mat = UsdShade.Material.Define(stage, Sdf.Path(f"{looks}/Regolith"))
+    shader = UsdShade.Shader.Define(stage, Sdf.Path(f"{looks}/Regolith/PreviewSurface"))
+    shader.CreateIdAttr("UsdPreviewSurface")
+    shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.95)
+    shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(0.0)
+    diffuse = shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f)
+    if scene.texture_rgb is not None:
+        assets[TEXTURE_PATH] = _png_bytes(scene.texture_rgb)
+        reader = UsdShade.Shader.Define(stage, Sdf.Path(f"{looks}/Regolith/StReader"))
+        reader.CreateIdAttr("UsdPrimvarReader_float2")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
+        tex = UsdShade.Shader.Define(stage, Sdf.Path(f"{looks}/Regolith/Albedo"))
+        tex.CreateIdAttr("UsdUVTexture")
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(f"../{TEXTURE_PATH}")
+        tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("sRGB")
+        tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("clamp")
+        tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("clamp")
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
+            reader.ConnectableAPI(), "result"
+        )
+        diffuse.ConnectToSource(tex.ConnectableAPI(), "rgb")
+    else:
+        diffuse.Set(Gf.Vec3f(*REGOLITH_ALBEDO_RGB))
+    mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    return mat
+
+
+def author_terrain(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+    """Author ``/World/Terrain``: a payload of ``assets/terrain.usdc`` holding the
+    ``tile_i_j`` meshes, the regolith material and static triangle-mesh collision.
+
+    The heavy geometry lives in a binary crate layer so that ``scene.usda`` stays small and
+    readable; a ``.usdz`` package carries both.
+    """
+    asset_stage = create_asset_stage("Terrain")
+    _author_tiles(asset_stage, scene, assets)
+    assets[TERRAIN_ASSET] = crate_bytes(asset_stage)
+    prim = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Terrain")).GetPrim()
+    prim.GetPayloads().AddPayload(f"./{TERRAIN_ASSET}")
+
+
+def _author_tiles(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+    cfg = scene.config.export
+    terrain = UsdGeom.Xform.Get(stage, Sdf.Path("/Terrain"))
+    material = _material(stage, scene, assets)
+    for tile in heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts):
+        mesh = UsdGeom.Mesh.Define(stage, terrain.GetPath().AppendChild(tile.name))
+        faces = tile.face_vertex_indices
+        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(tile.points_m))
+        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)))
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.ravel()))
+        mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(tile.normals))
+        mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
+        mesh.CreateDoubleSidedAttr(False)
+        lo = tile.points_m.min(axis=0)
+        hi = tile.points_m.max(axis=0)
+        mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))
+        st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
+            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex
+        )
+        st.Set(Vt.Vec2fArray.FromNumpy(tile.st))
+        UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+        UsdPhysics.CollisionAPI.Apply(mesh.GetPrim())
+        UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(
+            UsdPhysics.Tokens.none
+        )

@@ -1,0 +1,65 @@
+"""Per-stage random streams derived from one user seed.
+
+Each stage gets an independent :class:`numpy.random.Generator` from
+``SeedSequence(seed, spawn_key=(stage_id,))``. Stage ids are fixed and must never be renumbered:
+changing a rock parameter must not move a single crater. See NumPy's "Parallel random number
+generation" guide (SeedSequence spawning).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from marsscene.errors import ConfigError
+
+__all__ = ["STAGE_IDS", "as_generator", "stage_rng"]
+
+#: Stage name -> spawn key. Append new stages; never renumber existing ones.
+STAGE_IDS: dict[str, int] = {
+    "terrain": 0,
+    "craters": 1,
+    "rocks": 2,
+    "lighting": 3,
+    "runtime": 4,
+    "terrain_detail": 5,
+    "rock_shapes": 6,
+    "texture": 7,
+    "sensors": 8,
+}
+
+
+def _check_seed(seed: int) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ConfigError(f"seed must be a non-negative integer; got {seed!r}")
+    return int(seed)
+
+
+def stage_rng(seed: int, stage: str) -> np.random.Generator:
+    """Return the random generator of one pipeline stage.
+
+    Parameters
+    ----------
+    seed : int
+        The user seed (non-negative).
+    stage : str
+        A key of :data:`STAGE_IDS`.
+
+    Examples
+    --------
+    >>> a = stage_rng(7, "craters").random()
+    >>> b = stage_rng(7, "craters").random()
+    >>> a == b
+    True
+    """
+    try:
+        stage_id = STAGE_IDS[stage]
+    except KeyError:
+        raise ConfigError(f"unknown stage {stage!r}; known: {sorted(STAGE_IDS)}") from None
+    return np.random.default_rng(np.random.SeedSequence(_check_seed(seed), spawn_key=(stage_id,)))
+
+
+def as_generator(rng: np.random.Generator | int) -> np.random.Generator:
+    """Normalise a user-facing ``rng`` argument (a Generator or an int seed) once."""
+    if isinstance(rng, np.random.Generator):
+        return rng
+    return np.random.default_rng(_check_seed(rng))

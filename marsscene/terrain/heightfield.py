@@ -1,0 +1,169 @@
+"""The :class:`Heightfield`: terrain as a regular grid of elevations in the scene frame.
+
+Grid convention (the only place it is defined): ``z_m[row, col]`` is the elevation of the post at
+``x = origin_x + col * cell_size_m`` (east) and ``y = origin_y + row * cell_size_m`` (north), so
+row 0 is the **southern** edge (MuJoCo's hfield row order). World frame: x east, y north, z up,
+metres (REP-103). DEM rasters (row 0 = north) are flipped once, in :func:`from_dem`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from marsscene.errors import ConfigError
+
+__all__ = ["Heightfield"]
+
+
+@dataclass(frozen=True, eq=False)
+class Heightfield:
+    """Regular elevation grid in the scene frame.
+
+    Parameters
+    ----------
+    z_m : ndarray of shape (rows, cols), float32
+        Elevation of each post above the scene datum (in m). Row 0 is the southern edge.
+    cell_size_m : float
+        Post spacing, equal in x and y (in m).
+    origin_xy_m : tuple of float
+        World (x east, y north) of post ``[0, 0]``, the south-west corner (in m).
+    """
+
+    z_m: NDArray[np.float32]
+    cell_size_m: float
+    origin_xy_m: tuple[float, float] = field(default=(0.0, 0.0))
+
+    def __post_init__(self) -> None:
+        z = np.asarray(self.z_m, dtype=np.float32)
+        if z.ndim != 2 or min(z.shape) < 2:
+            raise ConfigError(f"z_m must be a 2-D grid of at least 2x2 posts; got shape {z.shape}")
+        if not np.isfinite(z).all():
+            raise ConfigError("z_m contains NaN or inf; fill missing posts before building terrain")
+        if not (self.cell_size_m > 0 and np.isfinite(self.cell_size_m)):
+            raise ConfigError(f"cell_size_m must be > 0; got {self.cell_size_m!r}")
+        z.setflags(write=False)
+        object.__setattr__(self, "z_m", z)
+        object.__setattr__(self, "cell_size_m", float(self.cell_size_m))
+        ox, oy = self.origin_xy_m
+        object.__setattr__(self, "origin_xy_m", (float(ox), float(oy)))
+
+    # ---- geometry ---------------------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Grid shape ``(rows, cols)``."""
+        return (int(self.z_m.shape[0]), int(self.z_m.shape[1]))
+
+    @property
+    def size_m(self) -> tuple[float, float]:
+        """Footprint ``(width east, height north)`` between the outer posts (in m)."""
+        rows, cols = self.shape
+        return ((cols - 1) * self.cell_size_m, (rows - 1) * self.cell_size_m)
+
+    @property
+    def area_m2(self) -> float:
+        """Footprint area (in m^2)."""
+        w, h = self.size_m
+        return w * h
+
+    @property
+    def bounds_xy_m(self) -> tuple[float, float, float, float]:
+        """``(x_min, y_min, x_max, y_max)`` of the footprint (in m)."""
+        w, h = self.size_m
+        ox, oy = self.origin_xy_m
+        return (ox, oy, ox + w, oy + h)
+
+    def xy_of(self, rows: ArrayLike, cols: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """World ``(x, y)`` of (possibly fractional) grid indices."""
+        ox, oy = self.origin_xy_m
+        c = np.asarray(cols, dtype=np.float64)
+        r = np.asarray(rows, dtype=np.float64)
+        return ox + c * self.cell_size_m, oy + r * self.cell_size_m
+
+    def rowcol_of(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Fractional grid indices ``(row, col)`` of world points (inverse of :meth:`xy_of`)."""
+        ox, oy = self.origin_xy_m
+        xa = np.asarray(x, dtype=np.float64)
+        ya = np.asarray(y, dtype=np.float64)
+        return (ya - oy) / self.cell_size_m, (xa - ox) / self.cell_size_m
+
+    def grid_xy(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Coordinate vectors ``(x of each col, y of each row)`` (in m)."""
+        rows, cols = self.shape
+        return self.xy_of(np.zeros(cols), np.arange(cols))[0], self.xy_of(np.arange(rows), 0)[1]
+
+    def contains(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.bool_]:
+        """True where ``(x, y)`` lies inside the footprint."""
+        x0, y0, x1, y1 = self.bounds_xy_m
+        xa = np.asarray(x)
+        ya = np.asarray(y)
+        return (xa >= x0) & (xa <= x1) & (ya >= y0) & (ya <= y1)
+
+    # ---- sampling ---------------------------------------------------------------------------
+    def _cell(self, x: ArrayLike, y: ArrayLike):  # type: ignore[no-untyped-def]
+        rows, cols = self.shape
+        r, c = self.rowcol_of(x, y)
+        r = np.clip(r, 0.0, rows - 1.0)
+        c = np.clip(c, 0.0, cols - 1.0)
+        r0 = np.minimum(np.floor(r).astype(np.int64), rows - 2)
+        c0 = np.minimum(np.floor(c).astype(np.int64), cols - 2)
+        return r0, c0, r - r0, c - c0
+
+    def sample(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Bilinear elevation at world points (clamped to the footprint) (in m)."""
+        r0, c0, fr, fc = self._cell(x, y)
+        z = self.z_m
+        z00 = z[r0, c0].astype(np.float64)
+        z01 = z[r0, c0 + 1].astype(np.float64)
+        z10 = z[r0 + 1, c0].astype(np.float64)
+        z11 = z[r0 + 1, c0 + 1].astype(np.float64)
+        return (z00 * (1 - fc) + z01 * fc) * (1 - fr) + (z10 * (1 - fc) + z11 * fc) * fr
+
+    def gradient(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Surface gradient ``(dz/dx, dz/dy)`` of the bilinear surface at world points."""
+        r0, c0, fr, fc = self._cell(x, y)
+        z = self.z_m
+        z00 = z[r0, c0].astype(np.float64)
+        z01 = z[r0, c0 + 1].astype(np.float64)
+        z10 = z[r0 + 1, c0].astype(np.float64)
+        z11 = z[r0 + 1, c0 + 1].astype(np.float64)
+        dzdx = ((z01 - z00) * (1 - fr) + (z11 - z10) * fr) / self.cell_size_m
+        dzdy = ((z10 - z00) * (1 - fc) + (z11 - z01) * fc) / self.cell_size_m
+        return dzdx, dzdy
+
+    def normal(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Unit upward surface normal at world points, shape ``(..., 3)``."""
+        gx, gy = self.gradient(x, y)
+        n = np.stack([-gx, -gy, np.ones_like(gx)], axis=-1)
+        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+    def grid_gradient(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Central-difference gradient ``(dz/dx, dz/dy)`` at every post."""
+        gy, gx = np.gradient(self.z_m.astype(np.float64), self.cell_size_m)
+        return gx, gy
+
+    def slope_deg(self) -> NDArray[np.float64]:
+        """Slope at every post (in degrees), from central differences."""
+        gx, gy = self.grid_gradient()
+        return np.degrees(np.arctan(np.hypot(gx, gy)))
+
+    def grid_normals(self) -> NDArray[np.float32]:
+        """Unit normals at every post, shape ``(rows, cols, 3)``."""
+        gx, gy = self.grid_gradient()
+        n = np.stack([-gx, -gy, np.ones_like(gx)], axis=-1)
+        n /= np.linalg.norm(n, axis=-1, keepdims=True)
+        return n.astype(np.float32)
+
+    def with_z(self, z_m: ArrayLike) -> Heightfield:
+        """A new heightfield on the same grid with other elevations."""
+        return Heightfield(np.asarray(z_m, dtype=np.float32), self.cell_size_m, self.origin_xy_m)
+
+    @classmethod
+    def centered(cls, z_m: ArrayLike, cell_size_m: float) -> Heightfield:
+        """A heightfield whose footprint is centred on the world origin."""
+        z = np.asarray(z_m, dtype=np.float32)
+        rows, cols = z.shape
+        origin = (-(cols - 1) * cell_size_m / 2.0, -(rows - 1) * cell_size_m / 2.0)
+        return cls(z, cell_size_m, origin)

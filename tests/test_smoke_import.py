@@ -1,0 +1,16 @@
+"""`import marsscene` stays light: none of the heavy optional runtimes are imported."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def test_import_pulls_no_heavy_dependencies() -> None:
+    code = (
+        "import sys, marsscene\n"
+        "heavy = [m for m in ('pxr', 'mujoco', 'coacd', 'click', 'rasterio') if m in sys.modules]\n"
+        "print(','.join(heavy))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
