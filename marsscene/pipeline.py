@@ -86,7 +86,9 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     config = config if config is not None else SceneConfig()
     tcfg = config.terrain
     timer = _Timer()
-    models: list[ModelRef] = []
+    models: list[ModelRef] = []  # every model used, with its citation (manifest)
+    notes: list[str] = []  # rules applied and warnings (manifest)
+    summary: dict[str, object] = {}  # stage summary values: counts, tau, ... (manifest)
 
     with timer.stage("terrain"):
         dem, inputs = _load_dem(config, dem)
@@ -122,21 +124,29 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                 else:
                     hf = resample(hf, post_m=post_m)
 
-    # --- craters stage -------------------------------------------------------------------
+    # --- craters stage (issue: craters) ---------------------------------------------------
     craters = None
 
-    # --- rocks stage ---------------------------------------------------------------------
+    # --- end of craters stage -------------------------------------------------------------
+
+    # --- rocks stage (issue: rocks) -------------------------------------------------------
     rocks = None
     rock_prototypes = None
 
-    # --- lighting stage ------------------------------------------------------------------
+    # --- end of rocks stage ---------------------------------------------------------------
+
+    # --- lighting stage (issue: lighting) -------------------------------------------------
     lighting = None
+
+    # --- end of lighting stage ------------------------------------------------------------
 
     provenance = Provenance(
         frame=frame,
         inputs=inputs,
         models=tuple(models),
         timings_s=timer.timings_s,
+        notes=tuple(notes),
+        extra=summary,
     )
     return Scene(
         heightfield=hf,

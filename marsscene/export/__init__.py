@@ -31,6 +31,13 @@ def _write_mjcf(scene: Any, out: Path) -> list[Path]:
     return write_mjcf(scene, out)
 
 
+def _write_catalogs(scene: Any, out: Path) -> list[Path]:
+    from marsscene.export.catalog_craters import write_crater_catalog
+    from marsscene.export.catalog_rocks import write_rock_catalog
+
+    return write_crater_catalog(scene, out) + write_rock_catalog(scene, out)
+
+
 #: Format name -> writer(scene, out_dir) -> written paths. Extend to add a format.
 WRITERS: dict[str, Callable[[Any, Path], list[Path]]] = {"usd": _write_usd, "mjcf": _write_mjcf}
 
@@ -75,6 +82,7 @@ def write_scene(
             t0 = time.perf_counter()
             written[fmt] = WRITERS[fmt](scene, tmp)
             timings[f"export_{fmt}"] = round(time.perf_counter() - t0, 4)
+        written["catalogs"] = _write_catalogs(scene, tmp)
         rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
         (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
         written["manifest"] = [tmp / "manifest.json"]
