@@ -27,7 +27,8 @@ log = logging.getLogger("marsscene")
 
 _FBM_CITATION = (
     "fractional Brownian surface by spectral synthesis (Saupe 1988; Turcotte 1997, "
-    "doi:10.1017/CBO9781139174695); Mars self-affinity: Orosei et al. 2003, doi:10.1029/2002JE001883"
+    "doi:10.1017/CBO9781139174695); Mars self-affinity: Orosei et al. 2003, "
+    "doi:10.1029/2002JE001883"
 )
 
 
@@ -93,10 +94,9 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     with timer.stage("terrain"):
         dem, inputs = _load_dem(config, dem)
         if dem is None:
-            post_m = tcfg.post_m if tcfg.post_m is not None else 0.25
             hf = synthesize(
                 tcfg.effective_size_m,
-                post_m,
+                tcfg.post_m if tcfg.post_m is not None else 0.25,
                 hurst=tcfg.hurst,
                 rms_height_m=tcfg.rms_height_m,
                 rms_slope_deg=tcfg.rms_slope_deg,

@@ -18,7 +18,8 @@ def _scene_info(folder: Path) -> list[str]:
     t = doc["terrain"]
     lines = [
         f"scene: {folder}",
-        f"  marsscene {doc['marsscene_version']}, seed {doc['seed']}, config {doc['config_hash'][:12]}",
+        f"  marsscene {doc['marsscene_version']}, seed {doc['seed']}, "
+        f"config {doc['config_hash'][:12]}",
         f"  terrain: {t['shape_rows_cols'][0]} x {t['shape_rows_cols'][1]} posts at "
         f"{t['post_m']:g} m ({t['size_m'][0]:.1f} x {t['size_m'][1]:.1f} m), "
         f"z {t['z_min_m']:.2f} .. {t['z_max_m']:.2f} m above datum {doc['frame']['datum_m']} m",

@@ -9,11 +9,14 @@ metres (REP-103). DEM rasters (row 0 = north) are flipped once, in :func:`from_d
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from marsscene.errors import ConfigError
+
+XY = tuple[NDArray[np.float64], NDArray[np.float64]]
 
 __all__ = ["Heightfield"]
 
@@ -75,21 +78,21 @@ class Heightfield:
         ox, oy = self.origin_xy_m
         return (ox, oy, ox + w, oy + h)
 
-    def xy_of(self, rows: ArrayLike, cols: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def xy_of(self, rows: ArrayLike, cols: ArrayLike) -> XY:
         """World ``(x, y)`` of (possibly fractional) grid indices."""
         ox, oy = self.origin_xy_m
         c = np.asarray(cols, dtype=np.float64)
         r = np.asarray(rows, dtype=np.float64)
         return ox + c * self.cell_size_m, oy + r * self.cell_size_m
 
-    def rowcol_of(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def rowcol_of(self, x: ArrayLike, y: ArrayLike) -> XY:
         """Fractional grid indices ``(row, col)`` of world points (inverse of :meth:`xy_of`)."""
         ox, oy = self.origin_xy_m
         xa = np.asarray(x, dtype=np.float64)
         ya = np.asarray(y, dtype=np.float64)
         return (ya - oy) / self.cell_size_m, (xa - ox) / self.cell_size_m
 
-    def grid_xy(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def grid_xy(self) -> XY:
         """Coordinate vectors ``(x of each col, y of each row)`` (in m)."""
         rows, cols = self.shape
         return self.xy_of(np.zeros(cols), np.arange(cols))[0], self.xy_of(np.arange(rows), 0)[1]
@@ -102,7 +105,7 @@ class Heightfield:
         return (xa >= x0) & (xa <= x1) & (ya >= y0) & (ya <= y1)
 
     # ---- sampling ---------------------------------------------------------------------------
-    def _cell(self, x: ArrayLike, y: ArrayLike):  # type: ignore[no-untyped-def]
+    def _cell(self, x: ArrayLike, y: ArrayLike) -> tuple[Any, Any, Any, Any]:
         rows, cols = self.shape
         r, c = self.rowcol_of(x, y)
         r = np.clip(r, 0.0, rows - 1.0)
@@ -121,7 +124,7 @@ class Heightfield:
         z11 = z[r0 + 1, c0 + 1].astype(np.float64)
         return (z00 * (1 - fc) + z01 * fc) * (1 - fr) + (z10 * (1 - fc) + z11 * fc) * fr
 
-    def gradient(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def gradient(self, x: ArrayLike, y: ArrayLike) -> XY:
         """Surface gradient ``(dz/dx, dz/dy)`` of the bilinear surface at world points."""
         r0, c0, fr, fc = self._cell(x, y)
         z = self.z_m
@@ -139,15 +142,16 @@ class Heightfield:
         n = np.stack([-gx, -gy, np.ones_like(gx)], axis=-1)
         return n / np.linalg.norm(n, axis=-1, keepdims=True)
 
-    def grid_gradient(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def grid_gradient(self) -> XY:
         """Central-difference gradient ``(dz/dx, dz/dy)`` at every post."""
         gy, gx = np.gradient(self.z_m.astype(np.float64), self.cell_size_m)
-        return gx, gy
+        return np.asarray(gx), np.asarray(gy)
 
     def slope_deg(self) -> NDArray[np.float64]:
         """Slope at every post (in degrees), from central differences."""
         gx, gy = self.grid_gradient()
-        return np.degrees(np.arctan(np.hypot(gx, gy)))
+        out: NDArray[np.float64] = np.degrees(np.arctan(np.hypot(gx, gy)))
+        return out
 
     def grid_normals(self) -> NDArray[np.float32]:
         """Unit normals at every post, shape ``(rows, cols, 3)``."""

@@ -41,7 +41,7 @@ class TerrainTile:
 
 
 def tile_ranges(n: int, max_posts: int) -> list[tuple[int, int]]:
-    """Split ``n`` posts into inclusive-overlap ranges ``[start, stop)`` of at most ``max_posts``."""
+    """Split ``n`` posts into overlapping ranges ``[start, stop)`` of at most ``max_posts``."""
     step = max_posts - 1
     starts = list(range(0, max(n - 1, 1), step))
     return [(s, min(s + max_posts, n)) for s in starts]

@@ -56,7 +56,7 @@ def validate_mjcf(path: str | Path, *, seconds: float = 1.0) -> Any:
     except ValueError as err:
         raise ExportError(f"{path}: MuJoCo cannot compile it: {err}") from None
     data = mujoco.MjData(model)
-    steps = int(round(seconds / model.opt.timestep))
+    steps = round(seconds / model.opt.timestep)
     for _ in range(steps):
         mujoco.mj_step(model, data)
     warnings = [(i, int(w.number)) for i, w in enumerate(data.warning) if w.number]

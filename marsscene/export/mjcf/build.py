@@ -40,7 +40,8 @@ def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
         integrator="implicitfast",
     )
     size_info = ET.SubElement(root, "custom")
-    ET.SubElement(size_info, "text", name="marsscene", data=f"marsscene {__version__} seed {scene.seed}")
+    ET.SubElement(size_info, "text", name="marsscene",
+                  data=f"marsscene {__version__} seed {scene.seed}")
     ET.SubElement(root, "visual")
     asset = ET.SubElement(root, "asset")
     world = ET.SubElement(root, "worldbody")
