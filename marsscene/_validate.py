@@ -64,20 +64,21 @@ def dataclass_from_mapping(cls: type[T], mapping: Mapping[str, Any], section: st
     """
     if not isinstance(mapping, Mapping):
         raise ConfigError(f"[{section}] must be a table; got {mapping!r}")
+    prefix = f"{section}." if section else ""
     fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     hints = typing.get_type_hints(cls)
     kwargs: dict[str, Any] = {}
     for key, value in mapping.items():
         if key not in fields:
             raise ConfigError(
-                f"unknown key {section}.{key} = {value!r}; allowed keys: {sorted(fields)}"
+                f"unknown key {prefix}{key} = {value!r}; allowed keys: {sorted(fields)}"
             )
         hint = hints[key]
         if dataclasses.is_dataclass(hint) and isinstance(hint, type):
-            kwargs[key] = dataclass_from_mapping(hint, value, f"{section}.{key}")
+            kwargs[key] = dataclass_from_mapping(hint, value, f"{prefix}{key}")
         else:
             kwargs[key] = _coerce(value, hint)
     try:
         return cls(**kwargs)
     except TypeError as err:
-        raise ConfigError(f"[{section}]: {err}") from None
+        raise ConfigError(f"[{section or 'config'}]: {err}") from None

@@ -66,7 +66,7 @@ class SceneConfig:
     @classmethod
     def from_dict(cls, mapping: dict[str, Any]) -> SceneConfig:
         """Build from a nested mapping (as parsed from TOML)."""
-        return dataclass_from_mapping(cls, mapping, "config")
+        return dataclass_from_mapping(cls, mapping, "")
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike[str]) -> SceneConfig:
