@@ -61,7 +61,8 @@ def read_dem(path: str | os.PathLike[str], *, band: int = 1) -> DEM:
             if not 1 <= band <= ds.count:
                 raise DEMReadError(f"{p}: band {band} does not exist (file has {ds.count})")
             data = ds.read(band, masked=True).astype(np.float32)
-            transform = tuple(ds.transform)[:6]
+            a, b, c, d, e, f = (float(v) for v in tuple(ds.transform)[:6])
+            transform = (a, b, c, d, e, f)
             crs_wkt = ds.crs.to_wkt() if ds.crs else ""
             is_geographic = bool(ds.crs and ds.crs.is_geographic)
             tags: dict[str, Any] = dict(ds.tags())
@@ -75,7 +76,7 @@ def read_dem(path: str | os.PathLike[str], *, band: int = 1) -> DEM:
     elevation = np.ma.filled(data, np.nan).astype(np.float32)
     dem = DEM(
         elevation_m=elevation,
-        transform=transform,  # type: ignore[arg-type]
+        transform=transform,
         crs_wkt=crs_wkt,
         source_path=str(p),
         metadata={"driver": driver, **tags},
