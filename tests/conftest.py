@@ -35,7 +35,7 @@ def small_procedural_config() -> ms.SceneConfig:
 def synthetic_dem_path(tmp_path: Path) -> Path:
     """A 64 x 48 projected GeoTIFF DEM (a bowl plus a slope, 1 m posts, nodata corner)."""
     import rasterio
-    from rasterio.transform import from_origin
+    from affine import Affine
 
     rows, cols = 48, 64
     yy, xx = np.mgrid[0:rows, 0:cols].astype(np.float64)
@@ -48,7 +48,7 @@ def synthetic_dem_path(tmp_path: Path) -> Path:
     path = tmp_path / "bowl.tif"
     with rasterio.open(
         path, "w", driver="GTiff", height=rows, width=cols, count=1, dtype="float32",
-        crs=crs, transform=from_origin(-32.0, 1_090_000.0, 1.0, 1.0), nodata=-32767.0,
+        crs=crs, transform=Affine(1.0, 0.0, -32.0, 0.0, -1.0, 1_090_000.0), nodata=-32767.0,
     ) as ds:
         ds.write(z.astype(np.float32), 1)
     return path

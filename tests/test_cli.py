@@ -104,3 +104,15 @@ def test_failed_export_leaves_previous_scene_intact(
     result = runner.invoke(main, ["build", "--procedural", "--out", str(out)])
     assert result.exit_code == 1 and "disk full" in result.output
     assert (out / "marker.txt").read_text() == "old" and not (out / "partial.xml").exists()
+
+
+def test_info_on_a_dem(runner: CliRunner, synthetic_dem_path: Path) -> None:
+    result = runner.invoke(main, ["info", str(synthetic_dem_path)])
+    assert result.exit_code == 0, result.output
+    assert "48 rows x 64 cols, post 1 m" in result.output
+    assert "lon 77.5" in result.output
+
+
+def test_info_on_a_folder_that_is_not_a_scene(runner: CliRunner, tmp_path: Path) -> None:
+    result = runner.invoke(main, ["info", str(tmp_path)])
+    assert result.exit_code == 1 and "not a marsscene scene folder" in result.output
