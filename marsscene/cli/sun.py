@@ -47,7 +47,7 @@ def _report(lat: float, lon: float, utc: str | None, mars_year: int | None, ls: 
 
 
 def _hms(hours: float) -> str:
-    s = int(round(hours * 3600.0)) % 86400
+    s = round(hours * 3600.0) % 86400
     return f"{s // 3600:02d}:{s % 3600 // 60:02d}:{s % 60:02d}"
 
 

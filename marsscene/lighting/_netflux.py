@@ -46,7 +46,9 @@ def _interpolator() -> RegularGridInterpolator:
     return RegularGridInterpolator((tau, z), f, method="linear", bounds_error=True)
 
 
-def net_flux_table(zenith_deg: NDArray[np.float64], tau: NDArray[np.float64]) -> NDArray[np.float64]:
+def net_flux_table(
+    zenith_deg: NDArray[np.float64], tau: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Bilinear interpolation of the albedo-0.1 table; inputs inside z in [0, 85], tau in
     [0.1, 6] (broadcast together)."""
     z, t = np.broadcast_arrays(np.asarray(zenith_deg, float), np.asarray(tau, float))

@@ -107,7 +107,7 @@ class LightingConfig:
             if value is not None:
                 check_range(f"lighting.{key}", value, lo, hi)
         local = (self.mars_year, self.ltst_h)
-        if any(v is not None for v in local) and not all(v is not None for v in local) or (
+        if (any(v is not None for v in local) and not all(v is not None for v in local)) or (
             self.mars_year is not None and self.ls_deg is None
         ):
             raise ConfigError(

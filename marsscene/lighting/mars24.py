@@ -146,7 +146,8 @@ def _topocentric(terms: dict[str, Any], lat_deg: float, lon_east_deg: float) -> 
     zen = np.degrees(np.arccos(np.clip(cos_z, -1.0, 1.0)))
     # Mars24 azimuth formula written with sin/cos of the declination (no tan singularity).
     az = np.degrees(np.arctan2(
-        np.sin(h) * np.cos(dec), math.cos(phi) * np.sin(dec) - math.sin(phi) * np.cos(dec) * np.cos(h)
+        np.sin(h) * np.cos(dec),
+        math.cos(phi) * np.sin(dec) - math.sin(phi) * np.cos(dec) * np.cos(h),
     ))
     return {"lmst_h": lmst, "ltst_h": ltst, "zenith_deg": zen, "azimuth_deg": np.mod(az, 360.0),
             "subsolar_lon_east_deg": np.mod(-subsolar_w, 360.0)}

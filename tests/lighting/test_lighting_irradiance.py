@@ -88,7 +88,7 @@ def test_appelbaum_flood_reference_cells(
 
 
 def test_table_interpolates_between_cells_and_is_monotone() -> None:
-    tau, z, f = table_albedo_0p1()
+    _tau, _z, f = table_albedo_0p1()
     assert f.shape == (58, 18)
     assert np.all(np.diff(f, axis=0) <= 0) and np.all(np.diff(f, axis=1) <= 0)  # typos fixed
     kw = {"distance_au": 1.0, "solar_constant_w_m2": 1.0}

@@ -112,8 +112,9 @@ def _atmosphere_attributes(prim: Any, lt: Any) -> None:
     _attr(prim, "atmosphere:diffuseModel", s, lt.diffuse_model)
     _attr(prim, "sun:mode", s, lt.sun_mode)
     _attr(prim, "usd:intensityUnits", s, lt.usd_units)
-    for name, value in (("sun:ls_deg", lt.ls_deg), ("sun:ltst_h", lt.ltst_h),
-                        ("site:lat_deg", lt.site_lat_deg), ("site:lonEast_deg", lt.site_lon_east_deg)):
+    optional = (("sun:ls_deg", lt.ls_deg), ("sun:ltst_h", lt.ltst_h),
+                ("site:lat_deg", lt.site_lat_deg), ("site:lonEast_deg", lt.site_lon_east_deg))
+    for name, value in optional:
         if value is not None:
             _attr(prim, name, d, float(value))
     if lt.utc is not None:
