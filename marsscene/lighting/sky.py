@@ -112,7 +112,7 @@ def visibility_m(
     Examples
     --------
     >>> round(float(visibility_m(1.0)))  # 3.912 * 11 km
-    43034
+    43032
     """
     beta = extinction_coefficient_per_m(tau, dust_scale_height_m=dust_scale_height_m)
     with np.errstate(divide="ignore"):
