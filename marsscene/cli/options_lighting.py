@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from marsscene.cli._common import compose
+from marsscene.errors import ConfigError
 
 __all__ = ["apply", "options"]
 
@@ -38,9 +39,9 @@ options: Callable[[Any], Any] = compose(
                  help="Explicit sun elevation."),
     click.option("--mars-year", type=int, default=None,
                  help="Mars Year (with --ls and --ltst): sun at a Mars-local time."),
-    click.option("--ls", "ls_deg", type=click.FloatRange(0.0, 360.0), default=None,
+    click.option("--ls", "ls_deg", type=click.FloatRange(0.0, 360.0, max_open=True), default=None,
                  help="Solar longitude Ls in degrees (season)."),
-    click.option("--ltst", "ltst_h", type=click.FloatRange(0.0, 24.0), default=None,
+    click.option("--ltst", "ltst_h", type=click.FloatRange(0.0, 24.0, max_open=True), default=None,
                  help="Local true solar time in hours."),
     click.option("--site-lat-deg", type=click.FloatRange(-90.0, 90.0), default=None,
                  help="Site latitude (default: DEM centre, else Jezero)."),
@@ -74,8 +75,6 @@ def apply(cfg: Any, values: dict[str, Any]) -> Any:
         changes.update({"utc": None, "mars_year": None, "ltst_h": None})
     elif "mars_year" in changes:
         changes.update({"utc": None})
-    from marsscene.errors import ConfigError
-
     try:
         lighting = dataclasses.replace(cfg.lighting, **changes)
     except ConfigError as err:

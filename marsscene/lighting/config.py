@@ -97,7 +97,6 @@ class LightingConfig:
         ):
             raise ConfigError(f"lighting.mars_year = {self.mars_year!r} must be an integer")
         optional = {
-            "ls_deg": (self.ls_deg, 0.0, 360.0), "ltst_h": (self.ltst_h, 0.0, 24.0),
             "sun_azimuth_deg": (self.sun_azimuth_deg, 0.0, 360.0),
             "sun_elevation_deg": (self.sun_elevation_deg, -90.0, 90.0),
             "site_lat_deg": (self.site_lat_deg, -90.0, 90.0),
@@ -106,6 +105,9 @@ class LightingConfig:
         for key, (value, lo, hi) in optional.items():
             if value is not None:
                 check_range(f"lighting.{key}", value, lo, hi)
+        for key, value, hi in (("ls_deg", self.ls_deg, 360.0), ("ltst_h", self.ltst_h, 24.0)):
+            if value is not None:
+                check_range(f"lighting.{key}", value, 0.0, hi, hi_open=True)
         local = (self.mars_year, self.ltst_h)
         if (any(v is not None for v in local) and not all(v is not None for v in local)) or (
             self.mars_year is not None and self.ls_deg is None

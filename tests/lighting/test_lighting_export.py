@@ -98,10 +98,12 @@ def test_usd_dome_gives_the_diffuse_irradiance(tmp_path: Path) -> None:
     assert 90.0 - (row + 0.5) / h * 180.0 == pytest.approx(lt.sun_elevation_deg, abs=180.0 / h)
 
 
-def test_usd_is_byte_reproducible(tmp_path: Path) -> None:
+def test_usd_and_mjcf_are_byte_reproducible(tmp_path: Path) -> None:
     for sub in ("a", "b"):
-        write_usd(_scene({"utc": "2021-02-18T20:55Z"}), tmp_path / sub)
-    for name in ("scene.usda", "textures/sky.png"):
+        scene = _scene({"utc": "2021-02-18T20:55Z"})
+        write_usd(scene, tmp_path / sub)
+        write_mjcf(scene, tmp_path / sub)
+    for name in ("scene.usda", "textures/sky.png", "mjcf/scene.xml"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
 
 

@@ -25,6 +25,7 @@ def _cfg(**lighting: object) -> ms.SceneConfig:
     ({"sun_azimuth_deg": 70.0}, "go together"),
     ({"site_lat_deg": 95.0, "site_lon_east_deg": 0.0}, "site_lat_deg"),
     ({"mars_year": 36, "ltst_h": 12.0}, "go together"),
+    ({"mars_year": 36, "ls_deg": 360.0, "ltst_h": 12.0}, "lighting.ls_deg"),
     ({"diffuse_model": "disort"}, "diffuse_model"),
     ({"usd_units": "candela"}, "usd_units"),
     ({"unknown": 1}, "unknown key"),
