@@ -15,6 +15,10 @@ from contextlib import contextmanager
 from marsscene.config import SceneConfig
 from marsscene.dem.model import DEM
 from marsscene.errors import ConfigError
+from marsscene.lighting.compute import compute_lighting
+from marsscene.lighting.config import DEFAULT_SITE_LAT_LON_EAST_DEG
+from marsscene.lighting.irradiance import AF_CITATION, DELTA_EDDINGTON_CITATION
+from marsscene.lighting.mars24 import MARS24_CITATION
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
@@ -137,6 +141,39 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
     # --- lighting stage (issue: lighting) -------------------------------------------------
     lighting = None
+    lcfg = config.lighting
+    if lcfg.enabled:
+        with timer.stage("lighting"):  # deterministic: no random draws in this stage
+            if lcfg.site_lat_deg is not None and lcfg.site_lon_east_deg is not None:
+                lat_deg, lon_e_deg, site_src = lcfg.site_lat_deg, lcfg.site_lon_east_deg, "config"
+            elif frame.origin_lonlat_deg is not None:
+                lon_e_deg, lat_deg = frame.origin_lonlat_deg
+                site_src = "DEM centre"
+            else:
+                lat_deg, lon_e_deg = DEFAULT_SITE_LAT_LON_EAST_DEG
+                site_src = "default site (Jezero)"
+            lighting = compute_lighting(lcfg, lat_deg=lat_deg, lon_east_deg=lon_e_deg)
+            if lcfg.sun_mode in ("utc", "local"):
+                models.append(ModelRef("lighting", "Mars24 sun position", MARS24_CITATION))
+            diffuse_ref = DELTA_EDDINGTON_CITATION if lcfg.diffuse_model == "delta_eddington" \
+                else AF_CITATION
+            models.append(ModelRef("lighting", f"Beer's-law sun + {lcfg.diffuse_model} sky",
+                                   diffuse_ref))
+            notes.append(
+                f"lighting: sun from {lcfg.sun_mode} at {site_src} "
+                f"(lat {lat_deg:.4f}, lon {lon_e_deg % 360.0:.4f} E)"
+            )
+            if lighting.sun_elevation_deg <= 0.0:
+                notes.append("lighting: the sun is below the horizon (no direct or diffuse light)")
+            summary.update({
+                "lighting_tau": lighting.tau,
+                "lighting_sun_azimuth_deg": round(lighting.sun_azimuth_deg, 6),
+                "lighting_sun_elevation_deg": round(lighting.sun_elevation_deg, 6),
+                "lighting_direct_normal_w_m2": round(lighting.direct_normal_w_m2, 4),
+                "lighting_diffuse_horizontal_w_m2": round(lighting.diffuse_horizontal_w_m2, 4),
+                "lighting_visibility_m": round(lighting.visibility_m, 1)
+                if lighting.visibility_m != float("inf") else None,
+            })
 
     # --- end of lighting stage ------------------------------------------------------------
 

@@ -48,9 +48,11 @@ def main(verbose: int, quiet: int) -> None:
 def _register() -> None:
     from marsscene.cli.build import build
     from marsscene.cli.info import info
+    from marsscene.cli.sun import sun
 
     main.add_command(build)
     main.add_command(info)
+    main.add_command(sun)
 
 
 _register()
