@@ -11,6 +11,7 @@ import logging
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 from marsscene.config import SceneConfig
 from marsscene.dem.model import DEM
@@ -19,7 +20,7 @@ from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
 from marsscene.terrain.default import DEFAULT_DEM_CITATION, default_dem_path
-from marsscene.terrain.from_dem import GeoFrame
+from marsscene.terrain.from_dem import GeoFrame, footprint_projected_m, prepare_dem
 
 __all__ = ["build_scene"]
 
@@ -28,6 +29,12 @@ log = logging.getLogger("marsscene")
 _FBM_CITATION = (
     "fractional Brownian surface by spectral synthesis (Saupe 1988; Turcotte 1997, "
     "doi:10.1017/CBO9781139174695); Mars self-affinity: Orosei et al. 2003, doi:10.1029/2002JE001883"
+)
+
+
+_HIRISE_DTM = (
+    "HiRISE stereo DTM (McEwen et al. 2007, doi:10.1029/2005JE002605; Kirk et al. 2008, "
+    "doi:10.1029/2007JE003000), NASA/JPL/University of Arizona"
 )
 
 
@@ -46,17 +53,49 @@ class _Timer:
 
 
 def _load_dem(config: SceneConfig, dem: DEM | None) -> tuple[DEM | None, dict[str, str]]:
+    """Read (or take) the DEM, reading only the configured crop window (memory checked first)."""
+    from marsscene.dem.ops import Crop
+
+    tcfg = config.terrain
+    spec = None
+    if tcfg.crop_px is not None:
+        spec = Crop(pixels=tcfg.crop_px)
+    elif tcfg.crop_bounds_m is not None:
+        spec = Crop(bounds_xy_m=tcfg.crop_bounds_m)
+    elif tcfg.crop_lonlat is not None:
+        spec = Crop(center_lonlat_deg=tcfg.crop_lonlat, size_m=tcfg.size_m)
+    inputs = {"ortho": tcfg.ortho_path} if tcfg.ortho_path else {}
     if dem is not None:
-        return dem, ({"dem": dem.source_path} if dem.source_path else {})
-    src = config.terrain.source
+        if spec is None and tcfg.size_m is not None and dem.crs_wkt:
+            spec = _center_crop(dem.center_xy(), tcfg.size_m)
+        if spec is not None:
+            from marsscene.dem.ops import crop
+
+            dem = crop(dem, spec)
+        return dem, ({"dem": dem.source_path} if dem.source_path else {}) | inputs
+    src = tcfg.source
     if src == "procedural":
         return None, {}
-    from marsscene.dem.io import read_dem  # rasterio is imported only when a DEM is read
+    from marsscene.dem.io import open_source, read_dem  # rasterio only when a DEM is read
 
-    path = default_dem_path() if src == "default" else config.terrain.dem_path
+    path = default_dem_path() if src == "default" else tcfg.dem_path
     if path is None:  # pragma: no cover - TerrainConfig validation forbids it
         raise ConfigError('terrain.source = "dem" needs terrain.dem_path')
-    return read_dem(path), {"dem": str(path)}
+    if spec is None and tcfg.size_m is not None:
+        s = open_source(path)
+        a, _, c, _, e, f = s.transform
+        spec = _center_crop((c + a * s.shape[1] / 2, f + e * s.shape[0] / 2), tcfg.size_m)
+    target = tcfg.post_m if tcfg.post_m is not None else (0.25 if src == "default" else None)
+    out = read_dem(path, band=tcfg.band, crop=spec, max_bytes=tcfg.max_memory_gb * 1e9,
+                   target_post_m=target)
+    return out, {"dem": str(path)} | inputs
+
+
+def _center_crop(center_xy: tuple[float, float], size_m: tuple[float, float]) -> Any:
+    from marsscene.dem.ops import Crop
+
+    (cx, cy), (w, h) = center_xy, size_m
+    return Crop(bounds_xy_m=(cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2))
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
@@ -90,6 +129,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     notes: list[str] = []  # rules applied and warnings (manifest)
     summary: dict[str, object] = {}  # stage summary values: counts, tau, ... (manifest)
 
+    texture_rgb = None
     with timer.stage("terrain"):
         dem, inputs = _load_dem(config, dem)
         if dem is None:
@@ -105,14 +145,19 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             frame = GeoFrame(0.0, None, None, "", 1.0)
             models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
         else:
+            default_post = 0.25 if tcfg.source == "default" else None
+            dem, post_m, dem_notes, dem_summary = prepare_dem(
+                dem, tcfg, default_post_m=default_post
+            )
+            notes.extend(dem_notes)
+            summary.update(dem_summary)
             hf, frame = heightfield_from_dem(dem, z_scale=tcfg.z_scale)
             if tcfg.source == "default":
                 models.append(ModelRef("terrain", "default DEM", DEFAULT_DEM_CITATION))
-            post_m = tcfg.post_m
-            if tcfg.source == "default" and post_m is None:
-                post_m = 0.25
-            if post_m is not None and abs(post_m - hf.cell_size_m) > 1e-9 * hf.cell_size_m:
-                if tcfg.detail and post_m < hf.cell_size_m:
+            if dem.metadata.get("DATA_SET_ID"):
+                models.append(ModelRef("terrain", str(dem.metadata["DATA_SET_ID"]), _HIRISE_DTM))
+            if post_m < hf.cell_size_m * (1 - 1e-9):
+                if tcfg.detail:
                     hf = add_detail(
                         hf,
                         post_m=post_m,
@@ -123,6 +168,20 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                     models.append(ModelRef("terrain", "sub-DEM fractal detail", _FBM_CITATION))
                 else:
                     hf = resample(hf, post_m=post_m)
+            if tcfg.ortho_path:
+                from marsscene.dem.io_ortho import read_ortho
+                from marsscene.dem.texture import texture_grid
+                from marsscene.dem.texture import texture_rgb as drape
+
+                bounds = footprint_projected_m(hf, frame)
+                grid = texture_grid(bounds, 1e-9, tcfg.texture_max_px)
+                ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
+                                   pixel_m=(bounds[2] - bounds[0]) / grid[1])
+                texture_rgb = drape(ortho, bounds, crs_wkt=frame.crs_wkt,
+                                    max_px=tcfg.texture_max_px)
+                summary["texture_shape_rows_cols"] = list(texture_rgb.shape[:2])
+                notes.append(f"orthoimage {ortho.metadata.get('PRODUCT_ID', ortho.source_path)} "
+                             f"co-registered to the terrain footprint")
 
     # --- craters stage (issue: craters) ---------------------------------------------------
     craters = None
@@ -150,6 +209,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     )
     return Scene(
         heightfield=hf,
+        texture_rgb=texture_rgb,
         config=config,
         seed=seed,
         provenance=provenance,

@@ -18,6 +18,7 @@ from marsscene.errors import CRSError
 __all__ = [
     "IAU_2015_MARS",
     "crs_from_wkt",
+    "grid_convergence_deg",
     "iau_2015_code",
     "is_projected_metres",
     "lonlat_to_xy",
@@ -125,3 +126,17 @@ def iau_2015_code(crs_wkt: str) -> str | None:
                if k != "proj") and float(params.get("k", params.get("k_0", 1.0))) == 1.0:
             return code
     return None
+
+
+def grid_convergence_deg(crs_wkt: str, lon_deg: float, lat_deg: float) -> float:
+    """Angle from true north to grid north at a point (in deg; 0 on an equirectangular grid's
+    meridians, the longitude offset on a polar stereographic grid)."""
+    from pyproj import Proj
+
+    try:
+        factors = Proj(crs_from_wkt(crs_wkt)).get_factors(
+            ((lon_deg + 180.0) % 360.0) - 180.0, lat_deg)
+    except Exception:  # projections without factors: report none
+        return 0.0
+    value = float(factors.meridian_convergence)
+    return value if np.isfinite(value) else 0.0

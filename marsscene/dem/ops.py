@@ -56,7 +56,7 @@ class PixelWindow:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Crop:
-    """What part of a DEM to keep: exactly one of ``pixels``, ``bounds_xy_m``, ``center_lonlat_deg``.
+    """What part of a DEM to keep: one of ``pixels``, ``bounds_xy_m`` or ``center_lonlat_deg``.
 
     ``pixels = (row_off, col_off, rows, cols)``; ``bounds_xy_m = (x_min, y_min, x_max, y_max)`` in
     the DEM's projected metres (posts whose centres fall inside are kept);
@@ -120,8 +120,8 @@ def crop_window(
         x, y = lonlat_to_xy(crs_wkt, lon, lat)
         cc = int(np.floor((float(x) - c) / a))
         rc = int(np.floor((float(y) - f) / e))
-        nc = int(round(spec.size_m[0] / a)) + 1
-        nr = int(round(spec.size_m[1] / -e)) + 1
+        nc = round(spec.size_m[0] / a) + 1
+        nr = round(spec.size_m[1] / -e) + 1
         c0, r0 = cc - nc // 2, rc - nr // 2
         c1, r1 = c0 + nc, r0 + nr
         what = f"lon/lat ({lon}, {lat}) x {spec.size_m} m"
@@ -149,7 +149,7 @@ def _center_lonlat(dem: DEM) -> tuple[float, float] | None:
         return None
     try:
         lon, lat = xy_to_lonlat(dem.crs_wkt, *dem.center_xy())
-    except Exception:  # noqa: BLE001 - a CRS without a usable inverse: no centre
+    except Exception:  # a CRS without a usable inverse: no centre
         return None
     return (float(lon), float(lat))
 

@@ -35,7 +35,9 @@ def _keys(t: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.where(at <= 1, w1, np.where(at < 2, w2, 0.0))
 
 
-def axis_weights(u: NDArray[np.float64], n_src: int, method: str, scale: float = 1.0) -> sp.csr_array:
+def axis_weights(
+    u: NDArray[np.float64], n_src: int, method: str, scale: float = 1.0
+) -> sp.csr_array:
     """Sparse ``(len(u), n_src)`` weights; row ``j`` interpolates at fractional index ``u[j]``.
 
     Parameters

@@ -104,13 +104,14 @@ def dtm_label(
     lines: int, samples: int, *, pointer: str, record_bytes: int, file_records: int,
     map_scale_m: float = 1.0, center_lat: float = 18.0, center_lon: float = 77.0,
     radius_km: float = 3394.8398133163, lpo: float = 1_066_700.5, spo: float = -1_200.5,
-    product_id: str = "DTEEC_045994_1985_046060_1985_U01", valid_range: tuple[float, float] = (
-        -2700.0, -2400.0), proj_type: str = "EQUIRECTANGULAR",
+    product_id: str = "DTEEC_045994_1985_046060_1985_U01",
+    valid_range: tuple[float, float] = (-2700.0, -2400.0), proj_type: str = "EQUIRECTANGULAR",
 ) -> str:
     """Assembled DTEEC label text (CRLF line ends are not needed by parsers; LF used)."""
     map_res = float(np.pi * radius_km * 1000.0 / 180.0 / map_scale_m)
     head = (f"PDS_VERSION_ID            = PDS3\n\n/* File format and length */\n"
-            f"RECORD_TYPE               = FIXED_LENGTH\nRECORD_BYTES              = {record_bytes}\n"
+            f"RECORD_TYPE               = FIXED_LENGTH\n"
+            f"RECORD_BYTES              = {record_bytes}\n"
             f"FILE_RECORDS              = {file_records}\n{pointer}\n\n")
     return (head + _IMAGE.format(lines=lines, samples=samples, vmin=float(valid_range[0]),
                                  vmax=float(valid_range[1]))
