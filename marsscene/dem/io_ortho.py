@@ -11,6 +11,7 @@ read (GDAL average) when the texture needs far fewer pixels than the source has.
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -36,7 +37,7 @@ __all__ = ["read_ortho"]
 
 def _jp2_source(label_path: Path, label: Label) -> RasterSource:
     import rasterio
-    from rasterio.errors import RasterioError
+    from rasterio.errors import NotGeoreferencedWarning, RasterioError
 
     comp = label.obj("COMPRESSED_FILE")
     unc = label.obj("UNCOMPRESSED_FILE")
@@ -47,8 +48,10 @@ def _jp2_source(label_path: Path, label: Label) -> RasterSource:
         raise DEMReadError(f"{label_path}: COMPRESSED_FILE {name!r} is not beside the label")
     img = unc.obj("IMAGE") if unc is not None else None
     try:
-        with rasterio.open(data) as ds:
-            shape, count, dtype = (ds.height, ds.width), ds.count, ds.dtypes[0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)  # georef is in the label
+            with rasterio.open(data) as ds:
+                shape, count, dtype = (ds.height, ds.width), ds.count, ds.dtypes[0]
     except RasterioError as err:
         raise DEMReadError(f"{data}: not a readable image ({err})") from None
     if img is not None:
@@ -120,7 +123,7 @@ def read_ortho(
     """
     import rasterio
     from rasterio.enums import Resampling
-    from rasterio.errors import RasterioError
+    from rasterio.errors import NotGeoreferencedWarning, RasterioError
     from rasterio.windows import Window
 
     p = Path(path)
@@ -137,7 +140,10 @@ def read_ortho(
     k = k if k >= 2 else 1
     out_rows, out_cols = max(win.rows // k, 1), max(win.cols // k, 1)
     try:
-        with rasterio.open(src.open_path) as ds:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            ds = rasterio.open(src.open_path)
+        with ds:
             raw: Any = ds.read(
                 bands, window=Window(win.col_off, win.row_off, win.cols, win.rows),
                 out_shape=(len(bands), out_rows, out_cols),
