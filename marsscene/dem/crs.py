@@ -22,6 +22,7 @@ __all__ = [
     "iau_2015_code",
     "is_projected_metres",
     "lonlat_to_xy",
+    "proj_params",
     "xy_to_lonlat",
 ]
 
@@ -105,6 +106,19 @@ def xy_to_lonlat(
     return np.asarray(lon, dtype=np.float64) % 360.0, np.asarray(lat, dtype=np.float64)
 
 
+def proj_params(crs_wkt: str) -> dict[str, Any]:
+    """PROJ parameters of a projected CRS (``{}`` for other CRSs)."""
+    import warnings
+
+    crs = crs_from_wkt(crs_wkt)
+    if not crs.is_projected:
+        return {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # "lose projection information": expected
+        params: dict[str, Any] = crs.to_dict()
+    return params
+
+
 def iau_2015_code(crs_wkt: str) -> str | None:
     """The IAU_2015 Mars code equal to this CRS (same projection, centre and 3396190 m sphere).
 
@@ -112,8 +126,7 @@ def iau_2015_code(crs_wkt: str) -> str | None:
     latitude of true scale, so most DTMs have no IAU code (``None``); the label sphere is then the
     CRS of record.
     """
-    crs = crs_from_wkt(crs_wkt)
-    params = crs.to_dict() if crs.is_projected else {}
+    params = proj_params(crs_wkt)
     radius = params.get("R", params.get("a"))
     if radius is None or params.get("b", radius) != radius:
         return None

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.dem.crs import crs_from_wkt
+from marsscene.dem.crs import crs_from_wkt, proj_params
 from marsscene.dem.model import Ortho
 from marsscene.dem.resample import resample_separable
 from marsscene.errors import ConfigError, CRSError
@@ -30,7 +30,7 @@ def same_crs(a_wkt: str, b_wkt: str) -> bool:
     a, b = crs_from_wkt(a_wkt), crs_from_wkt(b_wkt)
     if a.equals(b, ignore_axis_order=True):
         return True
-    pa, pb = a.to_dict(), b.to_dict()
+    pa, pb = proj_params(a_wkt), proj_params(b_wkt)
     keys = set(pa) | set(pb)
     for k in keys - {"no_defs", "type", "units", "x_0", "y_0", "lat_0"}:
         va, vb = pa.get(k), pb.get(k)

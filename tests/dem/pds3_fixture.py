@@ -164,3 +164,52 @@ def write_pds3_dtm(
             out[~np.isfinite(out)] = NULL4
             fh.write(out.tobytes())
     return path.with_suffix(".LBL") if detached else img_path
+
+
+def write_hirise_ortho(
+    folder: Path, dn: np.ndarray, *, template: Path, x0_m: float, y0_m: float, scale_m: float,
+    name: str = "ESP_TEST_RED",
+) -> Path:
+    """Write ``<name>.JP2`` (lossless, uint16 DN) and an **ASSEMBLED** ``<name>.LBL``.
+
+    The label is the real HiRISE RDR label ``template`` (GDAL's ESP_013951_1955_RED.LBL) with
+    the file name, image size, MAP_SCALE and projection offsets replaced so that the upper-left
+    pixel corner is at projected ``(x0_m, y0_m)``. Its DN scaling (SCALING_FACTOR, OFFSET) and
+    CORE_NULL = 0 are the real label's.
+    """
+    import re
+    import warnings
+
+    import rasterio
+    import rasterio.errors
+
+    rows, cols = dn.shape
+    jp2 = folder / f"{name}.JP2"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", rasterio.errors.NotGeoreferencedWarning)  # label georef
+        with rasterio.open(jp2, "w", driver="JP2OpenJPEG", width=cols, height=rows, count=1,
+                           dtype="uint16", QUALITY=100, REVERSIBLE="YES") as ds:
+            ds.write(dn.astype(np.uint16), 1)
+    text = template.read_bytes().decode("ascii").replace("\r\n", "\n")
+    spo = -x0_m / scale_m - 0.5
+    lpo = y0_m / scale_m - 0.5
+    subs = {
+        r'FILE_NAME                  = "byte.tif"': f'FILE_NAME                  = "{jp2.name}"',
+        r"LINES                      = 67395": f"LINES                      = {rows}",
+        r"LINE_SAMPLES               = 19243": f"LINE_SAMPLES               = {cols}",
+        r"MAP_SCALE                    = 0.5 <METERS/PIXEL>":
+            f"MAP_SCALE                    = {scale_m!r} <METERS/PIXEL>",
+        r"LINE_PROJECTION_OFFSET       = 1872006.5 <PIXEL>":
+            f"LINE_PROJECTION_OFFSET       = {lpo!r} <PIXEL>",
+        r"SAMPLE_PROJECTION_OFFSET     = 12278395.5 <PIXEL>":
+            f"SAMPLE_PROJECTION_OFFSET     = {spo!r} <PIXEL>",
+    }
+    for old, new in subs.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    text = re.sub(r"^PDS_VERSION_ID.*$", "PDS_VERSION_ID            = PDS3\n"
+                  "/* ASSEMBLED TEST FIXTURE: real HiRISE RDR label with test geometry */",
+                  text, count=1, flags=re.M)
+    lbl = folder / f"{name}.LBL"
+    lbl.write_text(text, encoding="ascii")
+    return lbl

@@ -105,12 +105,11 @@ def test_not_a_raster(tmp_path: Path) -> None:
 
 def test_geographic_crs_refused(tmp_path: Path) -> None:
     import rasterio
-    from rasterio.transform import from_origin
 
     path = tmp_path / "geo.tif"
     with rasterio.open(path, "w", driver="GTiff", width=4, height=4, count=1, dtype="float32",
                        crs="+proj=longlat +R=3396190 +no_defs",
-                       transform=from_origin(137.0, -4.0, 1e-4, 1e-4)) as ds:
+                       transform=rasterio.Affine(1e-4, 0, 137.0, 0, -1e-4, -4.0)) as ds:
         ds.write(np.zeros((4, 4), np.float32), 1)
     with pytest.raises(CRSError, match="geographic"):
         read_dem(path)
