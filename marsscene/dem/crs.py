@@ -27,7 +27,7 @@ __all__ = [
 ]
 
 #: IAU_2015 Mars CRSs on the 3396190 m sphere that a label CRS may match exactly.
-IAU_2015_MARS = {
+IAU_2015_MARS: dict[str, dict[str, Any]] = {
     "IAU_2015:49910": {"proj": "eqc", "lat_ts": 0.0, "lon_0": 0.0, "lat_0": 0.0},
     "IAU_2015:49915": {"proj": "eqc", "lat_ts": 0.0, "lon_0": 180.0, "lat_0": 0.0},
     "IAU_2015:49930": {"proj": "stere", "lat_0": 90.0, "lon_0": 0.0},
@@ -91,7 +91,7 @@ def lonlat_to_xy(
     x = np.asarray(x, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
     if not (np.isfinite(x).all() and np.isfinite(y).all()):
-        raise CRSError(f"lon/lat ({lon_deg}, {lat_deg}) cannot be projected into the DEM's CRS")
+        raise CRSError(f"lon/lat ({lon_deg!r}, {lat_deg!r}) cannot be projected into the DEM's CRS")
     return x, y
 
 
@@ -135,7 +135,7 @@ def iau_2015_code(crs_wkt: str) -> str | None:
     for code, want in IAU_2015_MARS.items():
         if params.get("proj") != want["proj"]:
             continue
-        if all(np.isclose(float(params.get(k, 0.0)), v, atol=1e-9) for k, v in want.items()
+        if all(abs(float(params.get(k, 0.0)) - float(v)) <= 1e-9 for k, v in want.items()
                if k != "proj") and float(params.get("k", params.get("k_0", 1.0))) == 1.0:
             return code
     return None

@@ -116,7 +116,8 @@ def _pds3_source(path: Path) -> RasterSource:
     layout = pds3.image_layout(label)
     _check_pds3_data(path, label_length(blob), layout)
     meta = pds3.label_metadata(label)
-    missing = (layout.missing_bits,) if layout.missing_bits is not None else ()
+    missing: tuple[int, ...] = (
+        (layout.missing_bits,) if layout.missing_bits is not None else ())
     if layout.dtype.kind == "f" and layout.dtype.itemsize == 4:
         missing = tuple(sorted(set(missing) | set(pds3.ISIS_SPECIAL_BITS_F32)))
     return RasterSource(

@@ -159,5 +159,5 @@ def read_ortho(
     sx, sy = a * win.cols / out_cols, e * win.rows / out_rows
     transform = (sx, 0.0, c + a * win.col_off, 0.0, sy, f + e * win.row_off)
     meta = {"driver": src.driver, "decimation": k, **src.metadata}
-    return Ortho(image=np.moveaxis(img, 0, -1), transform=transform,  # type: ignore[arg-type]
+    return Ortho(image=np.moveaxis(img, 0, -1), transform=transform,
                  crs_wkt=src.crs_wkt, source_path=str(p), metadata=meta)

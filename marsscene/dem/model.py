@@ -29,7 +29,7 @@ def _check_transform(transform: Any) -> Transform:
         raise ConfigError(
             f"transform must be north-up and unrotated (a > 0, b = d = 0, e < 0); got {t}"
         )
-    return t  # type: ignore[return-value]
+    return (t[0], t[1], t[2], t[3], t[4], t[5])
 
 
 class _Georef:

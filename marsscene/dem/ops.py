@@ -212,7 +212,8 @@ def resample(
     n_rows = int(np.floor((rows - 1) * src / post_m + 1e-9)) + 1
     step = post_m / src
     z = resample_separable(
-        dem.elevation_m, np.arange(n_rows) * step, np.arange(n_cols) * step,
+        dem.elevation_m, np.arange(n_rows, dtype=np.float64) * step,
+        np.arange(n_cols, dtype=np.float64) * step,
         method=method, scale_rows=step, scale_cols=step,
     )
     x0, _, _, y1 = dem.post_bounds_xy_m

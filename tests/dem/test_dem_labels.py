@@ -34,7 +34,7 @@ END
 
 
 def test_hidtmgen_fixture_geotransform_matches_science_reference() -> None:
-    # SCIENCE.md §7.3: SPO = -10413.5, LPO = 760.5, 1000 m -> GT (10413000, 1000, 0, 761000, 0, -1000)
+    # SCIENCE.md §7.3: SPO -10413.5, LPO 760.5, 1000 m -> GT (10413000, 1000, 0, 761000, 0, -1000)
     label = parse_label(HIDTMGEN_FIXTURE)
     a, b, c, d, e, f = pds3.map_geotransform(label)
     assert (c, a, b, f, d, e) == (10413000.0, 1000.0, 0.0, 761000.0, 0.0, -1000.0)

@@ -160,7 +160,7 @@ def test_fill_nodata_reproduces_a_plane() -> None:
 def test_mostly_missing_crop_is_refused() -> None:
     z = np.full((20, 20), np.nan, np.float32)
     z[:5] = 1.0
-    with pytest.raises(ConfigError, match="75.0 % of the 400 posts are missing"):
+    with pytest.raises(ConfigError, match=r"75\.0 % of the 400 posts are missing"):
         ops.fill_nodata(plane_dem(20, 20).replace(elevation_m=z))
 
 
