@@ -230,7 +230,7 @@ def resample(
                        metadata=meta)
 
 
-def _laplace_fill(z: NDArray[np.float64], missing: NDArray[np.bool_]) -> NDArray[np.float64]:
+def _laplace_fill(z: NDArray[np.float32], missing: NDArray[np.bool_]) -> NDArray[np.float32]:
     rows, cols = z.shape
     idx = -np.ones(z.shape, dtype=np.int64)
     rr, cc = np.nonzero(missing)
@@ -250,12 +250,12 @@ def _laplace_fill(z: NDArray[np.float64], missing: NDArray[np.bool_]) -> NDArray
         unknown = nb_idx >= 0
         off_i.append(me[unknown])
         off_j.append(nb_idx[unknown])
-        np.add.at(rhs, me[~unknown], z[nb_r[~unknown], nb_c[~unknown]])
+        np.add.at(rhs, me[~unknown], z[nb_r[~unknown], nb_c[~unknown]].astype(np.float64))
     i = np.concatenate([np.arange(n), *off_i])
     j = np.concatenate([np.arange(n), *off_j])
     v = np.concatenate([diag, -np.ones(sum(a.size for a in off_i))])
     mat = sp.csc_array((v, (i, j)), shape=(n, n))
-    out = z.copy()
+    out = np.array(z, dtype=np.float32)
     out[rr, cc] = spsolve(mat, rhs)
     return out
 
@@ -289,7 +289,7 @@ def fill_nodata(dem: DEM, *, max_missing_fraction: float = 0.5) -> tuple[DEM, in
             f"(allowed at most {max_missing_fraction * 100:.0f} %, "
             "terrain.max_missing_fraction): choose a crop inside the DTM's valid area"
         )
-    filled = _laplace_fill(z.astype(np.float64), missing).astype(np.float32)
+    filled = _laplace_fill(z, missing)
     warnings.warn(
         f"{dem.product_id or 'DEM'}: filled {n:,} missing posts ({frac * 100:.2f} %) by "
         "Laplace inpainting", NodataFilledWarning, stacklevel=2,
