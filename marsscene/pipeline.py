@@ -168,15 +168,24 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                     models.append(ModelRef("terrain", "sub-DEM fractal detail", _FBM_CITATION))
                 else:
                     hf = resample(hf, post_m=post_m)
-            if tcfg.ortho_path:
-                from marsscene.dem.io_ortho import read_ortho
+            if frame.crs_wkt:
+                from marsscene.dem.crs import iau_2015_code
+
+                summary["crs_iau_2015"] = iau_2015_code(frame.crs_wkt)
+                summary["grid_convergence_deg"] = frame.grid_convergence_deg
+            ortho = dem.ortho
+            if tcfg.ortho_path or ortho is not None:
                 from marsscene.dem.texture import texture_grid
                 from marsscene.dem.texture import texture_rgb as drape
 
                 bounds = footprint_projected_m(hf, frame)
-                grid = texture_grid(bounds, 1e-9, tcfg.texture_max_px)
-                ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
-                                   pixel_m=(bounds[2] - bounds[0]) / grid[1])
+                if tcfg.ortho_path:
+                    from marsscene.dem.io_ortho import read_ortho
+
+                    grid = texture_grid(bounds, 1e-9, tcfg.texture_max_px)
+                    ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
+                                       pixel_m=(bounds[2] - bounds[0]) / grid[1])
+                assert ortho is not None
                 texture_rgb = drape(ortho, bounds, crs_wkt=frame.crs_wkt,
                                     max_px=tcfg.texture_max_px)
                 summary["texture_shape_rows_cols"] = list(texture_rgb.shape[:2])

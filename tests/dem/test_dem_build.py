@@ -157,3 +157,6 @@ def test_cli_errors(tmp_path: Path, runner) -> None:  # type: ignore[no-untyped-
     res = runner.invoke(main, ["build", "--crop-lonlat", "10", "10", "--size-m", "5", "5",
                                "--out", str(tmp_path / "z")])
     assert res.exit_code == 1 and "outside the DEM" in res.output
+    res = runner.invoke(main, ["build", "--post-m", "0.01", "--out", str(tmp_path / "m")])
+    assert res.exit_code == 1 and "GB" in res.output and "budget" in res.output
+    assert not (tmp_path / "m").exists()
