@@ -18,15 +18,8 @@ from typing import Any
 import numpy as np
 
 from marsscene.dem import pds3
-from marsscene.dem.io import (
-    RasterSource,
-    _head,
-    _is_pds3,
-    _sibling,
-    missing_mask,
-    open_source,
-    select_band,
-)
+from marsscene.dem.io import missing_mask, open_source, select_band
+from marsscene.dem.io_pds3 import RasterSource, _head, _is_pds3, _sibling
 from marsscene.dem.model import Ortho
 from marsscene.dem.ops import PixelWindow
 from marsscene.dem.pvl import Label, parse_label
