@@ -11,7 +11,6 @@ import logging
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
 
 from marsscene.config import SceneConfig
 from marsscene.dem.model import DEM
@@ -20,7 +19,12 @@ from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
 from marsscene.terrain.default import DEFAULT_DEM_CITATION, default_dem_path
-from marsscene.terrain.from_dem import GeoFrame, footprint_projected_m, prepare_dem
+from marsscene.terrain.from_dem import (
+    GeoFrame,
+    footprint_projected_m,
+    plan_crop,
+    prepare_dem,
+)
 
 __all__ = ["build_scene"]
 
@@ -53,21 +57,11 @@ class _Timer:
 
 
 def _load_dem(config: SceneConfig, dem: DEM | None) -> tuple[DEM | None, dict[str, str]]:
-    """Read (or take) the DEM, reading only the configured crop window (memory checked first)."""
-    from marsscene.dem.ops import Crop
-
+    """Read (or take) the DEM, reading only the planned crop window (memory checked first)."""
     tcfg = config.terrain
-    spec = None
-    if tcfg.crop_px is not None:
-        spec = Crop(pixels=tcfg.crop_px)
-    elif tcfg.crop_bounds_m is not None:
-        spec = Crop(bounds_xy_m=tcfg.crop_bounds_m)
-    elif tcfg.crop_lonlat is not None:
-        spec = Crop(center_lonlat_deg=tcfg.crop_lonlat, size_m=tcfg.size_m)
     inputs = {"ortho": tcfg.ortho_path} if tcfg.ortho_path else {}
     if dem is not None:
-        if spec is None and tcfg.size_m is not None and dem.crs_wkt:
-            spec = _center_crop(dem.center_xy(), tcfg.size_m)
+        spec = plan_crop(tcfg, dem.transform, dem.shape, default_post_m=None)
         if spec is not None:
             from marsscene.dem.ops import crop
 
@@ -81,21 +75,13 @@ def _load_dem(config: SceneConfig, dem: DEM | None) -> tuple[DEM | None, dict[st
     path = default_dem_path() if src == "default" else tcfg.dem_path
     if path is None:  # pragma: no cover - TerrainConfig validation forbids it
         raise ConfigError('terrain.source = "dem" needs terrain.dem_path')
-    if spec is None and tcfg.size_m is not None:
-        s = open_source(path)
-        a, _, c, _, e, f = s.transform
-        spec = _center_crop((c + a * s.shape[1] / 2, f + e * s.shape[0] / 2), tcfg.size_m)
-    target = tcfg.post_m if tcfg.post_m is not None else (0.25 if src == "default" else None)
+    info = open_source(path)
+    default_post = 0.25 if src == "default" else None
+    spec = plan_crop(tcfg, info.transform, info.shape, default_post_m=default_post)
+    target = tcfg.post_m if tcfg.post_m is not None else default_post
     out = read_dem(path, band=tcfg.band, crop=spec, max_bytes=tcfg.max_memory_gb * 1e9,
                    target_post_m=target)
     return out, {"dem": str(path)} | inputs
-
-
-def _center_crop(center_xy: tuple[float, float], size_m: tuple[float, float]) -> Any:
-    from marsscene.dem.ops import Crop
-
-    (cx, cy), (w, h) = center_xy, size_m
-    return Crop(bounds_xy_m=(cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2))
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:

@@ -20,6 +20,7 @@ from marsscene.dem.resample import RESAMPLING, resample_separable
 from marsscene.errors import ConfigError, MarsSceneWarning, MemoryBudgetError
 
 __all__ = [
+    "AutoCropWarning",
     "Crop",
     "CropClippedWarning",
     "PixelWindow",
@@ -40,6 +41,10 @@ BYTES_PER_OUTPUT_POST = 160
 
 class CropClippedWarning(MarsSceneWarning):
     """A requested crop extends past the DEM and was clipped to it."""
+
+
+class AutoCropWarning(MarsSceneWarning):
+    """No crop was given and the whole DEM would not fit in memory: a centred crop was taken."""
 
 
 @dataclass(frozen=True, slots=True)

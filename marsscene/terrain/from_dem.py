@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import ndimage
@@ -12,7 +14,17 @@ from marsscene.errors import ConfigError
 from marsscene.terrain.config import TerrainConfig
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["GeoFrame", "footprint_projected_m", "heightfield_from_dem", "prepare_dem"]
+if TYPE_CHECKING:
+    from marsscene.dem.ops import Crop
+
+__all__ = [
+    "AUTO_CROP_M",
+    "GeoFrame",
+    "footprint_projected_m",
+    "heightfield_from_dem",
+    "plan_crop",
+    "prepare_dem",
+]
 
 
 @dataclass(frozen=True)
@@ -84,6 +96,47 @@ def footprint_projected_m(hf: Heightfield, frame: GeoFrame) -> tuple[float, floa
     return (x0 + ox, y0 + oy, x1 + ox, y1 + oy)
 
 
+#: Side of the centred square crop taken when no crop is configured and the whole DEM would not
+#: fit in the memory budget (in m; the MarsLab reference scenes are 0.5-3.6 km).
+AUTO_CROP_M = 1000.0
+
+
+def plan_crop(cfg: TerrainConfig, transform: tuple[float, ...], shape: tuple[int, int], *,
+              default_post_m: float | None) -> Crop | None:
+    """The DEM crop the config asks for, or ``None`` for the whole DEM.
+
+    ``crop_px`` / ``crop_bounds_m`` / ``crop_lonlat`` (+ ``size_m``) as given; ``size_m`` alone
+    crops that footprint around the DEM's centre. With no crop and a whole DEM whose estimated
+    build memory exceeds ``max_memory_gb``, a centred ``AUTO_CROP_M`` square is taken with an
+    :class:`~marsscene.dem.ops.AutoCropWarning` (a full HiRISE DTM is ~6000 x 20000 posts).
+    """
+    from marsscene.dem import ops
+
+    if cfg.crop_px is not None:
+        return ops.Crop(pixels=cfg.crop_px)
+    if cfg.crop_bounds_m is not None:
+        return ops.Crop(bounds_xy_m=cfg.crop_bounds_m)
+    if cfg.crop_lonlat is not None:
+        return ops.Crop(center_lonlat_deg=cfg.crop_lonlat, size_m=cfg.size_m)
+    rows, cols = shape
+    post = abs(transform[0])
+    size = cfg.size_m
+    if size is None:
+        target = cfg.post_m or default_post_m or post
+        need = ops.estimate_bytes(rows * cols, int(rows * cols * (post / target) ** 2))
+        if need <= cfg.max_memory_gb * 1e9 or max(rows, cols) * post <= AUTO_CROP_M:
+            return None  # fits, or cropping cannot help (read_dem then refuses with the estimate)
+        size = (AUTO_CROP_M, AUTO_CROP_M)
+        warnings.warn(
+            f"the whole {rows} x {cols} DEM would need about {need / 1e9:.1f} GB "
+            f"(terrain.max_memory_gb = {cfg.max_memory_gb}); building the centred "
+            f"{AUTO_CROP_M:g} m x {AUTO_CROP_M:g} m crop instead (set size_m / crop_lonlat / "
+            "crop_px to choose)", ops.AutoCropWarning, stacklevel=3)
+    n_cols = min(round(size[0] / post) + 1, cols)
+    n_rows = min(round(size[1] / abs(transform[4])) + 1, rows)
+    return ops.Crop(pixels=(rows // 2 - n_rows // 2, cols // 2 - n_cols // 2, n_rows, n_cols))
+
+
 def prepare_dem(dem: DEM, cfg: TerrainConfig, *, default_post_m: float | None) -> tuple[
         DEM, float, list[str], dict[str, object]]:
     """Fill missing posts, detrend and coarsen a DEM as ``cfg`` asks (pure).
@@ -99,6 +152,9 @@ def prepare_dem(dem: DEM, cfg: TerrainConfig, *, default_post_m: float | None) -
     if dem.metadata.get("PRODUCT_ID"):
         summary["dem_product_id"] = dem.product_id
     if "window_rows_cols" in dem.metadata:
+        win = dem.metadata["window_rows_cols"]
+        notes.append(f"read DEM window rows {win[0]}..{win[0] + win[2] - 1}, "
+                     f"cols {win[1]}..{win[1] + win[3] - 1}")
         summary["dem_window_rows_cols"] = list(dem.metadata["window_rows_cols"])
     if cfg.fill_nodata:
         dem, n_filled = ops.fill_nodata(dem, max_missing_fraction=cfg.max_missing_fraction)

@@ -160,3 +160,17 @@ def test_cli_errors(tmp_path: Path, runner) -> None:  # type: ignore[no-untyped-
     res = runner.invoke(main, ["build", "--post-m", "0.01", "--out", str(tmp_path / "m")])
     assert res.exit_code == 1 and "GB" in res.output and "budget" in res.output
     assert not (tmp_path / "m").exists()
+
+
+def test_whole_dem_over_budget_is_auto_cropped(tmp_path: Path) -> None:
+    from marsscene.dem.ops import AutoCropWarning
+
+    rng = np.random.default_rng(5)
+    z = (-2500 + np.cumsum(rng.standard_normal((1500, 1200)), axis=1) * 0.05).astype(np.float32)
+    path = write_pds3_dtm(tmp_path / "DTEEC_BIG.IMG", z)
+    cfg = ms.SceneConfig.from_dict({"terrain": {"source": "dem", "dem_path": str(path),
+                                                "max_memory_gb": 0.25}})
+    with pytest.warns(AutoCropWarning, match=r"about 0\.3 GB"):
+        scene = ms.build_scene(cfg, seed=0)
+    assert scene.heightfield.shape == (1001, 1001)
+    assert scene.provenance.extra["dem_window_rows_cols"] == [250, 100, 1001, 1001]

@@ -136,3 +136,26 @@ def test_bundled_gale_geotiff() -> None:
     lon, lat = dem.center_lonlat_deg or (0.0, 0.0)
     assert lon == pytest.approx(137.370, abs=0.01) and lat == pytest.approx(-4.667, abs=0.01)
     assert open_source(GALE_TIF).driver == "GTiff"
+
+
+def test_geotiff_nodata_corner(synthetic_dem_path: Path) -> None:
+    dem = read_dem(synthetic_dem_path)
+    assert np.isnan(dem.elevation_m[:3, :3]).all()
+    assert int(np.isnan(dem.elevation_m).sum()) == 9
+
+
+def test_polar_stereographic_dtm(tmp_path: Path, gale_z: np.ndarray) -> None:
+    # DTEPC-style label: polar stereographic about the north pole, planetocentric sphere
+    path = write_pds3_dtm(tmp_path / "DTEPC_POLAR.IMG", gale_z, proj_type="POLAR STEREOGRAPHIC",
+                          center_lat=90.0, center_lon=0.0, radius_km=3376.2,
+                          spo=-200_000.5, lpo=-10_000.5)
+    dem = read_dem(path)
+    assert "+proj=stere" in dem.crs_wkt and "+R=3376200.0" in dem.crs_wkt
+    lon, lat = dem.center_lonlat_deg or (0.0, 0.0)
+    # centre x ~ 200080 m, y ~ 9940 m from the pole: r = 2R tan((90 - lat) / 2)
+    x, y = dem.center_xy()
+    r = float(np.hypot(x, y))
+    assert lat == pytest.approx(90 - 2 * np.degrees(np.arctan(r / (2 * 3376200.0))), abs=1e-9)
+    assert lon == pytest.approx(np.degrees(np.arctan2(x, -y)) % 360, abs=1e-9)
+    part = read_dem(path, crop=Crop(center_lonlat_deg=(lon, lat), size_m=(40.0, 30.0)))
+    assert part.shape == (31, 41)
