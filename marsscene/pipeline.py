@@ -136,6 +136,8 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                 dem, tcfg, default_post_m=default_post
             )
             notes.extend(dem_notes)
+            if "data_file" in dem.metadata:  # the .IMG of a detached .LBL
+                inputs["dem_data"] = str(dem.metadata["data_file"])
             summary.update(dem_summary)
             hf, frame = heightfield_from_dem(dem, z_scale=tcfg.z_scale)
             if tcfg.source == "default":
@@ -172,6 +174,8 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                     ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
                                        pixel_m=(bounds[2] - bounds[0]) / grid[1])
                 assert ortho is not None
+                if "data_file" in ortho.metadata:  # the JP2 beside a .LBL
+                    inputs["ortho_data"] = str(ortho.metadata["data_file"])
                 texture_rgb = drape(ortho, bounds, crs_wkt=frame.crs_wkt,
                                     max_px=tcfg.texture_max_px)
                 summary["texture_shape_rows_cols"] = list(texture_rgb.shape[:2])

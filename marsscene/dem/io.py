@@ -30,7 +30,7 @@ from marsscene.dem.ops import (
     crop_window,
     window_transform,
 )
-from marsscene.errors import CRSError, DEMReadError
+from marsscene.errors import ConfigError, CRSError, DEMReadError
 
 __all__ = ["RasterSource", "open_source", "read_dem"]
 
@@ -161,6 +161,7 @@ def read_dem(
     *,
     band: int | None = None,
     crop: Crop | None = None,
+    window: tuple[int, int, int, int] | None = None,
     max_bytes: float | None = None,
     target_post_m: float | None = None,
 ) -> DEM:
@@ -175,6 +176,8 @@ def read_dem(
         1-based elevation band; required when the file has several bands.
     crop : Crop, optional
         Pixel window, projected bounds or lon/lat centre + size (see :func:`ops.crop_window`).
+    window : (row_off, col_off, rows, cols), optional
+        Shorthand for ``crop=Crop(pixels=window)``.
     max_bytes : float, optional
         Refuse (:class:`~marsscene.errors.MemoryBudgetError`) before reading when the estimated
         build memory for this window (resampled to ``target_post_m``) exceeds it.
@@ -188,6 +191,10 @@ def read_dem(
     ------
     DEMReadError, CRSError, ConfigError, MemoryBudgetError
     """
+    if window is not None:
+        if crop is not None:
+            raise ConfigError("give crop or window, not both")
+        crop = Crop(pixels=tuple(int(v) for v in window))  # type: ignore[arg-type]
     src = open_source(path)
     b = select_band(src, band)
     if src.crs_wkt and not is_projected_metres(src.crs_wkt):

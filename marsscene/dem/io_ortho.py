@@ -52,7 +52,7 @@ def _jp2_source(label_path: Path, label: Label) -> RasterSource:
         if want != shape:
             raise DEMReadError(f"{data}: image is {shape}, the label says {want}")
     null = img.find("CORE_NULL", 0) if img is not None else 0
-    meta = pds3.label_metadata(label)
+    meta = {**pds3.label_metadata(label), "data_file": str(data)}
     return RasterSource(
         open_path=data, source_path=label_path, shape=shape, count=count, dtype=dtype,
         transform=pds3.map_geotransform(label), crs_wkt=pds3.map_projection(label),

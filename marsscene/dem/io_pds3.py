@@ -55,7 +55,8 @@ def _sibling(path: Path, name: str) -> Path | None:
     return None
 
 
-def _check_pds3_data(label_path: Path, label_bytes: int, layout: pds3.ImageLayout) -> None:
+def _check_pds3_data(label_path: Path, label_bytes: int, layout: pds3.ImageLayout) -> Path:
+    """Check the data file holds the label's image; return the data file."""
     if layout.data_file is None:
         data_path, attached = label_path, True
     else:
@@ -80,14 +81,17 @@ def _check_pds3_data(label_path: Path, label_bytes: int, layout: pds3.ImageLayou
             f"{layout.bands} {layout.dtype.name} image at byte {layout.offset_bytes + 1} needs "
             f"{need:,} bytes, the file has {size:,} (or the ^IMAGE pointer is wrong)"
         )
+    return data_path
 
 
 def _pds3_source(path: Path) -> RasterSource:
     blob = path.read_bytes() if path.stat().st_size < 1 << 16 else _head(path, 1 << 16)
     label = parse_label(blob)
     layout = pds3.image_layout(label)
-    _check_pds3_data(path, label_length(blob), layout)
+    data_path = _check_pds3_data(path, label_length(blob), layout)
     meta = pds3.label_metadata(label)
+    if data_path != path:
+        meta["data_file"] = str(data_path)
     missing: tuple[int, ...] = (
         (layout.missing_bits,) if layout.missing_bits is not None else ())
     if layout.dtype.kind == "f" and layout.dtype.itemsize == 4:

@@ -25,6 +25,7 @@ def test_pds3_round_trip_and_missing(which: str, request: pytest.FixtureRequest,
     assert dem.metadata["PRODUCT_ID"] == "DTEEC_045994_1985_046060_1985_U01"
     assert dem.metadata["MISSING_CONSTANT"] == "16#FF7FFFFB#"
     assert dem.metadata["CENTER_LATITUDE"] == 18.0 and dem.metadata["A_AXIS_RADIUS"] > 3394
+    assert ("data_file" in dem.metadata) == (which == "pds3_detached")
 
 
 def test_pds3_known_post_coordinates(pds3_attached: Path) -> None:
@@ -59,7 +60,7 @@ def test_isis_special_pixels_by_bits_only(tmp_path: Path, gale_z: np.ndarray) ->
 
 def test_windowed_read_equals_crop_of_full(pds3_attached: Path) -> None:
     full = read_dem(pds3_attached)
-    part = read_dem(pds3_attached, crop=Crop(pixels=(10, 20, 30, 40)))
+    part = read_dem(pds3_attached, window=(10, 20, 30, 40))
     np.testing.assert_array_equal(part.elevation_m, full.elevation_m[10:40, 20:60])
     assert part.xy_of(0, 0) == full.xy_of(10, 20)
     assert part.metadata["window_rows_cols"] == [10, 20, 30, 40]
