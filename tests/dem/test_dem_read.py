@@ -160,3 +160,21 @@ def test_polar_stereographic_dtm(tmp_path: Path, gale_z: np.ndarray) -> None:
     assert lon == pytest.approx(np.degrees(np.arctan2(x, -y)) % 360, abs=1e-9)
     part = read_dem(path, crop=Crop(center_lonlat_deg=(lon, lat), size_m=(40.0, 30.0)))
     assert part.shape == (31, 41)
+
+
+def test_pds4_written_by_gdal(tmp_path: Path, gale_z: np.ndarray) -> None:
+    import rasterio
+
+    z = gale_z.copy()
+    z[5, 7] = -3.4028226550889045e38
+    crs = ("+proj=eqc +lat_ts=18 +lat_0=0 +lon_0=77 +x_0=0 +y_0=0 +R=3394839.8 +units=m "
+           "+no_defs")
+    path = tmp_path / "dtm.xml"
+    with rasterio.open(path, "w", driver="PDS4", width=z.shape[1], height=z.shape[0], count=1,
+                       dtype="float32", crs=crs, nodata=-3.4028226550889045e38,
+                       transform=rasterio.Affine(1.0, 0, 1000.0, 0, -1.0, 1_066_000.0)) as ds:
+        ds.write(z, 1)
+    dem = read_dem(path)
+    assert dem.metadata["driver"] == "PDS4" and dem.transform[2] == 1000.0
+    assert np.isnan(dem.elevation_m[5, 7]) and int(np.isnan(dem.elevation_m).sum()) == 1
+    assert dem.center_lonlat_deg is not None and 77.0 < dem.center_lonlat_deg[0] < 77.1
