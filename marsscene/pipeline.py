@@ -12,12 +12,16 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+import numpy as np
+from numpy.typing import NDArray
+
 from marsscene.config import SceneConfig
 from marsscene.dem.model import DEM
 from marsscene.errors import ConfigError
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
+from marsscene.terrain.config import TerrainConfig
 from marsscene.terrain.default import DEFAULT_DEM_CITATION, default_dem_path
 from marsscene.terrain.from_dem import (
     GeoFrame,
@@ -25,6 +29,7 @@ from marsscene.terrain.from_dem import (
     plan_crop,
     prepare_dem,
 )
+from marsscene.terrain.heightfield import Heightfield
 
 __all__ = ["build_scene"]
 
@@ -82,6 +87,39 @@ def _load_dem(config: SceneConfig, dem: DEM | None) -> tuple[DEM | None, dict[st
     out = read_dem(path, band=tcfg.band, crop=spec, max_bytes=tcfg.max_memory_gb * 1e9,
                    target_post_m=target)
     return out, {"dem": str(path)} | inputs
+
+
+def _drape_ortho(
+    tcfg: TerrainConfig,
+    dem: DEM,
+    hf: Heightfield,
+    frame: GeoFrame,
+    inputs: dict[str, str],
+    notes: list[str],
+    summary: dict[str, object],
+) -> NDArray[np.uint8] | None:
+    """The orthoimage (``tcfg.ortho_path``, else ``dem.ortho``) co-registered to the terrain
+    footprint as an RGB texture, row 0 north; ``None`` without one."""
+    ortho = dem.ortho
+    if not tcfg.ortho_path and ortho is None:
+        return None
+    from marsscene.dem.texture import texture_grid, texture_rgb
+
+    bounds = footprint_projected_m(hf, frame)
+    if tcfg.ortho_path:
+        from marsscene.dem.io_ortho import read_ortho  # rasterio
+
+        rows_cols = texture_grid(bounds, 1e-9, tcfg.texture_max_px)
+        ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
+                           pixel_m=(bounds[2] - bounds[0]) / rows_cols[1])
+    assert ortho is not None
+    if "data_file" in ortho.metadata:  # the JP2 beside a .LBL
+        inputs["ortho_data"] = str(ortho.metadata["data_file"])
+    rgb = texture_rgb(ortho, bounds, crs_wkt=frame.crs_wkt, max_px=tcfg.texture_max_px)
+    summary["texture_shape_rows_cols"] = list(rgb.shape[:2])
+    name = ortho.metadata.get("PRODUCT_ID", ortho.source_path)
+    notes.append(f"orthoimage {name} co-registered to the terrain footprint")
+    return rgb
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
@@ -161,26 +199,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
                 summary["crs_iau_2015"] = iau_2015_code(frame.crs_wkt)
                 summary["grid_convergence_deg"] = frame.grid_convergence_deg
-            ortho = dem.ortho
-            if tcfg.ortho_path or ortho is not None:
-                from marsscene.dem.texture import texture_grid
-                from marsscene.dem.texture import texture_rgb as drape
-
-                bounds = footprint_projected_m(hf, frame)
-                if tcfg.ortho_path:
-                    from marsscene.dem.io_ortho import read_ortho
-
-                    grid = texture_grid(bounds, 1e-9, tcfg.texture_max_px)
-                    ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
-                                       pixel_m=(bounds[2] - bounds[0]) / grid[1])
-                assert ortho is not None
-                if "data_file" in ortho.metadata:  # the JP2 beside a .LBL
-                    inputs["ortho_data"] = str(ortho.metadata["data_file"])
-                texture_rgb = drape(ortho, bounds, crs_wkt=frame.crs_wkt,
-                                    max_px=tcfg.texture_max_px)
-                summary["texture_shape_rows_cols"] = list(texture_rgb.shape[:2])
-                notes.append(f"orthoimage {ortho.metadata.get('PRODUCT_ID', ortho.source_path)} "
-                             f"co-registered to the terrain footprint")
+            texture_rgb = _drape_ortho(tcfg, dem, hf, frame, inputs, notes, summary)
 
     # --- craters stage (issue: craters) ---------------------------------------------------
     craters = None
