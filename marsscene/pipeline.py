@@ -180,7 +180,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             hf, frame = heightfield_from_dem(dem, z_scale=tcfg.z_scale)
             if tcfg.source == "default":
                 models.append(ModelRef("terrain", "default DEM", DEFAULT_DEM_CITATION))
-            if dem.metadata.get("DATA_SET_ID"):
+            if "HIRISE" in str(dem.metadata.get("DATA_SET_ID", "")).upper():
                 models.append(ModelRef("terrain", str(dem.metadata["DATA_SET_ID"]), _HIRISE_DTM))
             if post_m < hf.cell_size_m * (1 - 1e-9):
                 if tcfg.detail:

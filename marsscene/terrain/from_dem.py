@@ -75,7 +75,7 @@ def heightfield_from_dem(dem: DEM, *, z_scale: float = 1.0) -> tuple[Heightfield
     if dem.crs_wkt and dem.center_lonlat_deg is not None:
         from marsscene.dem.crs import grid_convergence_deg
 
-        convergence = round(grid_convergence_deg(dem.crs_wkt, *dem.center_lonlat_deg), 9)
+        convergence = round(grid_convergence_deg(dem.crs_wkt, *dem.center_lonlat_deg), 9) + 0.0
     frame = GeoFrame(
         datum_m=datum_m,
         origin_projected_xy_m=dem.center_xy() if dem.crs_wkt else None,
@@ -168,7 +168,8 @@ def prepare_dem(dem: DEM, cfg: TerrainConfig, *, default_post_m: float | None) -
         dem = ops.detrend(dem)
         notes.append("removed the DEM's best-fit plane (terrain.detrend)")
     post_m = cfg.post_m if cfg.post_m is not None else (default_post_m or dem.post_m)
-    if post_m > dem.post_m * (1 + 1e-9):
+    finer = post_m < dem.post_m * (1 - 1e-9)
+    if post_m > dem.post_m * (1 + 1e-9) or (finer and not cfg.detail and cfg.resampling):
         dem = ops.resample(dem, post_m, method=cfg.resampling)
         notes.append(f"resampled the DEM to {post_m:g} m ({dem.metadata['resampling']})")
     return dem, post_m, notes, summary
