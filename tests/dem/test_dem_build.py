@@ -176,3 +176,31 @@ def test_whole_dem_over_budget_is_auto_cropped(tmp_path: Path) -> None:
         scene = ms.build_scene(cfg, seed=0)
     assert scene.heightfield.shape == (1001, 1001)
     assert scene.provenance.extra["dem_window_rows_cols"] == [250, 100, 1001, 1001]
+
+
+def test_toml_keys_and_relative_paths(tmp_path: Path, dem_and_ortho: tuple[Path, Path]) -> None:
+    dem, lbl = dem_and_ortho
+    toml = tmp_path / "site.toml"
+    toml.write_text(
+        "[terrain]\n"
+        'source = "dem"\n'
+        f'dem_path = "{dem.name}"\n'
+        f'ortho_path = "{lbl.name}"\n'
+        "crop_bounds_m = [-6138980.0, 935900.0, -6138900.0, 935960.0]\n"
+        "post_m = 2.0\n"
+        'resampling = "area"\n'
+        "texture_max_px = 64\n"
+    )
+    cfg = ms.SceneConfig.from_toml(toml)
+    assert cfg.terrain.dem_path == str(dem.resolve())
+    assert cfg.terrain.ortho_path == str(lbl.resolve())
+    scene = ms.build_scene(cfg, seed=1)
+    # bounds keep posts with centres inside: x -6138979.5 .. -6138900.5 (80 posts, 79 m)
+    assert scene.heightfield.size_m == (78.0, 58.0) and scene.heightfield.cell_size_m == 2.0
+    assert scene.texture_rgb is not None and max(scene.texture_rgb.shape[:2]) == 64
+    with pytest.raises(ms.MarsSceneError, match="crop_px, crop_bounds_m"):
+        ms.SceneConfig.from_dict({"terrain": {"source": "dem", "dem_path": "x.img",
+                                              "crop_px": [0, 0, 4, 4],
+                                              "crop_bounds_m": [0, 0, 1, 1]}})
+    with pytest.raises(ms.MarsSceneError, match="needs a DEM"):
+        ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "ortho_path": "o.tif"}})
