@@ -34,12 +34,9 @@ from marsscene.errors import ConfigError, CRSError, DEMReadError
 
 __all__ = ["RasterSource", "open_source", "read_dem"]
 
-#: ISIS3 special pixels of integer cubes (NULL, LRS, LIS, HIS, HRS) by GDAL dtype.
-_ISIS_INT_SPECIALS = {
-    "uint8": (0, 255),
-    "int16": (-32768, -32767, -32766, -32765, -32764),
-    "uint16": (0, 1, 2, 65534, 65535),
-}
+#: ISIS3 NULL of integer cubes by GDAL dtype. The saturation specials (LRS/HRS: 0/255 for
+#: 8 bit) are kept as values: for an image they are (saturated) data, not gaps.
+_ISIS_INT_SPECIALS = {"uint8": (0,), "int16": (-32768,), "uint16": (0,)}
 
 
 def _isis_metadata(ds: Any) -> dict[str, Any]:
