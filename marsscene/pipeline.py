@@ -12,6 +12,9 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+import numpy as np
+from numpy.typing import NDArray
+
 from marsscene.config import SceneConfig
 from marsscene.dem.model import DEM
 from marsscene.errors import ConfigError
@@ -22,8 +25,15 @@ from marsscene.lighting.mars24 import MARS24_CITATION
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
+from marsscene.terrain.config import TerrainConfig
 from marsscene.terrain.default import DEFAULT_DEM_CITATION, default_dem_path
-from marsscene.terrain.from_dem import GeoFrame
+from marsscene.terrain.from_dem import (
+    GeoFrame,
+    footprint_projected_m,
+    plan_crop,
+    prepare_dem,
+)
+from marsscene.terrain.heightfield import Heightfield
 
 __all__ = ["build_scene"]
 
@@ -33,6 +43,12 @@ _FBM_CITATION = (
     "fractional Brownian surface by spectral synthesis (Saupe 1988; Turcotte 1997, "
     "doi:10.1017/CBO9781139174695); Mars self-affinity: Orosei et al. 2003, "
     "doi:10.1029/2002JE001883"
+)
+
+
+_HIRISE_DTM = (
+    "HiRISE stereo DTM (McEwen et al. 2007, doi:10.1029/2005JE002605; Kirk et al. 2008, "
+    "doi:10.1029/2007JE003000), NASA/JPL/University of Arizona"
 )
 
 
@@ -51,17 +67,64 @@ class _Timer:
 
 
 def _load_dem(config: SceneConfig, dem: DEM | None) -> tuple[DEM | None, dict[str, str]]:
+    """Read (or take) the DEM, reading only the planned crop window (memory checked first)."""
+    tcfg = config.terrain
+    inputs = {"ortho": tcfg.ortho_path} if tcfg.ortho_path else {}
     if dem is not None:
-        return dem, ({"dem": dem.source_path} if dem.source_path else {})
-    src = config.terrain.source
+        spec = plan_crop(tcfg, dem.transform, dem.shape, default_post_m=None)
+        if spec is not None:
+            from marsscene.dem.ops import crop
+
+            dem = crop(dem, spec)
+        return dem, ({"dem": dem.source_path} if dem.source_path else {}) | inputs
+    src = tcfg.source
     if src == "procedural":
         return None, {}
-    from marsscene.dem.io import read_dem  # rasterio is imported only when a DEM is read
+    from marsscene.dem.io import open_source, read_dem  # rasterio only when a DEM is read
 
-    path = default_dem_path() if src == "default" else config.terrain.dem_path
+    path = default_dem_path() if src == "default" else tcfg.dem_path
     if path is None:  # pragma: no cover - TerrainConfig validation forbids it
         raise ConfigError('terrain.source = "dem" needs terrain.dem_path')
-    return read_dem(path), {"dem": str(path)}
+    info = open_source(path)
+    default_post = 0.25 if src == "default" else None
+    spec = plan_crop(tcfg, info.transform, info.shape, default_post_m=default_post)
+    target = tcfg.post_m if tcfg.post_m is not None else default_post
+    out = read_dem(path, band=tcfg.band, crop=spec, max_bytes=tcfg.max_memory_gb * 1e9,
+                   target_post_m=target)
+    return out, {"dem": str(path)} | inputs
+
+
+def _drape_ortho(
+    tcfg: TerrainConfig,
+    dem: DEM,
+    hf: Heightfield,
+    frame: GeoFrame,
+    inputs: dict[str, str],
+    notes: list[str],
+    summary: dict[str, object],
+) -> NDArray[np.uint8] | None:
+    """The orthoimage (``tcfg.ortho_path``, else ``dem.ortho``) co-registered to the terrain
+    footprint as an RGB texture, row 0 north; ``None`` without one."""
+    ortho = dem.ortho
+    if not tcfg.ortho_path and ortho is None:
+        return None
+    from marsscene.dem.texture import texture_grid, texture_rgb
+
+    bounds = footprint_projected_m(hf, frame)
+    if tcfg.ortho_path:
+        from marsscene.dem.io_ortho import read_ortho  # rasterio
+
+        rows_cols = texture_grid(bounds, 1e-9, tcfg.texture_max_px)
+        ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
+                           pixel_m=(bounds[2] - bounds[0]) / rows_cols[1])
+    assert ortho is not None
+    if "data_file" in ortho.metadata:  # the JP2 beside a .LBL
+        inputs["ortho_data"] = str(ortho.metadata["data_file"])
+    rgb = texture_rgb(ortho, bounds, crs_wkt=frame.crs_wkt, max_px=tcfg.texture_max_px)
+    summary["texture_shape_rows_cols"] = list(rgb.shape[:2])
+    name = ortho.metadata.get("PRODUCT_ID", ortho.source_path)
+    notes.append(f"orthoimage {name} co-registered to the terrain footprint")
+    return rgb
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
@@ -95,6 +158,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     notes: list[str] = []  # rules applied and warnings (manifest)
     summary: dict[str, object] = {}  # stage summary values: counts, tau, ... (manifest)
 
+    texture_rgb = None
     with timer.stage("terrain"):
         dem, inputs = _load_dem(config, dem)
         if dem is None:
@@ -109,14 +173,21 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             frame = GeoFrame(0.0, None, None, "", 1.0)
             models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
         else:
+            default_post = 0.25 if tcfg.source == "default" else None
+            dem, post_m, dem_notes, dem_summary = prepare_dem(
+                dem, tcfg, default_post_m=default_post
+            )
+            notes.extend(dem_notes)
+            if "data_file" in dem.metadata:  # the .IMG of a detached .LBL
+                inputs["dem_data"] = str(dem.metadata["data_file"])
+            summary.update(dem_summary)
             hf, frame = heightfield_from_dem(dem, z_scale=tcfg.z_scale)
             if tcfg.source == "default":
                 models.append(ModelRef("terrain", "default DEM", DEFAULT_DEM_CITATION))
-            post_m = tcfg.post_m
-            if tcfg.source == "default" and post_m is None:
-                post_m = 0.25
-            if post_m is not None and abs(post_m - hf.cell_size_m) > 1e-9 * hf.cell_size_m:
-                if tcfg.detail and post_m < hf.cell_size_m:
+            if "HIRISE" in str(dem.metadata.get("DATA_SET_ID", "")).upper():
+                models.append(ModelRef("terrain", str(dem.metadata["DATA_SET_ID"]), _HIRISE_DTM))
+            if post_m < hf.cell_size_m * (1 - 1e-9):
+                if tcfg.detail:
                     hf = add_detail(
                         hf,
                         post_m=post_m,
@@ -127,6 +198,12 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                     models.append(ModelRef("terrain", "sub-DEM fractal detail", _FBM_CITATION))
                 else:
                     hf = resample(hf, post_m=post_m)
+            if frame.crs_wkt:
+                from marsscene.dem.crs import iau_2015_code
+
+                summary["crs_iau_2015"] = iau_2015_code(frame.crs_wkt)
+                summary["grid_convergence_deg"] = frame.grid_convergence_deg
+            texture_rgb = _drape_ortho(tcfg, dem, hf, frame, inputs, notes, summary)
 
     # --- craters stage (issue: craters) ---------------------------------------------------
     craters = None
@@ -187,6 +264,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     )
     return Scene(
         heightfield=hf,
+        texture_rgb=texture_rgb,
         config=config,
         seed=seed,
         provenance=provenance,

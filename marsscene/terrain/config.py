@@ -40,6 +40,29 @@ class TerrainConfig:
     """RMS of the added detail (in m); default continues the DEM's own spectrum."""
     z_scale: float = 1.0
     """Vertical exaggeration applied to elevations relative to the datum."""
+    ortho_path: str | None = None
+    """Orthoimage draped as the terrain texture (HiRISE .LBL+.JP2, GeoTIFF, ISIS3 .cub)."""
+    band: int | None = None
+    """1-based elevation band; required for multi-band DEMs."""
+    crop_px: tuple[int, int, int, int] | None = None
+    """DEM crop as a pixel window ``[row_off, col_off, rows, cols]``."""
+    crop_bounds_m: tuple[float, float, float, float] | None = None
+    """DEM crop as projected bounds ``[x_min, y_min, x_max, y_max]`` (in m)."""
+    crop_lonlat: tuple[float, float] | None = None
+    """DEM crop centre ``[east lon, lat]`` (in deg, planetocentric); size from ``size_m``.
+    With a DEM, ``size_m`` alone crops around the DEM's centre."""
+    resampling: str | None = None
+    """"bilinear", "cubic" or "area"; default area when coarsening, else bilinear."""
+    fill_nodata: bool = True
+    """Fill missing DEM posts by Laplace inpainting (else nearest valid post)."""
+    max_missing_fraction: float = 0.5
+    """Refuse a DEM crop with more than this fraction of missing posts."""
+    detrend: bool = False
+    """Remove the DEM's best-fit plane (keeps the mean elevation)."""
+    max_memory_gb: float = 8.0
+    """Refuse a DEM build whose estimated memory exceeds this (in GB)."""
+    texture_max_px: int = 4096
+    """Largest side of the draped orthoimage texture (in pixels)."""
 
     def __post_init__(self) -> None:
         check_choice("terrain.source", self.source, TERRAIN_SOURCES)
@@ -59,8 +82,53 @@ class TerrainConfig:
         if self.detail_rms_m is not None:
             check_range("terrain.detail_rms_m", self.detail_rms_m, 0.0, 100.0)
         check_range("terrain.z_scale", self.z_scale, 0.0, 100.0, lo_open=True)
-        if not isinstance(self.detail, bool):
-            raise ConfigError(f"terrain.detail must be true or false; got {self.detail!r}")
+        for key in ("detail", "fill_nodata", "detrend"):
+            if not isinstance(getattr(self, key), bool):
+                raise ConfigError(f"terrain.{key} must be true or false; "
+                                  f"got {getattr(self, key)!r}")
+        self._check_dem_keys()
+
+    def _check_dem_keys(self) -> None:
+        crops = [k for k in ("crop_px", "crop_bounds_m", "crop_lonlat") if getattr(self, k)]
+        dem_keys = [*crops, *(["ortho_path"] if self.ortho_path else [])]
+        if self.source == "procedural" and dem_keys:
+            raise ConfigError(f"terrain.{dem_keys[0]} needs a DEM; terrain.source = "
+                              f'"procedural" has none')
+        if len(crops) > 1:
+            raise ConfigError(f"give at most one of terrain.crop_px, crop_bounds_m, "
+                              f"crop_lonlat; got {crops}")
+        if self.crop_px is not None:
+            if len(self.crop_px) != 4 or any(
+                isinstance(v, bool) or not isinstance(v, int) for v in self.crop_px
+            ):
+                raise ConfigError(f"terrain.crop_px = {self.crop_px!r}: need 4 integers "
+                                  "[row_off, col_off, rows, cols]")
+            if min(self.crop_px[:2]) < 0 or min(self.crop_px[2:]) < 2:
+                raise ConfigError(f"terrain.crop_px = {list(self.crop_px)}: need offsets >= 0 "
+                                  "and rows, cols >= 2")
+        if self.crop_bounds_m is not None:
+            b = self.crop_bounds_m
+            if len(b) != 4 or not (b[2] > b[0] and b[3] > b[1]):
+                raise ConfigError(f"terrain.crop_bounds_m = {b!r}: need [x_min, y_min, "
+                                  "x_max, y_max] with min < max")
+        if self.crop_lonlat is not None:
+            if len(self.crop_lonlat) != 2:
+                raise ConfigError(f"terrain.crop_lonlat = {self.crop_lonlat!r}: need [lon, lat]")
+            check_range("terrain.crop_lonlat longitude", self.crop_lonlat[0], -180.0, 360.0)
+            check_range("terrain.crop_lonlat latitude", self.crop_lonlat[1], -90.0, 90.0)
+            if self.size_m is None:
+                raise ConfigError("terrain.crop_lonlat needs terrain.size_m = [width, height] "
+                                  "(in m)")
+        if self.band is not None and (isinstance(self.band, bool) or not isinstance(
+                self.band, int) or self.band < 1):
+            raise ConfigError(f"terrain.band = {self.band!r}: need an integer >= 1")
+        if self.resampling is not None:
+            check_choice("terrain.resampling", self.resampling, ("bilinear", "cubic", "area"))
+        check_range("terrain.max_missing_fraction", self.max_missing_fraction, 0.0, 1.0)
+        check_range("terrain.max_memory_gb", self.max_memory_gb, 0.0, 1e4, lo_open=True)
+        if isinstance(self.texture_max_px, bool) or not isinstance(self.texture_max_px, int):
+            raise ConfigError(f"terrain.texture_max_px = {self.texture_max_px!r}: need an integer")
+        check_range("terrain.texture_max_px", self.texture_max_px, 16, 16384)
 
     @property
     def effective_size_m(self) -> tuple[float, float]:

@@ -19,6 +19,20 @@ __all__ = ["build_mjcf", "fmt"]
 #: doi:10.1029/2010JE003625).
 REGOLITH_FRICTION = (0.8, 0.02, 0.002)
 HFIELD_ASSET = "assets/terrain.bin"
+TEXTURE_ASSET = "assets/terrain_albedo.png"
+
+
+def png_bytes(rgb: Any) -> bytes:
+    """Deterministic PNG bytes of an ``(rows, cols, 3)`` uint8 image (row 0 at the top)."""
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8), mode="RGB").save(
+        buf, format="PNG", optimize=False)
+    return buf.getvalue()
 
 
 def fmt(values: float | Iterable[float], digits: int = 6) -> str:
@@ -48,16 +62,25 @@ def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
 
     spec = hfield_spec(scene.heightfield)
     ET.SubElement(asset, "hfield", name="terrain", file=HFIELD_ASSET, size=fmt(spec.size, 9))
-    ET.SubElement(asset, "texture", name="regolith_tex", type="2d", builtin="flat",
-                  rgb1="0.62 0.42 0.28", width="16", height="16")
-    ET.SubElement(asset, "material", name="regolith", texture="regolith_tex", rgba="1 1 1 1",
-                  specular="0.05", shininess="0.1")
+    assets = {HFIELD_ASSET: spec.bin_bytes}
+    if scene.texture_rgb is not None:
+        # Orthoimage draped once over the whole hfield (texuniform false, texrepeat 1 1): image
+        # row 0 (north) lands on +y, column 0 (west) on -x (checked by a rendering test).
+        assets[TEXTURE_ASSET] = png_bytes(scene.texture_rgb)
+        ET.SubElement(asset, "texture", name="regolith_tex", type="2d", file=TEXTURE_ASSET)
+        ET.SubElement(asset, "material", name="regolith", texture="regolith_tex",
+                      texrepeat="1 1", texuniform="false", rgba="1 1 1 1", specular="0.05",
+                      shininess="0.1")
+    else:
+        ET.SubElement(asset, "texture", name="regolith_tex", type="2d", builtin="flat",
+                      rgb1="0.62 0.42 0.28", width="16", height="16")
+        ET.SubElement(asset, "material", name="regolith", texture="regolith_tex",
+                      rgba="1 1 1 1", specular="0.05", shininess="0.1")
     ET.SubElement(
         world, "geom", name="terrain", type="hfield", hfield="terrain",
         pos=fmt(spec.pos, 9), material="regolith", friction=fmt(REGOLITH_FRICTION),
         condim="3", contype="1", conaffinity="1",
     )
-    assets = {HFIELD_ASSET: spec.bin_bytes}
     for add in (add_rocks, add_lighting):
         add(root, assets, scene)
     return root, assets
