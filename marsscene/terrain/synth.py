@@ -9,8 +9,8 @@ self-affine over metre to kilometre baselines with H ≈ 0.6–0.9 (Orosei et al
 
 :func:`add_detail` upsamples a DEM with a cubic spline and adds detail **only above the DEM's
 Nyquist frequency**, with an amplitude that continues the DEM's own spectrum: the variance of the
-DEM in its top octave ``[k_c/2, k_c]`` fixes the variance of the new band ``(k_c, k_f]`` through
-``σ²_band ∝ k1^-2H − k2^-2H``. Coarse scales are left untouched, so the detailed terrain still
+DEM in a reference octave (wavelengths of 8-16 posts, below the smoothing of stereo DEMs) fixes
+the variance of the new band ``(k_c, k_f]`` through ``σ²_band ∝ k1^-2H − k2^-2H``. Coarse scales are left untouched, so the detailed terrain still
 matches the DEM when averaged back to its posts.
 """
 
@@ -109,11 +109,43 @@ def synthesize(
 
 
 def _band_variance(z: NDArray[np.float32], post_m: float, k_lo: float, k_hi: float) -> float:
-    zz = z - z.mean()
+    """Variance of ``z`` in the radial frequency band ``(k_lo, k_hi]`` (cycles/m).
+
+    The plane trend is removed and the grid is mirrored into a 2x2 periodic tile first, so the
+    DEM's edges do not leak spurious high-frequency power into the band.
+    """
+    rows, cols = z.shape
+    yy, xx = np.mgrid[0:rows, 0:cols]
+    a = np.column_stack([np.ones(z.size), xx.ravel(), yy.ravel()])
+    coef = np.linalg.lstsq(a, z.astype(np.float64).ravel(), rcond=None)[0]
+    zz = z - (a @ coef).reshape(rows, cols)
+    zz = np.concatenate([zz, zz[::-1, :]], axis=0)
+    zz = np.concatenate([zz, zz[:, ::-1]], axis=1)
     spec = sfft.rfft2(zz, workers=-1)
     k = _radial_k(zz.shape, post_m)
     band = sfft.irfft2(spec * ((k > k_lo) & (k <= k_hi)), s=zz.shape, workers=-1)
     return float(band.var())
+
+
+#: The reference octave is [k_c / 2**REFERENCE_OCTAVE, k_c / 2**(REFERENCE_OCTAVE - 1)].
+REFERENCE_OCTAVE = 3
+
+
+def _continued_detail_rms(hf: Heightfield, post_m: float, hurst: float) -> float:
+    """RMS of the band ``(k_c, k_f]`` that continues the DEM's spectrum with exponent ``H``.
+
+    Stereo DEMs are smoothed over their top octaves (HiRISE DTMs resolve features of ~3-5 posts,
+    Kirk et al. 2008, doi:10.1029/2007JE003000), so the power law is anchored on the octave of
+    wavelengths 8-16 posts and extrapolated: ``σ²(k1, k2) ∝ k1^-2H − k2^-2H``.
+    """
+    k_c = 0.5 / hf.cell_size_m
+    k_f = 0.5 / post_m
+    octave = REFERENCE_OCTAVE if min(hf.shape) >= 2 ** (REFERENCE_OCTAVE + 2) else 1
+    k_lo, k_hi = k_c / 2.0**octave, k_c / 2.0 ** (octave - 1)
+    ref_var = _band_variance(hf.z_m, hf.cell_size_m, k_lo, k_hi)
+    e = -2.0 * hurst
+    ratio = (k_c**e - k_f**e) / (k_lo**e - k_hi**e)
+    return float(np.sqrt(max(ref_var, 0.0) * ratio))
 
 
 def _spline_resample(hf: Heightfield, cols: int, rows: int, post_m: float) -> NDArray[np.float32]:
@@ -174,10 +206,7 @@ def add_detail(
     z = _spline_resample(hf, cols, rows, post_m)
     k_c = 0.5 / hf.cell_size_m  # coarse Nyquist (cycles/m)
     if detail_rms_m is None:
-        top_var = _band_variance(hf.z_m, hf.cell_size_m, k_c / 2.0, k_c)
-        k_f = 0.5 / post_m
-        ratio = (1.0 - (k_c / k_f) ** (2 * hurst)) / (2.0 ** (2 * hurst) - 1.0)
-        detail_rms_m = float(np.sqrt(max(top_var, 0.0) * ratio))
+        detail_rms_m = _continued_detail_rms(hf, post_m, hurst)
     if detail_rms_m > 0:
         noise = fbm_surface((rows, cols), post_m, hurst=hurst, rng=rng, k_min_cyc_m=k_c)
         z += noise * np.float32(detail_rms_m)
