@@ -172,8 +172,11 @@ def footprint_gradient(
     baseline of ``max(D, baseline_m, 2 posts)`` (the plane a rock rests on; post-scale
     roughness neither tilts nor rejects it)."""
     h = 0.5 * np.maximum(np.maximum(d, baseline_m), 2.0 * hf.cell_size_m)
-    gx = (hf.sample(x + h, y) - hf.sample(x - h, y)) / (2.0 * h)
-    gy = (hf.sample(x, y + h) - hf.sample(x, y - h)) / (2.0 * h)
+    x0, y0, x1, y1 = hf.bounds_xy_m
+    xp, xm = np.minimum(x + h, x1), np.maximum(x - h, x0)  # one-sided at the edges
+    yp, ym = np.minimum(y + h, y1), np.maximum(y - h, y0)
+    gx = (hf.sample(xp, y) - hf.sample(xm, y)) / (xp - xm)
+    gy = (hf.sample(x, yp) - hf.sample(x, ym)) / (yp - ym)
     return gx, gy
 
 
