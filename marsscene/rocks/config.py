@@ -91,7 +91,7 @@ class RockConfig:
     """coacd concavity threshold (only with ``collision = "coacd"``)."""
     mjcf_min_diameter_m: float = 0.2
     """Only rocks at least this large become MJCF collision geoms (in m)."""
-    mjcf_max_rocks: int = 1500
+    mjcf_max_rocks: int = 1000
     """At most this many rocks (the largest) become MJCF geoms (MuJoCo performance)."""
     mjcf_region_xy_m: tuple[float, float] | None = None
     """Optional centre of the MJCF rock region (in m); with ``mjcf_region_radius_m``."""
