@@ -15,7 +15,7 @@ import io
 import json
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -108,9 +108,10 @@ def convex_decompose(
         )
         folder.mkdir(parents=True, exist_ok=True)
         buf = io.BytesIO()
-        arrays = {f"v{i}": np.asarray(v) for i, (v, _) in enumerate(raw)}
+        arrays: dict[str, Any] = {f"v{i}": np.asarray(v) for i, (v, _) in enumerate(raw)}
         arrays |= {f"f{i}": np.asarray(f) for i, (_, f) in enumerate(raw)}
-        np.savez(buf, n=np.array(len(raw)), **arrays)
+        arrays["n"] = np.array(len(raw))
+        np.savez(buf, **arrays)
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
         tmp.write_bytes(buf.getvalue())
         tmp.replace(path)  # atomic: concurrent builds never read half a file

@@ -129,8 +129,11 @@ def place_rocks(
     weight = intensity_map(hf, craters, cfg, grid)
     kcell = k_per_cell(hf, cfg, grid, k_map)
     k_values, k_index = np.unique(kcell, return_inverse=True)
-    area_w = np.bincount(k_index, weights=weight, minlength=len(k_values)) * grid.cell_area_m2
-    lam = _expected(area_w, k_values, cfg)
+    area_w = np.asarray(
+        np.bincount(k_index, weights=weight, minlength=len(k_values)) * grid.cell_area_m2,
+        dtype=np.float64,
+    )
+    lam = _expected(area_w, np.asarray(k_values, dtype=np.float64), cfg)
     if lam.sum() > cfg.max_rocks:
         raise ConfigError(
             f"rocks: about {lam.sum():.3g} rocks expected with d_min_m = {cfg.d_min_m} on "

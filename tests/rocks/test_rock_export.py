@@ -157,7 +157,7 @@ def test_bake_rule_raises_the_hfield(tmp_path: Path) -> None:
 def test_rock_outputs_are_byte_reproducible(tmp_path: Path) -> None:
     outs = []
     for i in range(2):
-        np.random.seed(1000 + i)  # global state must not matter  # noqa: NPY002
+        np.random.seed(1000 + i)  # global state must not matter
         scene = ms.build_scene(ms.SceneConfig.from_dict(BASE), seed=5)
         ms.write_scene(scene, tmp_path / f"s{i}")
         outs.append(tmp_path / f"s{i}")

@@ -19,7 +19,7 @@ from marsscene.terrain.heightfield import Heightfield
 
 
 def flat(size_m: float = 100.0, post_m: float = 0.5) -> Heightfield:
-    n = int(round(size_m / post_m)) + 1
+    n = round(size_m / post_m) + 1
     return Heightfield.centered(np.zeros((n, n), np.float32), post_m)
 
 
@@ -77,7 +77,7 @@ def test_rocks_sit_at_prescribed_burial_and_tilt_limit() -> None:
     assert ratio.min() >= 0.35 - 1e-9 and ratio.max() <= 0.65 + 1e-9
     np.testing.assert_allclose(np.linalg.norm(r.orientation_wxyz, axis=1), 1.0, atol=1e-12)
     # the rock's up axis: third column of the rotation = tilt from vertical <= limit
-    w, qx, qy, _ = r.orientation_wxyz.T
+    _, qx, qy, _ = r.orientation_wxyz.T
     up_z = 1.0 - 2.0 * (qx**2 + qy**2)
     assert np.degrees(np.arccos(np.clip(up_z, -1, 1))).max() <= 12.0 + 1e-6
     np.testing.assert_allclose(r.scale_xyz_m[:, 2], r.height_m + r.burial_m)
@@ -86,7 +86,7 @@ def test_rocks_sit_at_prescribed_burial_and_tilt_limit() -> None:
 
 def test_up_axis_follows_gentle_slope() -> None:
     n = 201
-    yy, xx = np.mgrid[0:n, 0:n] * 0.25
+    _, xx = np.mgrid[0:n, 0:n] * 0.25
     hf = Heightfield.centered((0.1 * xx).astype(np.float32), 0.25)  # 5.7 deg slope, uphill +x
     cfg = RockConfig(placement="uniform", tilt_jitter_deg=0.0, max_tilt_deg=30.0)
     r = place_rocks(hf, NO_CRATERS, cfg, rng=np.random.default_rng(2))
@@ -154,7 +154,7 @@ def test_rock_field_polygon_and_k_map() -> None:
 
 def test_slope_limit() -> None:
     n = 161
-    yy, xx = np.mgrid[0:n, 0:n] * 0.25
+    _, xx = np.mgrid[0:n, 0:n] * 0.25
     z = np.where(xx > 20.0, (xx - 20.0) * 1.5, 0.0)  # east half at 56 deg
     hf = Heightfield.centered(z.astype(np.float32), 0.25)
     cfg = RockConfig(placement="uniform", max_slope_deg=30.0, d_min_m=0.1, d_max_m=0.5)
