@@ -95,7 +95,7 @@ def rock_mesh(
     r = 1.0 / np.sqrt(((dirs / axes) ** 2).sum(axis=1))
     normals = rng.normal(size=(facets, 3))
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    offsets = rng.uniform(0.55, 0.9, size=facets)
+    offsets = rng.uniform(0.45, 0.85, size=facets)
     cos = dirs @ normals.T  # (V, facets)
     with np.errstate(divide="ignore"):
         plane_r = np.where(cos > 1e-6, offsets / np.maximum(cos, 1e-6), np.inf)
@@ -132,7 +132,7 @@ def make_prototypes(cfg: RockConfig, *, rng: np.random.Generator) -> tuple[RockP
         visual = rock_mesh(
             rng=rng,
             subdivisions=2 if size_class == 0 else 3,
-            facets=6 + 3 * size_class,
+            facets=8 + 4 * size_class,
             roughness=0.03 + 0.015 * size_class,
         )
         if cfg.collision == "coacd":

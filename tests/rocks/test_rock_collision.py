@@ -52,21 +52,37 @@ def test_cache_dir_honours_environment(monkeypatch: pytest.MonkeyPatch, tmp_path
     assert cache_dir() == tmp_path / "xdg" / "marsscene" / "coacd"
 
 
-@pytest.mark.slow
-def test_pipeline_with_coacd_parts(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """~15 s: three prototypes decomposed by coacd, exported to MJCF and USD."""
+def test_multi_part_prototype_exports(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A coacd-decomposed prototype (~1.5 s) exported to MJCF (one geom per part) and USD."""
+    import dataclasses
+
+    pytest.importorskip("pxr")
+    pytest.importorskip("mujoco")
+
     import marsscene as ms
     from marsscene.export.mjcf import validate_mjcf
+    from marsscene.rocks import RockConfig, make_prototypes
 
     monkeypatch.setenv("MARSSCENE_CACHE_DIR", str(tmp_path / "cache"))
+    rcfg = RockConfig(prototypes=1, collision="coacd", coacd_threshold=0.02)
+    protos = make_prototypes(rcfg, rng=np.random.default_rng(2))
+    n_parts = len(protos[0].collision)
+    assert n_parts >= 2
+    assert all(p.is_convex for p in protos[0].collision)
     cfg = ms.SceneConfig.from_dict({
-        "terrain": {"source": "procedural", "size_m": [20.0, 20.0]},
-        "rocks": {"collision": "coacd", "prototypes": 3, "coacd_threshold": 0.03,
-                  "mjcf_max_rocks": 30},
+        "terrain": {"source": "procedural", "size_m": [16.0, 16.0]},
+        "rocks": {"collision": "coacd", "prototypes": 1, "coacd_threshold": 0.02,
+                  "mjcf_max_rocks": 10},
     })
-    scene = ms.build_scene(cfg, seed=2)
-    assert scene.rock_prototypes is not None
-    assert max(len(p.collision) for p in scene.rock_prototypes) > 1
+    scene = ms.build_scene(cfg.replace(rocks=dataclasses.replace(rcfg, collision="convex_hull",
+                                                                 mjcf_max_rocks=10)), seed=2)
+    scene = dataclasses.replace(scene, config=cfg, rock_prototypes=protos)
     ms.write_scene(scene, tmp_path / "out")
     model, _ = validate_mjcf(tmp_path / "out" / "mjcf" / "scene.xml")
-    assert model.ngeom > 31  # several convex parts per exported rock
+    assert sum(model.geom(i).name.startswith("rock_") for i in range(model.ngeom)) == 10 * n_parts
+    from pxr import Usd, UsdPhysics
+
+    stage = Usd.Stage.Open(str(tmp_path / "out" / "scene.usda"))
+    coll = stage.GetPrimAtPath("/World/Rocks/Instancer/Prototypes/rock_00/Collision")
+    parts = coll.GetChildren()
+    assert len(parts) == n_parts and all(p.HasAPI(UsdPhysics.CollisionAPI) for p in parts)
