@@ -82,7 +82,7 @@ def rock_summary(
     covered = float(np.sum(np.pi * rocks.diameter_m**2 / 4.0)) / area if area > 0 else 0.0
     return {
         "count": len(rocks),
-        "expected_count": round(expected_count(area, k=cfg.k, d_min_m=cfg.d_min_m,
+        "expected_count_at_k": round(expected_count(area, k=cfg.k, d_min_m=cfg.d_min_m,
                                                d_max_m=cfg.d_max_m), 3),
         "area_fraction": round(covered, 6),
         "max_diameter_m": round(float(rocks.diameter_m.max()), 4) if len(rocks) else 0.0,
