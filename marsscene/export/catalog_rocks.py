@@ -22,27 +22,44 @@ COLUMNS = ("id", "x_m", "y_m", "z_m", "diameter_m", "height_m", "burial_m", "pro
            "in_mjcf")
 
 
+#: ASCII digits of 0000..9999, shape (10000, 4): numbers are formatted 4 digits per gather.
+_DIGITS4 = (
+    (np.arange(10000)[:, None] // 10 ** np.arange(3, -1, -1)[None, :]) % 10 + ord("0")
+).astype(np.uint8)
+
+
+def _chunks4(values: NDArray[np.int64], groups: int) -> NDArray[np.uint8]:
+    """Zero-padded decimal digits of non-negative ints, ``4 * groups`` chars per row."""
+    out = []
+    for g in range(groups - 1, -1, -1):
+        out.append(_DIGITS4[(values // 10 ** (4 * g)) % 10000])
+    return np.concatenate(out, axis=1)
+
+
 def _fixed(values: NDArray[np.float64], decimals: int) -> NDArray[np.uint8]:
-    """ASCII fixed-point text of each value as a (N, W) byte matrix, 0 = padding."""
+    """ASCII fixed-point text of each value as a (N, W) byte matrix, 0 = padding.
+
+    ``decimals`` is 0 or 4.
+    """
     scaled = np.rint(np.abs(values) * 10**decimals).astype(np.int64)
     neg = (values < 0) & (scaled > 0)
-    n_digits = max(len(str(int(scaled.max()))) if len(scaled) else 1, decimals + 1)
-    powers = 10 ** np.arange(n_digits - 1, -1, -1, dtype=np.int64)
-    digits = (scaled[:, None] // powers[None, :]) % 10  # most significant first
-    chars = (digits + ord("0")).astype(np.uint8)
-    n_int = n_digits - decimals
+    whole = scaled // 10**decimals
+    top = int(whole.max()) if len(whole) else 0
+    groups = max(1, (len(str(top)) + 3) // 4)
+    int_chars = _chunks4(whole, groups)
+    width = int_chars.shape[1]
     # blank leading zeros of the integer part (keep the units digit)
-    significant = np.cumsum(digits[:, :n_int] > 0, axis=1) > 0
-    significant[:, -1] = True
-    int_part = np.where(significant, chars[:, :n_int], 0).astype(np.uint8)
-    first = np.argmax(significant, axis=1)
-    sign = np.zeros((len(values), n_int + 1), dtype=np.uint8)
-    sign[:, 1:] = int_part
+    n_digits = np.searchsorted(10 ** np.arange(1, width, dtype=np.int64), whole, side="right") + 1
+    first = width - n_digits
+    significant = np.arange(width)[None, :] >= first[:, None]
+    body = np.zeros((len(values), width + 1), dtype=np.uint8)
+    body[:, 1:] = np.where(significant, int_chars, 0)
     rows = np.flatnonzero(neg)
-    sign[rows, first[rows]] = ord("-")  # the slot just before the first digit
-    parts = [sign]
+    body[rows, first[rows]] = ord("-")  # the slot just before the first digit
+    parts = [body]
     if decimals:
-        parts += [np.full((len(values), 1), ord("."), np.uint8), chars[:, n_int:]]
+        parts += [np.full((len(values), 1), ord("."), np.uint8),
+                  _DIGITS4[scaled % 10**decimals]]
     return np.concatenate(parts, axis=1)
 
 

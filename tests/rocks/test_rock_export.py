@@ -165,3 +165,15 @@ def test_rock_outputs_are_byte_reproducible(tmp_path: Path) -> None:
     assert objs
     for rel in ("assets/rocks.usdc", "rocks.csv", "mjcf/scene.xml", "scene.usda", *objs):
         assert (outs[0] / rel).read_bytes() == (outs[1] / rel).read_bytes(), rel
+
+
+def test_catalog_fixed_point_formatting() -> None:
+    from marsscene.export.catalog_rocks import _fixed
+
+    values = np.array([0.0, -0.00004, 1.23456, -12.5, 123.0001, -0.5, 9.99999, -40000.0001,
+                       99.99999, 123456789.5])
+    text = [bytes(row[row != 0]).decode() for row in _fixed(values, 4)]
+    assert text == ["0.0000", "0.0000", "1.2346", "-12.5000", "123.0001", "-0.5000", "10.0000",
+                    "-40000.0001", "100.0000", "123456789.5000"]
+    ints = [bytes(row[row != 0]).decode() for row in _fixed(np.array([0.0, 7, 10, 9999]), 0)]
+    assert ints == ["0", "7", "10", "9999"]
