@@ -85,6 +85,9 @@ def test_mjcf_compiles_steps_and_follows_the_rule(written: tuple[ms.Scene, Path]
     names = [model.geom(i).name for i in range(model.ngeom)]
     assert sum(n.startswith("rock_") for n in names) == 40
     assert any("rocks/mjcf" in n and "largest first" in n for n in scene.provenance.notes)
+    summary = scene.provenance.extra["rocks"]
+    assert summary["count"] == len(scene.rocks) and summary["mjcf_rocks"] == 40
+    assert any(m.stage == "rocks" and "Golombek" in m.citation for m in scene.provenance.models)
     csv = np.loadtxt(out / "rocks.csv", delimiter=",", skiprows=1)
     assert csv.shape == (len(scene.rocks), 9)
     np.testing.assert_allclose(csv[:, 1:4], scene.rocks.position_xyz_m, atol=6e-5)

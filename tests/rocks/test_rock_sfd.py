@@ -109,3 +109,23 @@ def test_k_bounds_in_functions() -> None:
         cumulative_area_fraction(0.1, k=0.3)  # inside the fitted range: no warning
     with pytest.warns(ExtrapolationWarning):
         cumulative_area_fraction(0.1, k=0.6)
+
+
+def test_toml_style_config_round_trip() -> None:
+    import marsscene as ms
+
+    cfg = ms.SceneConfig.from_dict({"rocks": {
+        "k": 0.1, "height_ratio": [0.4, 0.6], "burial_fraction": 0.2,
+        "field_polygon_xy_m": [[0, 0], [10, 0], [10, 10]], "mjcf_region_xy_m": [1, 2],
+        "mjcf_region_radius_m": 30.0, "size_classes_m": [0.5],
+    }})
+    r = cfg.rocks
+    assert r.height_ratio == (0.4, 0.6) and r.range_of("burial_fraction") == (0.2, 0.2)
+    assert r.field_polygon_xy_m == ((0.0, 0.0), (10.0, 0.0), (10.0, 10.0))
+    assert r.mjcf_region_xy_m == (1, 2) and r.size_classes_m == (0.5,)
+    assert cfg.to_dict()["rocks"]["field_polygon_xy_m"][1] == [10.0, 0.0]
+    assert len(cfg.config_hash()) == 64
+    with pytest.raises(ConfigError, match=r"unknown key config\.rocks\.kk"):
+        ms.SceneConfig.from_dict({"rocks": {"kk": 0.1}})
+    with pytest.raises(ConfigError, match=r"rocks\.prototypes"):
+        ms.SceneConfig.from_dict({"rocks": {"prototypes": 0}})
