@@ -16,12 +16,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.config import SceneConfig
+from marsscene.craters.table import CraterTable
 from marsscene.dem.model import DEM
 from marsscene.errors import ConfigError
 from marsscene.lighting.compute import compute_lighting
 from marsscene.lighting.config import DEFAULT_SITE_LAT_LON_EAST_DEG
 from marsscene.lighting.irradiance import AF_CITATION, DELTA_EDDINGTON_CITATION
 from marsscene.lighting.mars24 import MARS24_CITATION
+from marsscene.rocks import make_prototypes, place_rocks
+from marsscene.rocks.report import EJECTA_CITATION, rock_notes, rock_summary
+from marsscene.rocks.sfd import GOLOMBEK_CITATION
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
@@ -213,6 +217,19 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     # --- rocks stage (issue: rocks) -------------------------------------------------------
     rocks = None
     rock_prototypes = None
+    if config.rocks.enabled:
+        with timer.stage("rocks"):
+            rcfg = config.rocks
+            rock_prototypes = make_prototypes(rcfg, rng=stage_rng(seed, "rock_shapes"))
+            crater_table = craters if craters is not None else CraterTable.empty()
+            rocks = place_rocks(hf, crater_table, rcfg, rng=stage_rng(seed, "rocks"))
+            models.append(ModelRef("rocks", "Golombek-Rapp rock size-frequency F_k(D) = "
+                                   "k exp(-q(k) D), q = 1.79 + 0.152/k", GOLOMBEK_CITATION))
+            if rcfg.placement == "ejecta":
+                models.append(ModelRef("rocks", "crater-ejecta rock weighting",
+                                       EJECTA_CITATION))
+            notes.extend(rock_notes(hf, crater_table, rcfg, rocks))
+            summary["rocks"] = rock_summary(hf, rcfg, rocks, rock_prototypes)
 
     # --- end of rocks stage ---------------------------------------------------------------
 

@@ -10,7 +10,8 @@ self-affine over metre to kilometre baselines with H ≈ 0.6–0.9 (Orosei et al
 :func:`add_detail` upsamples a DEM with a cubic spline and adds detail **only above the DEM's
 Nyquist frequency**, with an amplitude that continues the DEM's own spectrum: the variance of the
 DEM in a reference octave (wavelengths of 8-16 posts, below the smoothing of stereo DEMs) fixes
-the variance of the new band ``(k_c, k_f]`` through ``σ²_band ∝ k1^-2H − k2^-2H``. Coarse scales are left untouched, so the detailed terrain still
+the variance of the new band ``(k_c, k_f]`` through ``σ²_band ∝ k1^-2H − k2^-2H``.
+Coarse scales are left untouched, so the detailed terrain still
 matches the DEM when averaged back to its posts.
 """
 

@@ -1,13 +1,125 @@
-"""Rocks in USD."""
+"""Rocks in USD: one ``UsdGeom.PointInstancer`` over a few procedural prototypes.
+
+Layout (the instancer lives in the binary crate layer ``assets/rocks.usdc``, payloaded at
+``/World/Rocks``, so ``scene.usda`` stays small even with 10^6 rocks)::
+
+    /World/Rocks                          Xform (payload ./assets/rocks.usdc)
+      Looks/Rock                          UsdPreviewSurface (dark basaltic grey-brown)
+      Instancer                           PointInstancer: positions, orientations, scales,
+                                          protoIndices (one row per rock of Scene.rocks)
+        Prototypes/rock_NN                Xform (unit frame: x, y in [-0.5, 0.5], z in [0, 1])
+          Visual                          Mesh (render), material bound
+          Collision/part_M                Mesh, purpose guide, CollisionAPI,
+                                          MeshCollisionAPI approximation "convexHull"
+
+Orientations are authored as ``quath`` (``orientations``, read by every USD version); the
+half-precision error is < 0.1 deg.
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["author_rocks"]
+import numpy as np
+from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
+
+from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
+
+__all__ = ["ROCKS_ASSET", "ROCK_ALBEDO_RGB", "author_rocks"]
+
+ROCKS_ASSET = "assets/rocks.usdc"
+#: Basaltic rock colour (linear sRGB), darker and less red than dusty soil (rock albedo ~0.1-0.2;
+#: Bell et al. 2008, doi:10.1017/CBO9780511536076.004).
+ROCK_ALBEDO_RGB = (0.20, 0.15, 0.12)
+
+
+def _vec3f_extent(points: np.ndarray) -> Vt.Vec3fArray:
+    lo = points.min(axis=0).tolist()
+    hi = points.max(axis=0).tolist()
+    return Vt.Vec3fArray([Gf.Vec3f(*lo), Gf.Vec3f(*hi)])
+
+
+def _mesh(stage: Any, path: Sdf.Path, mesh: Any) -> UsdGeom.Mesh:
+    geom = UsdGeom.Mesh.Define(stage, path)
+    v = np.asarray(mesh.vertices, dtype=np.float32)
+    f = np.asarray(mesh.faces, dtype=np.int32)
+    geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(v))
+    geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(f), 3, np.int32)))
+    geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(f.ravel()))
+    geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    geom.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
+    geom.CreateExtentAttr(_vec3f_extent(v))
+    return geom
+
+
+def _material(stage: Any, root: Sdf.Path) -> UsdShade.Material:
+    looks = root.AppendChild("Looks")
+    UsdGeom.Scope.Define(stage, looks)
+    mat = UsdShade.Material.Define(stage, looks.AppendChild("Rock"))
+    shader = UsdShade.Shader.Define(stage, mat.GetPath().AppendChild("PreviewSurface"))
+    shader.CreateIdAttr("UsdPreviewSurface")
+    shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*ROCK_ALBEDO_RGB))
+    shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.8)
+    shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(0.0)
+    mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    return mat
+
+
+def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
+                material: UsdShade.Material) -> list[Sdf.Path]:
+    scope = instancer.AppendChild("Prototypes")
+    UsdGeom.Scope.Define(stage, scope)
+    paths = []
+    for proto in prototypes:  # a handful of prototypes
+        path = scope.AppendChild(proto.name)
+        UsdGeom.Xform.Define(stage, path)
+        visual = _mesh(stage, path.AppendChild("Visual"), proto.visual)
+        UsdShade.MaterialBindingAPI.Apply(visual.GetPrim()).Bind(material)
+        coll = path.AppendChild("Collision")
+        UsdGeom.Scope.Define(stage, coll)
+        for i, part in enumerate(proto.collision):
+            geom = _mesh(stage, coll.AppendChild(f"part_{i}"), part)
+            geom.CreatePurposeAttr(UsdGeom.Tokens.guide)
+            UsdPhysics.CollisionAPI.Apply(geom.GetPrim())
+            UsdPhysics.MeshCollisionAPI.Apply(geom.GetPrim()).CreateApproximationAttr(
+                UsdPhysics.Tokens.convexHull
+            )
+        paths.append(path)
+    return paths
+
+
+def author_instancer(stage: Any, root: Sdf.Path, rocks: Any, prototypes: tuple[Any, ...]) -> None:
+    """Author the material, prototypes and the PointInstancer of ``rocks`` under ``root``."""
+    material = _material(stage, root)
+    inst = UsdGeom.PointInstancer.Define(stage, root.AppendChild("Instancer"))
+    inst.CreatePrototypesRel().SetTargets(_prototypes(stage, inst.GetPath(), prototypes,
+                                                      material))
+    pos = np.asarray(rocks.position_xyz_m, dtype=np.float32)
+    q = np.asarray(rocks.orientation_wxyz, dtype=np.float64)
+    scale = np.asarray(rocks.scale_xyz_m, dtype=np.float32)
+    inst.CreateProtoIndicesAttr(Vt.IntArray.FromNumpy(rocks.prototype.astype(np.int32)))
+    inst.CreatePositionsAttr(Vt.Vec3fArray.FromNumpy(pos))
+    # Gf quaternions are stored imaginary-first: numpy rows are (x, y, z, w)
+    inst.CreateOrientationsAttr(Vt.QuathArray.FromNumpy(q[:, [1, 2, 3, 0]].astype(np.float16)))
+    inst.CreateScalesAttr(Vt.Vec3fArray.FromNumpy(scale))
+    if len(pos):
+        reach = np.linalg.norm(scale, axis=1)[:, None]
+        inst.CreateExtentAttr(Vt.Vec3fArray([
+            Gf.Vec3f(*(pos - reach).min(axis=0).tolist()),
+            Gf.Vec3f(*(pos + reach).max(axis=0).tolist()),
+        ]))
 
 
 def author_rocks(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
-    """Author the scene's rocks (nothing when the stage is disabled)."""
+    """Author ``/World/Rocks`` (a payload of ``assets/rocks.usdc``); nothing when disabled."""
     if scene.rocks is None:
         return
+    asset = create_asset_stage("Rocks")
+    author_instancer(asset, Sdf.Path("/Rocks"), scene.rocks, tuple(scene.rock_prototypes or ()))
+    assets[ROCKS_ASSET] = crate_bytes(asset)
+    prim = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Rocks")).GetPrim()
+    prim.GetPayloads().AddPayload(f"./{ROCKS_ASSET}")
+    prim.CreateAttribute("marsscene:rockCount", Sdf.ValueTypeNames.Int).Set(len(scene.rocks))
+    prim.CreateAttribute("marsscene:rockPrototypes", Sdf.ValueTypeNames.Int).Set(
+        len(scene.rock_prototypes or ())
+    )
