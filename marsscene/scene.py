@@ -55,7 +55,8 @@ class Scene:
     craters, rocks : tables, optional
         ``None`` when the stage is disabled.
     rock_prototypes : tuple, optional
-        Prototype meshes (``trimesh.Trimesh``) referenced by ``rocks.prototype``.
+        Rock prototypes (``marsscene.rocks.RockPrototype``: visual mesh, convex collision parts)
+        referenced by ``rocks.prototype``.
     lighting : Lighting, optional
     config : SceneConfig
     seed : int

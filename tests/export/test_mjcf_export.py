@@ -19,7 +19,8 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> tuple[ms.Scene, Path]:
     cfg = ms.SceneConfig.from_dict(
         {"terrain": {"source": "procedural", "size_m": [24.0, 16.0], "post_m": 0.25,
                      "rms_height_m": 0.4},
-         "export": {"formats": ["mjcf"]}}
+         "export": {"formats": ["mjcf"]},
+         "rocks": {"enabled": False}, "craters": {"enabled": False}}
     )
     scene = ms.build_scene(cfg, seed=5)
     out = tmp_path_factory.mktemp("mjcf") / "scene"
@@ -62,7 +63,8 @@ def gentle(tmp_path_factory: pytest.TempPathFactory) -> tuple[ms.Scene, Path]:
     cfg = ms.SceneConfig.from_dict(
         {"terrain": {"source": "procedural", "size_m": [24.0, 16.0], "post_m": 0.25,
                      "rms_height_m": 0.3, "hurst": 0.95},
-         "export": {"formats": ["mjcf"]}}
+         "export": {"formats": ["mjcf"]},
+         "rocks": {"enabled": False}, "craters": {"enabled": False}}
     )
     scene = ms.build_scene(cfg, seed=8)
     out = tmp_path_factory.mktemp("mjcf") / "gentle"

@@ -21,6 +21,8 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> tuple[ms.Scene, Path]:
         {
             "terrain": {"source": "procedural", "size_m": [30.0, 20.0], "post_m": 0.25},
             "export": {"max_tile_posts": 33},
+            "rocks": {"enabled": False},
+            "craters": {"enabled": False},
         }
     )
     scene = ms.build_scene(cfg, seed=3)
@@ -79,7 +81,8 @@ def test_usd_validation_reports_no_errors(written: tuple[ms.Scene, Path]) -> Non
 def test_binary_and_packaged_formats_open(tmp_path: Path, usd_format: str) -> None:
     cfg = ms.SceneConfig.from_dict(
         {"terrain": {"source": "procedural", "size_m": [8.0, 8.0], "post_m": 0.5},
-         "export": {"usd_format": usd_format, "formats": ["usd"]}}
+         "export": {"usd_format": usd_format, "formats": ["usd"]},
+         "rocks": {"enabled": False}, "craters": {"enabled": False}}
     )
     ms.write_scene(ms.build_scene(cfg, seed=1), tmp_path / "s")
     stage = Usd.Stage.Open(str(tmp_path / "s" / f"scene.{usd_format}"))

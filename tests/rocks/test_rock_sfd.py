@@ -125,7 +125,7 @@ def test_toml_style_config_round_trip() -> None:
     assert r.mjcf_region_xy_m == (1, 2) and r.size_classes_m == (0.5,)
     assert cfg.to_dict()["rocks"]["field_polygon_xy_m"][1] == [10.0, 0.0]
     assert len(cfg.config_hash()) == 64
-    with pytest.raises(ConfigError, match=r"unknown key config\.rocks\.kk"):
+    with pytest.raises(ConfigError, match=r"unknown key rocks\.kk"):
         ms.SceneConfig.from_dict({"rocks": {"kk": 0.1}})
     with pytest.raises(ConfigError, match=r"rocks\.prototypes"):
         ms.SceneConfig.from_dict({"rocks": {"prototypes": 0}})
