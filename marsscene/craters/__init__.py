@@ -12,6 +12,7 @@ from marsscene.craters.config import ResurfacingEvent as ResurfacingEvent
 from marsscene.craters.functions import SYSTEMS as SYSTEMS
 from marsscene.craters.functions import age_from_n1_ga as age_from_n1_ga
 from marsscene.craters.functions import chronology_system as chronology_system
+from marsscene.craters.functions import crater_models as crater_models
 from marsscene.craters.functions import cumulative_density_per_km2 as cumulative_density_per_km2
 from marsscene.craters.functions import equilibrium_density_per_km2 as equilibrium_density_per_km2
 from marsscene.craters.functions import n1_per_km2 as n1_per_km2
@@ -34,6 +35,7 @@ __all__ = [
     "ResurfacingEvent",
     "age_from_n1_ga",
     "chronology_system",
+    "crater_models",
     "crater_profile",
     "cumulative_density_per_km2",
     "equilibrium_density_per_km2",
