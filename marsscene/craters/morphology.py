@@ -224,11 +224,17 @@ def profile_family(
     table = _radial_diffusion_table(rho, h0, _S_GRID)
     table[0] = h0
     reach = np.full(_S_GRID.size, fresh_reach)
+    weight = 2.0 * np.pi * rho * _RHO_STEP  # annulus areas (in R^2)
     for i in range(1, _S_GRID.size):
         row = table[i]
         big = np.nonzero(np.abs(row) > 2e-2 * np.abs(row).max())[0]
         reach[i] = max(fresh_reach, min(rho[-1], rho[big[-1]] + 0.1))
-        table[i] = row * np.clip((reach[i] - rho) / 0.1, 0.0, 1.0)  # taper the far tail to 0
+        cut = row * np.clip((reach[i] - rho) / 0.1, 0.0, 1.0)  # taper the far tail to 0
+        # give the trimmed (positive, ejecta) tail volume back to the raised part: conserve volume
+        pos = np.maximum(cut, 0.0) @ weight
+        if pos > 0:
+            cut = np.where(cut > 0, cut * (1.0 + ((row - cut) @ weight) / pos), cut)
+        table[i] = cut
     for arr in (rho, table, reach):
         arr.setflags(write=False)
     return ProfileFamily(

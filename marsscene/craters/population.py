@@ -35,12 +35,15 @@ from marsscene.craters.functions import (
 from marsscene.craters.morphology import PROFILE_IDS, S_MAX, ProfileFamily, profile_family
 from marsscene.craters.resurfacing import erase_by_events, mask_weights
 from marsscene.craters.table import CraterTable
+from marsscene.errors import MemoryBudgetError
 from marsscene.terrain.heightfield import Heightfield
 
 __all__ = ["PopulationStats", "SizeDistribution", "sample_craters", "size_distribution"]
 
 FloatArray = NDArray[np.float64]
 _N_CELLS = 2048
+#: Largest expected number of sampled craters (memory plan: ~120 bytes per crater).
+MAX_CRATERS = 5e6
 
 
 @dataclass(frozen=True, eq=False)
@@ -173,6 +176,12 @@ def sample_craters(
     box_km2 = (width + 2 * grow) * (height + 2 * grow) / 1e6
     weight = dist.visible_mass_per_km2 * box_km2
     total = float(weight.sum())
+    if total > MAX_CRATERS:
+        raise MemoryBudgetError(
+            f"the crater population would hold ~{total:.3g} craters (> {MAX_CRATERS:.0e}; "
+            f"~{total * 120 / 1e9:.3g} GB while sampling); raise craters.d_min_m "
+            f"(= {config.d_min_m!r}), enable craters.equilibrium or shrink the scene"
+        )
     n = int(rng.poisson(total))
     cdf = np.cumsum(weight) / total
     cell = np.minimum(np.searchsorted(cdf, rng.random(n), side="right"), mid.size - 1)
