@@ -126,8 +126,9 @@ def stamp_craters(
     valid_r = np.zeros(rows + 2 * _PAD, dtype=bool)
     valid_r[_PAD:-_PAD] = True
     z = zpad[_PAD:-_PAD, _PAD:-_PAD]  # view: slice stamping writes through to zpad
-    bounds = np.searchsorted(wave, np.arange(wave.max() + 2)) if wave.size else np.zeros(1, int)
-    wave_order = order[np.argsort(wave, kind="stable")]
+    by_wave = np.argsort(wave, kind="stable")
+    wave_order = order[by_wave]
+    bounds = np.searchsorted(wave[by_wave], np.arange(int(wave.max(initial=-1)) + 2))
     for w in range(bounds.size - 1):
         members = wave_order[bounds[w]:bounds[w + 1]]
         for i in members[~small[members]]:

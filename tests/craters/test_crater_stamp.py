@@ -99,13 +99,10 @@ def test_batched_boxes_equal_one_at_a_time() -> None:
     assert len(table) > 100
     batched = stamp_craters(hf, table, profile_kwargs=cfg.profile_kwargs())
     serial = hf
-    for i in np.argsort(-table.age_ga, kind="stable")[:60]:
+    for i in np.argsort(-table.age_ga, kind="stable"):
         serial = stamp_craters(serial, table.take(np.array([i])),
                                profile_kwargs=cfg.profile_kwargs())
-    partial = stamp_craters(hf, table.take(np.argsort(-table.age_ga, kind="stable")[:60]),
-                            profile_kwargs=cfg.profile_kwargs())
-    np.testing.assert_allclose(partial.z_m, serial.z_m, atol=1e-5)
-    assert batched.shape == hf.shape
+    np.testing.assert_allclose(batched.z_m, serial.z_m, atol=1e-5)
 
 
 def test_slice_and_box_paths_agree(monkeypatch: pytest.MonkeyPatch) -> None:
