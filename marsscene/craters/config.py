@@ -92,7 +92,8 @@ class ResurfacingEvent:
         if len(masks) > 1:
             raise ConfigError(f"craters.resurfacing: give at most one mask; got {masks}")
         for key in ("polygon_xy_m", "polygon_lonlat_deg"):
-            object.__setattr__(self, key, _polygon(f"craters.resurfacing.{key}", getattr(self, key)))
+            poly = _polygon(f"craters.resurfacing.{key}", getattr(self, key))
+            object.__setattr__(self, key, poly)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

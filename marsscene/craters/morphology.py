@@ -126,7 +126,9 @@ def profile_over_diameter(
         inner = np.maximum(_ft_inner(r), _FT_RIM - depth_to_diameter)
         outer = np.where(r <= 1.54, _ft_outer(r - 0.04), 0.0)
         return np.where(r <= 0.98, inner, np.where(r <= 1.02, _FT_RIM, outer))
-    raise ConfigError(f"craters.profile = {model!r} is unknown; choose one of {list(PROFILE_MODELS)}")
+    raise ConfigError(
+        f"craters.profile = {model!r} is unknown; choose one of {list(PROFILE_MODELS)}"
+    )
 
 
 def _fresh_reach(model: str, ejecta_reach: float) -> float:
@@ -171,12 +173,14 @@ class ProfileFamily:
     def s_of_state(self, state: ArrayLike) -> FloatArray:
         """Diffusion length over radius at fractional row indices."""
         rows = np.arange(self.s.size, dtype=np.float64)
-        return np.asarray(np.interp(state, rows, self.s), dtype=np.float64)
+        return np.asarray(np.interp(np.asarray(state, dtype=np.float64), rows, self.s),
+                          dtype=np.float64)
 
     def state_of_s(self, s: ArrayLike) -> FloatArray:
         """Fractional row index of given ``s`` values (clipped to the table)."""
         rows = np.arange(self.s.size, dtype=np.float64)
-        return np.asarray(np.interp(np.asarray(s, dtype=np.float64), self.s, rows), dtype=np.float64)
+        s_arr = np.asarray(s, dtype=np.float64)
+        return np.asarray(np.interp(s_arr, self.s, rows), dtype=np.float64)
 
 
 def _radial_diffusion_table(rho: FloatArray, h0: FloatArray, s: FloatArray) -> FloatArray:

@@ -20,6 +20,7 @@ Algorithm (all vectorised):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -99,7 +100,9 @@ class PopulationStats:
     notes: list[str] = field(default_factory=list)
 
 
-def _relief_fn(config: CraterConfig, fam: ProfileFamily, cap_ga: FloatArray):  # type: ignore[no-untyped-def]
+def _relief_fn(
+    config: CraterConfig, fam: ProfileFamily, cap_ga: FloatArray
+) -> Callable[[FloatArray, FloatArray], FloatArray]:
     def relief(d_m: FloatArray, elapsed_ga: FloatArray) -> FloatArray:
         state = fam.state_of_s(_s_of(config, d_m, elapsed_ga, cap_ga))
         return np.asarray(
@@ -209,14 +212,15 @@ def sample_craters(
     centers = np.stack([cx, cy], axis=1)
     expected = float((dist.visible_mass_per_km2 * width * height / 1e6).sum())
 
-    fam = profile_family(**config.profile_kwargs())  # type: ignore[arg-type]
+    fam = profile_family(**config.profile_kwargs())
     if config.resurfacing:
         weights = [
             mask_weights(ev, centers, heightfield=heightfield, origin_lonlat_deg=origin_lonlat_deg)
             for ev in config.resurfacing
         ]
         alive = erase_by_events(
-            diameter, age, weights, config.resurfacing, relief_at=_relief_fn(config, fam, cap), rng=rng
+            diameter, age, weights, config.resurfacing,
+            relief_at=_relief_fn(config, fam, cap), rng=rng,
         )
     else:
         alive = np.ones(n, dtype=bool)

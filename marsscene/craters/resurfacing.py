@@ -89,7 +89,9 @@ def mask_weights(
         try:
             raster = np.load(Path(event.mask_path), allow_pickle=False)
         except (OSError, ValueError) as err:
-            raise ConfigError(f"craters.resurfacing.mask_path = {event.mask_path!r}: {err}") from None
+            raise ConfigError(
+                f"craters.resurfacing.mask_path = {event.mask_path!r}: {err}"
+            ) from None
     if raster is None:
         return np.ones(x.shape)
     if heightfield is None or np.shape(raster) != heightfield.shape:
@@ -108,9 +110,9 @@ def _rule_probability(
     event: ResurfacingEvent, diameter_m: FloatArray, relief_m: FloatArray
 ) -> FloatArray:
     if event.rule == "sharp":
-        return (diameter_m < event.d_max_m).astype(np.float64)
+        return (diameter_m < float(event.d_max_m or 0.0)).astype(np.float64)
     if event.rule == "burial":
-        return (relief_m < event.thickness_m).astype(np.float64)
+        return (relief_m < float(event.thickness_m or 0.0)).astype(np.float64)
     lo, hi = np.log(event.d_min_m), np.log(event.d_max_m)  # type: ignore[arg-type]
     return np.clip((hi - np.log(diameter_m)) / (hi - lo), 0.0, 1.0)
 

@@ -39,7 +39,7 @@ _BATCH_POSTS = 1_000_000
 def _families(profile_kwargs: dict[str, float | str] | None) -> dict[int, ProfileFamily]:
     kw = dict(profile_kwargs or {})
     kw.pop("model", None)
-    return {i: profile_family(name, **kw) for i, name in enumerate(PROFILE_MODELS)}  # type: ignore[arg-type]
+    return {i: profile_family(name, **kw) for i, name in enumerate(PROFILE_MODELS)}
 
 
 def _waves(r0: np.ndarray, r1: np.ndarray, c0: np.ndarray, c1: np.ndarray,
@@ -174,11 +174,11 @@ class _Params:
             self.strength[sel] = np.interp(state, np.arange(n_s), relief)
         self.pid = craters.profile
         self.diameter = d
-        q = craters.axis_ratio
+        q = np.asarray(craters.axis_ratio, dtype=np.float64)
         self.radius = d / 2.0
         self.semi_major = self.radius / np.sqrt(q)
         self.sqrt_q = np.sqrt(q)
-        az = np.radians(craters.azimuth_deg)
+        az = np.radians(np.asarray(craters.azimuth_deg, dtype=np.float64))
         self.cos_az, self.sin_az = np.cos(az), np.sin(az)
         self.cx = craters.center_xy_m[:, 0]
         self.cy = craters.center_xy_m[:, 1]
@@ -280,7 +280,8 @@ def _stamp_boxes(zpad: np.ndarray, xpad: np.ndarray, ypad: np.ndarray, valid_r: 
     gx = np.divide((col_sum * ix * xm).sum(1), sxx, out=np.zeros(ids.size), where=sxx > 0)
     gy = np.divide((row_sum * iy * ym).sum(1), syy, out=np.zeros(ids.size), where=syy > 0)
     mean = (col_sum * ix).sum(1) / cnt
-    plane = mean[:, None, None] + gx[:, None, None] * xm[:, None, :] + gy[:, None, None] * ym[:, :, None]
+    plane = (mean[:, None, None] + gx[:, None, None] * xm[:, None, :]
+             + gy[:, None, None] * ym[:, :, None])
     new = old + _blend(p, ids[:, None, None], rho) * (plane - old)
     new += _lookup(p, ids, *_index(p, rho))
     zpad[rr[:, :, None], cc[:, None, :]] = new

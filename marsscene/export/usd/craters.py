@@ -44,7 +44,8 @@ def author_craters(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
     pts.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(xyz)))
     pts.CreateWidthsAttr(Vt.FloatArray.FromNumpy(t.diameter_m.astype(np.float32)))
     f = Sdf.ValueTypeNames
-    _primvar(pts, "diameter_m", f.FloatArray, Vt.FloatArray.FromNumpy(t.diameter_m.astype(np.float32)))
+    _primvar(pts, "diameter_m", f.FloatArray,
+             Vt.FloatArray.FromNumpy(t.diameter_m.astype(np.float32)))
     _primvar(pts, "depth_m", f.FloatArray, Vt.FloatArray.FromNumpy(t.depth_m.astype(np.float32)))
     _primvar(pts, "rimHeight_m", f.FloatArray,
              Vt.FloatArray.FromNumpy(t.rim_height_m.astype(np.float32)))
