@@ -67,6 +67,10 @@ _RHO_STEP = 0.01  # radial grid step of the tabulated profiles (in crater radii)
 #: Degradation table: s = sqrt(2 kappa t) / R; below S_MIN the crater is treated as fresh.
 S_MIN = 0.02
 S_MAX = 1.5
+#: Recognisability limit: a crater diffused beyond ``s = S_ERASE`` keeps ~25 % of its fresh
+#: relief (watters-2015 defaults) and no longer counts as a crater; the sampler drops it, and
+#: equilibrium-capped sizes reach it exactly at their equilibrium age.
+S_ERASE = 0.6
 _S_GRID = np.concatenate([[0.0], np.geomspace(S_MIN, S_MAX, 40)])
 
 

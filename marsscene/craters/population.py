@@ -15,7 +15,8 @@ Algorithm (all vectorised):
 5. Formation ages: ``tau = N1^-1(u * N1(min(T, t_eq(D))))`` (the PF shape is time-invariant).
 6. Positions uniform in the grown box (corners beyond the reach rejected), optional
    ellipticity; resurfacing events; degradation by diffusion for ``kappa * tau``; craters whose
-   relief fell below ~4 % of fresh (``s > 1.5``) are counted as degraded away.
+   relief fell below ~25 % of fresh (``s > S_ERASE = 0.6``) are no longer recognisable and
+   are dropped (counted as degraded away).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ from marsscene.craters.functions import (
     n1_per_km2,
     production_shape,
 )
-from marsscene.craters.morphology import PROFILE_IDS, S_MAX, ProfileFamily, profile_family
+from marsscene.craters.morphology import PROFILE_IDS, S_ERASE, ProfileFamily, profile_family
 from marsscene.craters.resurfacing import erase_by_events, mask_weights
 from marsscene.craters.table import CraterTable
 from marsscene.errors import MemoryBudgetError
@@ -119,7 +120,7 @@ def _s_of(
     """Diffusion length over radius, ``sqrt(2 kappa tau) / R``.
 
     ``kappa = max(diffusivity_m2_per_myr, kappa_eq(D))``: for sizes capped at equilibrium,
-    ``kappa_eq = (S_MAX R)^2 / (2 t_eq(D))`` degrades a crater to the erased state exactly at its
+    ``kappa_eq = (S_ERASE R)^2 / (2 t_eq(D))`` degrades a crater to the erased state exactly at its
     equilibrium age, so the cap acts by degradation rather than by sudden removal.
     """
     if config.degradation == "none":
@@ -128,7 +129,7 @@ def _s_of(
     kappa = np.full(d_m.shape, config.diffusivity_m2_per_myr)
     if config.equilibrium != "none":
         capped = cap_ga < config.age_ga
-        k_eq = (S_MAX * radius) ** 2 / (2.0 * np.maximum(cap_ga, 1e-12) * 1e3)
+        k_eq = (S_ERASE * radius) ** 2 / (2.0 * np.maximum(cap_ga, 1e-12) * 1e3)
         kappa = np.where(capped, np.maximum(kappa, k_eq), kappa)
     kappa_t = kappa * age_ga * 1e3  # m^2
     return np.asarray(np.sqrt(2.0 * kappa_t) / radius, dtype=np.float64)
@@ -227,7 +228,7 @@ def sample_craters(
     n_resurfaced = int((keep & ~alive).sum())
     keep &= alive
     s = _s_of(config, diameter, age, cap)
-    gone = s > S_MAX * (1 + 1e-9)
+    gone = s > S_ERASE * (1 + 1e-9)
     n_degraded = int((keep & gone).sum())
     keep &= ~gone
     idx = np.nonzero(keep)[0]
