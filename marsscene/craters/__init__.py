@@ -12,11 +12,11 @@ from marsscene.craters.config import ResurfacingEvent as ResurfacingEvent
 from marsscene.craters.functions import SYSTEMS as SYSTEMS
 from marsscene.craters.functions import age_from_n1_ga as age_from_n1_ga
 from marsscene.craters.functions import chronology_system as chronology_system
-from marsscene.craters.functions import crater_models as crater_models
 from marsscene.craters.functions import cumulative_density_per_km2 as cumulative_density_per_km2
 from marsscene.craters.functions import equilibrium_density_per_km2 as equilibrium_density_per_km2
 from marsscene.craters.functions import n1_per_km2 as n1_per_km2
 from marsscene.craters.functions import production_shape as production_shape
+from marsscene.craters.models import crater_models as crater_models
 from marsscene.craters.morphology import PROFILE_IDS as PROFILE_IDS
 from marsscene.craters.morphology import crater_profile as crater_profile
 from marsscene.craters.morphology import profile_family as profile_family

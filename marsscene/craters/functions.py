@@ -280,28 +280,3 @@ def equilibrium_citation() -> str:
     eq = _data()["equilibrium"]["hartmann-1984"]
     return f"{eq['name']}: {eq['reference']}"
 
-
-def crater_models(config: object) -> list[tuple[str, str]]:
-    """``(name, citation)`` of every crater model a :class:`CraterConfig` uses (manifest)."""
-    from marsscene.craters.morphology import PROFILE_CITATIONS
-    from marsscene.craters.resurfacing import CITATION as RESURFACING_CITATION
-
-    cs = chronology_system(config.system)  # type: ignore[attr-defined]
-    out = [
-        (f"production function {cs.production}", cs.production_citation),
-        (f"chronology function {cs.chronology}", cs.chronology_citation),
-    ]
-    if config.equilibrium != "none":  # type: ignore[attr-defined]
-        out.append(("equilibrium hartmann-1984", equilibrium_citation()))
-    out.append((f"crater profile {config.profile}",  # type: ignore[attr-defined]
-                PROFILE_CITATIONS[config.profile]))  # type: ignore[attr-defined]
-    if config.degradation == "diffusion":  # type: ignore[attr-defined]
-        out.append((
-            "crater degradation by topographic diffusion",
-            f"linear diffusion (Culling 1960; Soderblom 1970, doi:10.1029/JB075i014p02655), "
-            f"kappa = {config.diffusivity_m2_per_myr} m^2/Myr (placeholder, not a fitted Mars "  # type: ignore[attr-defined]
-            "value) or the equilibrium-consistent kappa_eq(D)",
-        ))
-    if config.resurfacing:  # type: ignore[attr-defined]
-        out.append(("partial resurfacing forward model", RESURFACING_CITATION))
-    return out

@@ -33,6 +33,7 @@ from marsscene.errors import ConfigError
 __all__ = [
     "PROFILE_IDS",
     "PROFILE_MODELS",
+    "S_ERASE",
     "ProfileFamily",
     "crater_profile",
     "profile_family",
@@ -44,23 +45,6 @@ FloatArray = NDArray[np.float64]
 #: Profile model name -> id stored in ``CraterTable.profile``.
 PROFILE_IDS: dict[str, int] = {"watters-2015": 0, "fassett-thomson-2014": 1, "ftmod": 2}
 PROFILE_MODELS: tuple[str, ...] = tuple(PROFILE_IDS)
-#: Citation of each profile model (manifest).
-PROFILE_CITATIONS: dict[str, str] = {
-    "watters-2015": (
-        "power-law cavity, exponent 1.75 (Watters, Geiger, Fendrock et al. 2015, JGR Planets "
-        "120, doi:10.1002/2014JE004630); d/D and rim height configurable (defaults d/D = 0.18 "
-        "rim-to-floor, h_r/D = 0.036: MOLA fresh craters, Garvin et al. 2003 / Melosh 1989); "
-        "ejecta (r/R)^-3 (McGetchin, Settle & Head 1973, doi:10.1016/0012-821X(73)90118-0)"
-    ),
-    "fassett-thomson-2014": (
-        "Fassett, C. I., Thomson, B. J. (2014), Crater degradation on the lunar maria, JGR "
-        "Planets 119, doi:10.1002/2014JE004698, Eq. 4"
-    ),
-    "ftmod": (
-        "FTmod profile (Fassett pers. comm. 2022, as implemented in NeoGeographyToolkit/"
-        "synthterrain) after Fassett & Thomson (2014), doi:10.1002/2014JE004698"
-    ),
-}
 
 _FT_RIM = 0.036822095
 _RHO_STEP = 0.01  # radial grid step of the tabulated profiles (in crater radii)
