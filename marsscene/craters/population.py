@@ -22,7 +22,7 @@ Algorithm (all vectorised):
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -98,7 +98,6 @@ class PopulationStats:
     resurfaced: int
     degraded_away: int
     kept: int
-    notes: list[str] = field(default_factory=list)
 
 
 def _relief_fn(
@@ -187,7 +186,7 @@ def sample_craters(
             f"(= {config.d_min_m!r}), enable craters.equilibrium or shrink the scene"
         )
     n = int(rng.poisson(total))
-    cdf = np.cumsum(weight) / total
+    cdf = np.cumsum(weight) / total if total > 0 else np.ones(weight.size)
     cell = np.minimum(np.searchsorted(cdf, rng.random(n), side="right"), mid.size - 1)
     # exact local power law inside the cell: N(>=D) = N_i (D / D_i)^k
     c_lo, c_hi = dist.production_cum_per_km2[cell], dist.production_cum_per_km2[cell + 1]
