@@ -3,11 +3,12 @@
 Each crater touches only the posts of its footprint (``reach * R`` of its degraded profile,
 along the major axis). The new surface is
 
-    z = z_old + h(rho) + w(rho) * (plane - z_old)
+    z = z_old + h(rho) + w(rho) * (plane - lowpass(z_old))
 
 where ``h`` is the (degraded) profile, ``plane`` the least-squares plane of ``z_old`` over the
 box ``|dx|, |dy| <= 1.25 a`` and ``w`` = 1 inside the rim, falling smoothly to 0 at
-``rho = 1.25`` (scaled by the crater's remaining relief fraction). Inside its rim a young crater
+``rho = 1.25`` (scaled by the crater's remaining relief fraction); ``lowpass`` is a box filter
+~0.2 R wide, so roughness finer than that survives inside the crater. Inside its rim a young crater
 therefore *replaces* the older topography (it cuts older rims) while its ejecta drapes over it:
 the result depends on order, young over old.
 
@@ -21,6 +22,7 @@ are stamped together as ``(m, S, S)`` arrays of equal padded box size ``S``; lar
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import uniform_filter
 
 from marsscene.craters.morphology import PROFILE_MODELS, ProfileFamily, profile_family
 from marsscene.craters.table import CraterTable
@@ -34,6 +36,9 @@ _SIZES = np.array([4, 6, 8, 12, 16, 24, 32, 48, 64])  # padded box sides of batc
 _PAD = int(_SIZES[-1])
 _WAVE_CELL = 16  # posts per cell of the coarse occupancy grid used to find overlaps
 _BATCH_POSTS = 1_000_000
+#: Width of the box low-pass (in crater radii, >= 3 posts): inside the rim only the old surface's
+#: low-pass is replaced by the plane, so roughness finer than ~0.2 R survives in young craters.
+_LOWPASS_RADII = 0.2
 
 
 def _families(profile_kwargs: dict[str, float | str] | None) -> dict[int, ProfileFamily]:
@@ -116,8 +121,8 @@ def stamp_craters(
     bc1 = np.where(small, bc0 + s_of - 1, c1)
     wave = _waves(br0[order] + _PAD, br1[order] + _PAD, bc0[order] + _PAD, bc1[order] + _PAD,
                   (rows + 2 * _PAD, cols + 2 * _PAD))
-    zpad = np.zeros((rows + 2 * _PAD, cols + 2 * _PAD))
-    zpad[_PAD:-_PAD, _PAD:-_PAD] = heightfield.z_m
+    # edge-replicated padding: the interior low-pass never sees artificial values
+    zpad = np.pad(heightfield.z_m.astype(np.float64), _PAD, mode="edge")
     xs, ys = heightfield.grid_xy()
     xpad = ox + (np.arange(cols + 2 * _PAD) - _PAD) * cs
     ypad = oy + (np.arange(rows + 2 * _PAD) - _PAD) * cs
@@ -240,7 +245,13 @@ def _stamp_slice(z: np.ndarray, xs: np.ndarray, ys: np.ndarray, p: _Params, i: i
         gy = float(sub.sum(axis=1) @ ym) / syy if syy > 0 else 0.0
         plane = float(sub.mean()) + gx * xm[None, :] + gy * ym[:, None]
         rho_in = _rho(p, i, dx[:, b0:b1], dy[a0:a1])
-        sub += _blend(p, i, rho_in) * (plane - sub)
+        k = max(3, 2 * round(0.5 * _LOWPASS_RADII * p.radius[i] / (xs[1] - xs[0])) + 1)
+        h = k // 2
+        lo_r, lo_c = max(r0 + a0 - h, 0), max(c0 + b0 - h, 0)
+        region = z[lo_r:r0 + a1 + h, lo_c:c0 + b1 + h]
+        smooth = uniform_filter(region, size=k, mode="nearest")
+        smooth = smooth[r0 + a0 - lo_r:r0 + a1 - lo_r, c0 + b0 - lo_c:c0 + b1 - lo_c]
+        sub += _blend(p, i, rho_in) * (plane - smooth)
     rows, _ = p.rows(np.array([i]))
     fine = min(p.step, 0.25 * (xs[1] - xs[0]) / p.radius[i])  # in crater radii
     grid = np.arange(0.0, rows.shape[1] * p.step, fine)
@@ -282,7 +293,8 @@ def _stamp_boxes(zpad: np.ndarray, xpad: np.ndarray, ypad: np.ndarray, valid_r: 
     mean = (col_sum * ix).sum(1) / cnt
     plane = (mean[:, None, None] + gx[:, None, None] * xm[:, None, :]
              + gy[:, None, None] * ym[:, :, None])
-    new = old + _blend(p, ids[:, None, None], rho) * (plane - old)
+    smooth = uniform_filter(old, size=(1, 3, 3), mode="nearest")
+    new = old + _blend(p, ids[:, None, None], rho) * (plane - smooth)
     new += _lookup(p, ids, *_index(p, rho))
     zpad[rr[:, :, None], cc[:, None, :]] = new
 

@@ -79,13 +79,14 @@ def test_young_crater_cuts_old_one() -> None:
     a = stamp_craters(hf, both).z_m.astype(np.float64)
     b = stamp_craters(hf, swapped).z_m.astype(np.float64)
     assert not np.allclose(a, b)
-    # the young crater's own relief survives intact: its floor lies one nominal depth below its
-    # rim-crest level even though it sits inside the older crater
+    # the young crater's own relief survives: its floor lies one nominal depth below its
+    # rim-crest level even though its centre sits on the older crater's rim crest (only the
+    # crest's sub-0.2 R kink survives as texture, hence 10 %)
     x, y = hf.grid_xy()
     r = np.hypot(x[None, :] - 3.0, y[:, None])
     crest = np.median(a[np.abs(r - 4.0) < 0.13])
     floor = a[80, 80 + 12]
-    assert crest - floor == pytest.approx(0.18 * 8, rel=0.05)
+    assert crest - floor == pytest.approx(0.18 * 8, rel=0.1)
     # and the older crater's rim is cut where the young bowl overlaps it (at x = 3, y = 0)
     single_old = stamp_craters(hf, old).z_m.astype(np.float64)
     assert a[80, 80 + 12] < single_old[80, 80 + 12] - 0.5
