@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import time
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -16,9 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.config import SceneConfig
+from marsscene.craters import crater_models, sample_craters, stamp_craters
 from marsscene.craters.table import CraterTable
 from marsscene.dem.model import DEM
-from marsscene.errors import ConfigError
+from marsscene.errors import ConfigError, MarsSceneWarning
 from marsscene.lighting.compute import compute_lighting
 from marsscene.lighting.config import DEFAULT_SITE_LAT_LON_EAST_DEG
 from marsscene.lighting.irradiance import AF_CITATION, DELTA_EDDINGTON_CITATION
@@ -211,6 +213,31 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
     # --- craters stage (issue: craters) ---------------------------------------------------
     craters = None
+    ccfg = config.craters
+    if ccfg.enabled:
+        with timer.stage("craters"), warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", MarsSceneWarning)
+            craters, cstats = sample_craters(
+                hf.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters"), heightfield=hf,
+                origin_lonlat_deg=frame.origin_lonlat_deg,
+            )
+            hf = stamp_craters(hf, craters, profile_kwargs=ccfg.profile_kwargs())
+        for w in caught:  # re-emit once each, and record in the manifest
+            msg = f"craters: {w.message}"
+            if msg not in notes:
+                notes.append(msg)
+                warnings.warn(str(w.message), w.category, stacklevel=2)
+        models.extend(ModelRef("craters", n, c) for n, c in crater_models(ccfg))
+        summary["craters"] = {
+            "count": len(craters),
+            "expected_in_scene": round(cstats.expected_in_scene, 3),
+            "sampled_over_grown_area": cstats.sampled,
+            "erased_by_resurfacing": cstats.resurfaced,
+            "degraded_away": cstats.degraded_away,
+            "d_range_m": [ccfg.d_min_m, ccfg.d_max_m],
+            "system": ccfg.system,
+            "age_ga": ccfg.age_ga,
+        }
 
     # --- end of craters stage -------------------------------------------------------------
 

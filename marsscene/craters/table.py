@@ -28,6 +28,13 @@ class CraterTable:
         Formation age (in Ga before present).
     profile : ndarray of shape (N,), int
         Profile model id (see ``marsscene.craters.PROFILE_IDS``).
+    axis_ratio : ndarray of shape (N,), optional
+        Minor/major axis ratio of the rim outline (1 = circular; default all 1). ``diameter_m``
+        is the equal-area diameter, so the semi-axes are ``R / sqrt(q)`` and ``R sqrt(q)``.
+    azimuth_deg : ndarray of shape (N,), optional
+        Direction of the major axis, counter-clockwise from +x (east) (in degrees; default 0).
+
+    Rows are in formation order (oldest first) when produced by ``sample_craters``.
     """
 
     center_xy_m: NDArray[np.float64]
@@ -36,9 +43,13 @@ class CraterTable:
     rim_height_m: NDArray[np.float64]
     age_ga: NDArray[np.float64]
     profile: NDArray[np.int64]
+    axis_ratio: NDArray[np.float64] | None = None
+    azimuth_deg: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         n = len(self.diameter_m)
+        ratio = np.ones(n) if self.axis_ratio is None else self.axis_ratio
+        azimuth = np.zeros(n) if self.azimuth_deg is None else self.azimuth_deg
         cols = {
             "center_xy_m": np.asarray(self.center_xy_m, dtype=np.float64).reshape(n, 2),
             "diameter_m": np.asarray(self.diameter_m, dtype=np.float64),
@@ -46,6 +57,8 @@ class CraterTable:
             "rim_height_m": np.asarray(self.rim_height_m, dtype=np.float64),
             "age_ga": np.asarray(self.age_ga, dtype=np.float64),
             "profile": np.asarray(self.profile, dtype=np.int64),
+            "axis_ratio": np.asarray(ratio, dtype=np.float64),
+            "azimuth_deg": np.asarray(azimuth, dtype=np.float64),
         }
         for name, arr in cols.items():
             if arr.shape[0] != n:
@@ -70,4 +83,6 @@ class CraterTable:
             self.rim_height_m[index],
             self.age_ga[index],
             self.profile[index],
+            self.axis_ratio[index],  # type: ignore[index]
+            self.azimuth_deg[index],  # type: ignore[index]
         )

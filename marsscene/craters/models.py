@@ -1,0 +1,50 @@
+"""Names and citations of the crater models a configuration uses (for the manifest)."""
+
+from __future__ import annotations
+
+from marsscene.craters.config import CraterConfig
+from marsscene.craters.functions import chronology_system, equilibrium_citation
+from marsscene.craters.resurfacing import CITATION as RESURFACING_CITATION
+
+__all__ = ["PROFILE_CITATIONS", "crater_models"]
+
+#: Citation of each profile model (manifest).
+PROFILE_CITATIONS: dict[str, str] = {
+    "watters-2015": (
+        "power-law cavity, exponent 1.75 (Watters, Geiger, Fendrock et al. 2015, JGR Planets "
+        "120, doi:10.1002/2014JE004630); d/D and rim height configurable (defaults d/D = 0.18 "
+        "rim-to-floor, h_r/D = 0.036: MOLA fresh craters, Garvin et al. 2003 / Melosh 1989); "
+        "ejecta (r/R)^-3 (McGetchin, Settle & Head 1973, doi:10.1016/0012-821X(73)90118-0)"
+    ),
+    "fassett-thomson-2014": (
+        "Fassett, C. I., Thomson, B. J. (2014), Crater degradation on the lunar maria, JGR "
+        "Planets 119, doi:10.1002/2014JE004698, Eq. 4"
+    ),
+    "ftmod": (
+        "FTmod profile (Fassett pers. comm. 2022, as implemented in NeoGeographyToolkit/"
+        "synthterrain) after Fassett & Thomson (2014), doi:10.1002/2014JE004698"
+    ),
+}
+
+
+def crater_models(config: CraterConfig) -> list[tuple[str, str]]:
+    """``(name, citation)`` of every crater model a :class:`CraterConfig` uses (manifest)."""
+    cs = chronology_system(config.system)
+    out = [
+        (f"production function {cs.production}", cs.production_citation),
+        (f"chronology function {cs.chronology}", cs.chronology_citation),
+    ]
+    if config.equilibrium != "none":
+        out.append(("equilibrium hartmann-1984", equilibrium_citation()))
+    out.append((f"crater profile {config.profile}",
+                PROFILE_CITATIONS[config.profile]))
+    if config.degradation == "diffusion":
+        out.append((
+            "crater degradation by topographic diffusion",
+            f"linear diffusion (Culling 1960; Soderblom 1970, doi:10.1029/JB075i014p02655), "
+            f"kappa = {config.diffusivity_m2_per_myr} m^2/Myr (placeholder, not a fitted Mars "
+            "value) or the equilibrium-consistent kappa_eq(D)",
+        ))
+    if config.resurfacing:
+        out.append(("partial resurfacing forward model", RESURFACING_CITATION))
+    return out
