@@ -107,8 +107,11 @@ class CraterConfig:
 
     enabled: bool = True
     """Generate and stamp craters."""
-    system: str = "neukum-ivanov-2001"
-    """Chronology system: production function + chronology function."""
+    system: str = "hartmann-daubar-2016"
+    """Chronology system: production function + chronology function. The scene default is
+    Hartmann & Daubar (2016), whose production table covers craters from ~1 m; the Ivanov (2001)
+    polynomial of ``"neukum-ivanov-2001"`` (the default of the pure functions) is valid only
+    from 15 m and would be extrapolated over the default 2-20 m range."""
     age_ga: float = 3.5
     """Surface (crater retention) age (in Ga), 0 < age <= 4.5."""
     d_min_m: float = 2.0

@@ -13,7 +13,7 @@ from marsscene.errors import ConfigError
 
 def test_defaults() -> None:
     c = CraterConfig()
-    assert (c.system, c.age_ga, c.d_min_m, c.d_max_m) == ("neukum-ivanov-2001", 3.5, 2.0, 20.0)
+    assert (c.system, c.age_ga, c.d_min_m, c.d_max_m) == ("hartmann-daubar-2016", 3.5, 2.0, 20.0)
     assert c.equilibrium == "hartmann-1984" and c.profile == "watters-2015"
     assert c.resurfacing == ()
 
@@ -80,5 +80,5 @@ def test_bad_configs_raise_clear_errors(kw: dict, match: str) -> None:
 
 
 def test_unknown_key_in_toml_table() -> None:
-    with pytest.raises(ConfigError, match=r"unknown key config\.craters\.d_min"):
+    with pytest.raises(ConfigError, match=r"unknown key craters\.d_min"):
         ms.SceneConfig.from_dict({"craters": {"d_min": 1.0}})
