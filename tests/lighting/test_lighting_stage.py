@@ -64,6 +64,7 @@ def test_procedural_terrain_uses_jezero_for_a_utc() -> None:
     assert scene.provenance.extra["lighting_tau"] == 0.5
 
 
+@pytest.mark.filterwarnings("ignore::marsscene.errors.NodataFilledWarning")  # nodata corner
 def test_site_comes_from_the_dem_centre(synthetic_dem_path: object) -> None:
     cfg = ms.SceneConfig.from_dict({
         "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path)},
