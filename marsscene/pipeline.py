@@ -13,14 +13,12 @@ import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-import numpy as np
-from numpy.typing import NDArray
-
 from marsscene.config import SceneConfig
 from marsscene.craters import crater_models, sample_craters, stamp_craters
 from marsscene.craters.table import CraterTable
 from marsscene.dem.model import DEM
-from marsscene.errors import ConfigError, MarsSceneWarning
+from marsscene.errors import MarsSceneWarning
+from marsscene.inputs import HIRISE_DTM_CITATION, drape_ortho, load_inputs
 from marsscene.lighting.compute import compute_lighting
 from marsscene.lighting.config import DEFAULT_SITE_LAT_LON_EAST_DEG
 from marsscene.lighting.irradiance import AF_CITATION, DELTA_EDDINGTON_CITATION
@@ -31,15 +29,11 @@ from marsscene.rocks.sfd import GOLOMBEK_CITATION
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
-from marsscene.terrain.config import TerrainConfig
-from marsscene.terrain.default import DEFAULT_DEM_CITATION, default_dem_path
+from marsscene.terrain.default import DEFAULT_DEM_CITATION
 from marsscene.terrain.from_dem import (
     GeoFrame,
-    footprint_projected_m,
-    plan_crop,
     prepare_dem,
 )
-from marsscene.terrain.heightfield import Heightfield
 
 __all__ = ["build_scene"]
 
@@ -49,12 +43,6 @@ _FBM_CITATION = (
     "fractional Brownian surface by spectral synthesis (Saupe 1988; Turcotte 1997, "
     "doi:10.1017/CBO9781139174695); Mars self-affinity: Orosei et al. 2003, "
     "doi:10.1029/2002JE001883"
-)
-
-
-_HIRISE_DTM = (
-    "HiRISE stereo DTM (McEwen et al. 2007, doi:10.1029/2005JE002605; Kirk et al. 2008, "
-    "doi:10.1029/2007JE003000), NASA/JPL/University of Arizona"
 )
 
 
@@ -70,67 +58,6 @@ class _Timer:
         dt = time.perf_counter() - t0
         self.timings_s[name] = round(dt, 4)
         log.info("[%s] done in %.2f s", name, dt)
-
-
-def _load_dem(config: SceneConfig, dem: DEM | None) -> tuple[DEM | None, dict[str, str]]:
-    """Read (or take) the DEM, reading only the planned crop window (memory checked first)."""
-    tcfg = config.terrain
-    inputs = {"ortho": tcfg.ortho_path} if tcfg.ortho_path else {}
-    if dem is not None:
-        spec = plan_crop(tcfg, dem.transform, dem.shape, default_post_m=None)
-        if spec is not None:
-            from marsscene.dem.ops import crop
-
-            dem = crop(dem, spec)
-        return dem, ({"dem": dem.source_path} if dem.source_path else {}) | inputs
-    src = tcfg.source
-    if src == "procedural":
-        return None, {}
-    from marsscene.dem.io import open_source, read_dem  # rasterio only when a DEM is read
-
-    path = default_dem_path() if src == "default" else tcfg.dem_path
-    if path is None:  # pragma: no cover - TerrainConfig validation forbids it
-        raise ConfigError('terrain.source = "dem" needs terrain.dem_path')
-    info = open_source(path)
-    default_post = 0.25 if src == "default" else None
-    spec = plan_crop(tcfg, info.transform, info.shape, default_post_m=default_post)
-    target = tcfg.post_m if tcfg.post_m is not None else default_post
-    out = read_dem(path, band=tcfg.band, crop=spec, max_bytes=tcfg.max_memory_gb * 1e9,
-                   target_post_m=target)
-    return out, {"dem": str(path)} | inputs
-
-
-def _drape_ortho(
-    tcfg: TerrainConfig,
-    dem: DEM,
-    hf: Heightfield,
-    frame: GeoFrame,
-    inputs: dict[str, str],
-    notes: list[str],
-    summary: dict[str, object],
-) -> NDArray[np.uint8] | None:
-    """The orthoimage (``tcfg.ortho_path``, else ``dem.ortho``) co-registered to the terrain
-    footprint as an RGB texture, row 0 north; ``None`` without one."""
-    ortho = dem.ortho
-    if not tcfg.ortho_path and ortho is None:
-        return None
-    from marsscene.dem.texture import texture_grid, texture_rgb
-
-    bounds = footprint_projected_m(hf, frame)
-    if tcfg.ortho_path:
-        from marsscene.dem.io_ortho import read_ortho  # rasterio
-
-        rows_cols = texture_grid(bounds, 1e-9, tcfg.texture_max_px)
-        ortho = read_ortho(tcfg.ortho_path, bounds_xy_m=bounds,
-                           pixel_m=(bounds[2] - bounds[0]) / rows_cols[1])
-    assert ortho is not None
-    if "data_file" in ortho.metadata:  # the JP2 beside a .LBL
-        inputs["ortho_data"] = str(ortho.metadata["data_file"])
-    rgb = texture_rgb(ortho, bounds, crs_wkt=frame.crs_wkt, max_px=tcfg.texture_max_px)
-    summary["texture_shape_rows_cols"] = list(rgb.shape[:2])
-    name = ortho.metadata.get("PRODUCT_ID", ortho.source_path)
-    notes.append(f"orthoimage {name} co-registered to the terrain footprint")
-    return rgb
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
@@ -166,7 +93,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
     texture_rgb = None
     with timer.stage("terrain"):
-        dem, inputs = _load_dem(config, dem)
+        dem, inputs = load_inputs(config, dem)
         if dem is None:
             hf = synthesize(
                 tcfg.effective_size_m,
@@ -191,7 +118,8 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             if tcfg.source == "default":
                 models.append(ModelRef("terrain", "default DEM", DEFAULT_DEM_CITATION))
             if "HIRISE" in str(dem.metadata.get("DATA_SET_ID", "")).upper():
-                models.append(ModelRef("terrain", str(dem.metadata["DATA_SET_ID"]), _HIRISE_DTM))
+                dataset = str(dem.metadata["DATA_SET_ID"])
+                models.append(ModelRef("terrain", dataset, HIRISE_DTM_CITATION))
             if post_m < hf.cell_size_m * (1 - 1e-9):
                 if tcfg.detail:
                     hf = add_detail(
@@ -209,7 +137,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
                 summary["crs_iau_2015"] = iau_2015_code(frame.crs_wkt)
                 summary["grid_convergence_deg"] = frame.grid_convergence_deg
-            texture_rgb = _drape_ortho(tcfg, dem, hf, frame, inputs, notes, summary)
+            texture_rgb = drape_ortho(tcfg, dem, hf, frame, inputs, notes, summary)
 
     # --- craters stage (issue: craters) ---------------------------------------------------
     craters = None
