@@ -72,3 +72,35 @@ def test_changing_one_stage_leaves_other_stages_draws_unchanged() -> None:
     )
     b = ms.build_scene(other, seed=4)
     assert np.array_equal(a.heightfield.z_m, b.heightfield.z_m)
+
+
+def test_rock_parameters_do_not_move_a_single_crater() -> None:
+    base = ms.SceneConfig.from_dict(
+        {"terrain": {"source": "procedural", "size_m": [40, 40], "rms_height_m": 0.3},
+         "craters": {"d_min_m": 1.0, "d_max_m": 10.0}}
+    )
+    a = ms.build_scene(base, seed=11)
+    b = ms.build_scene(
+        base.replace(rocks=dataclasses.replace(base.rocks, k=0.15, d_min_m=0.3)), seed=11
+    )
+    assert a.craters is not None and b.craters is not None and len(a.craters) > 0
+    assert np.array_equal(a.craters.center_xy_m, b.craters.center_xy_m)
+    assert np.array_equal(a.craters.diameter_m, b.craters.diameter_m)
+    assert np.array_equal(a.heightfield.z_m, b.heightfield.z_m)
+    assert a.rocks is not None and b.rocks is not None and len(a.rocks) != len(b.rocks)
+
+
+def test_crater_parameters_do_not_change_rock_draws() -> None:
+    base = ms.SceneConfig.from_dict(
+        {"terrain": {"source": "procedural", "size_m": [40, 40], "rms_height_m": 0.3},
+         "rocks": {"placement": "uniform", "max_slope_deg": 90.0}}
+    )
+    a = ms.build_scene(base, seed=11)
+    b = ms.build_scene(
+        base.replace(craters=dataclasses.replace(base.craters, age_ga=1.0, d_max_m=15.0)),
+        seed=11,
+    )
+    assert a.rocks is not None and b.rocks is not None
+    assert not np.array_equal(a.heightfield.z_m, b.heightfield.z_m)  # craters differ
+    np.testing.assert_array_equal(a.rocks.diameter_m, b.rocks.diameter_m)
+    np.testing.assert_array_equal(a.rocks.position_xyz_m[:, :2], b.rocks.position_xyz_m[:, :2])
