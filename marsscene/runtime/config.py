@@ -161,6 +161,8 @@ class CameraConfig:
     fovy_deg: float = 60.0
     rate_hz: float = 10.0
     depth: bool = True
+    shadows: bool = False
+    """Shadow maps cost ~6x render time on a software (llvmpipe) GL; off by default."""
 
     def __post_init__(self) -> None:
         if not (16 <= int(self.width_px) <= 4096 and 16 <= int(self.height_px) <= 4096):

@@ -208,8 +208,11 @@ class RoverSim:
 
     def render(self, renderer: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
         """RGB (H, W, 3) uint8 and depth (H, W) float32 in m (None if depth is off)."""
+        shadows = self.run.camera.shadows if self.run.camera is not None else False
         renderer.disable_depth_rendering()
         renderer.update_scene(self.data, camera=self.camera_id)
+        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
+        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
         rgb = renderer.render().copy()
         depth = None
         if self.run.camera is None or self.run.camera.depth:
