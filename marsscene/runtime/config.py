@@ -45,7 +45,7 @@ class RoverConfig:
     ride_height_m: float = 0.75
     """Height of the chassis frame (base_link) above the ground on flat terrain."""
     drive_torque_limit_nm: float = 300.0
-    drive_kv_nm_s: float = 400.0
+    drive_kv_nm_s: float = 3000.0
     wheel_speed_limit_rad_s: float = 3.0
     steer_limit_rad: float = math.radians(100.0)
     steer_kp_nm: float = 2000.0
