@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
-from scipy.ndimage import gaussian_filter1d, maximum_filter
+from scipy.ndimage import binary_dilation, gaussian_filter1d, maximum_filter
 from scipy.sparse.csgraph import dijkstra
 
 from marsscene._validate import check_range
@@ -102,12 +102,20 @@ def cross_track_m(route: Route, xy: ArrayLike) -> NDArray[np.float64]:
 
 
 def _blocked_grid(hf: Heightfield, cell_m: float, max_slope_deg: float,
-                  obstacles: Obstacles | None, max_h: float, clearance_m: float):  # type: ignore[no-untyped-def]
+                  obstacles: Obstacles | None, max_h: float, clearance_m: float,
+                  inflation_m: float):  # type: ignore[no-untyped-def]
     step = max(1, int(round(cell_m / hf.cell_size_m)))
     slope = maximum_filter(hf.slope_deg(), size=step)[::step, ::step]
     blocked = slope > max_slope_deg
     rows, cols = blocked.shape
     cell = hf.cell_size_m * step
+    if inflation_m > 0:
+        k = int(math.ceil(inflation_m / cell))
+        yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
+        steep = blocked
+        blocked = binary_dilation(blocked, structure=(xx**2 + yy**2) <= k * k)
+    else:
+        steep = blocked.copy()
     ox, oy = hf.origin_xy_m
     if obstacles is not None and len(obstacles.radius_m):
         big = obstacles.height_m > max_h
@@ -115,11 +123,13 @@ def _blocked_grid(hf: Heightfield, cell_m: float, max_slope_deg: float,
         ys = oy + np.arange(rows) * cell
         for (cx, cy), r in zip(obstacles.xy_m[big], obstacles.radius_m[big], strict=True):
             rr = r + clearance_m  # loop over the few tall obstacles only
-            c0, c1 = np.searchsorted(xs, [cx - rr, cx + rr])
-            r0, r1 = np.searchsorted(ys, [cy - rr, cy + rr])
+            c0, c1 = np.searchsorted(xs, [cx - rr - 1, cx + rr + 1])
+            r0, r1 = np.searchsorted(ys, [cy - rr - 1, cy + rr + 1])
             gx, gy = np.meshgrid(xs[c0:c1], ys[r0:r1])
-            blocked[r0:r1, c0:c1] |= (gx - cx) ** 2 + (gy - cy) ** 2 <= rr * rr
-    return blocked, cell, (ox, oy)
+            d2 = (gx - cx) ** 2 + (gy - cy) ** 2
+            blocked[r0:r1, c0:c1] |= d2 <= (rr + 0.5 * cell + 0.25) ** 2  # planning margin
+            steep[r0:r1, c0:c1] |= d2 <= rr * rr
+    return blocked, steep, cell, (ox, oy)
 
 
 def _grid_path(blocked: NDArray[np.bool_], start: tuple[int, int], goal: tuple[int, int]):  # type: ignore[no-untyped-def]
@@ -149,6 +159,27 @@ def _grid_path(blocked: NDArray[np.bool_], start: tuple[int, int], goal: tuple[i
     return np.column_stack([nodes // cols, nodes % cols])
 
 
+def _clear(blocked: NDArray[np.bool_], a: NDArray[np.float64], b: NDArray[np.float64]) -> bool:
+    n = int(np.ceil(2 * np.abs(b - a).max())) + 2
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    rc = np.round(a + t * (b - a)).astype(int)
+    return not blocked[rc[:, 0], rc[:, 1]].any()
+
+
+def _shortcut(blocked: NDArray[np.bool_], nodes: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Line-of-sight string pulling of a grid path (removes 8-connected zig-zags)."""
+    p = nodes.astype(np.float64)
+    keep = [0]
+    i = 0
+    while i < len(p) - 1:  # loops over the path's own nodes only
+        j = len(p) - 1
+        while j > i + 1 and not _clear(blocked, p[i], p[j]):
+            j -= 1
+        keep.append(j)
+        i = j
+    return nodes[keep]
+
+
 def author_route(
     waypoints_xy_m: ArrayLike,
     hf: Heightfield,
@@ -159,6 +190,7 @@ def author_route(
     obstacles: Obstacles | None = None,
     max_obstacle_height_m: float = 0.3,
     clearance_m: float = 1.5,
+    inflation_m: float = 1.25,
     margin_m: float = 2.0,
 ) -> Route:
     """Author a drivable route through waypoints.
@@ -176,6 +208,9 @@ def author_route(
     max_slope_deg, obstacles, max_obstacle_height_m, clearance_m
         What to avoid (slopes over the limit; obstacles taller than the limit, kept
         ``clearance_m`` away from their edge).
+    inflation_m : float
+        Planned paths keep this distance from steep cells (about the rover's half width), so
+        the wheels, not just the centre line, stay on gentle ground.
 
     Returns
     -------
@@ -198,8 +233,8 @@ def author_route(
             f"{y1 - margin_m:.2f}] m (footprint minus a {margin_m} m margin)"
         )
     cell_m = max(hf.cell_size_m, math.sqrt(hf.area_m2 / _MAX_NODES), 0.25)
-    blocked, cell, (ox, oy) = _blocked_grid(
-        hf, cell_m, max_slope_deg, obstacles, max_obstacle_height_m, clearance_m
+    plan, blocked, cell, (ox, oy) = _blocked_grid(
+        hf, cell_m, max_slope_deg, obstacles, max_obstacle_height_m, clearance_m, inflation_m
     )
     rc = lambda p: (int(round((p[1] - oy) / cell)), int(round((p[0] - ox) / cell)))  # noqa: E731
     pieces = [wp[:1]]
@@ -207,12 +242,14 @@ def author_route(
         leg = resample_xy(np.vstack([a, b]), cell / 2)
         r = np.clip(np.round((leg[:, 1] - oy) / cell).astype(int), 0, blocked.shape[0] - 1)
         c = np.clip(np.round((leg[:, 0] - ox) / cell).astype(int), 0, blocked.shape[1] - 1)
-        if not blocked[r, c].any():
+        if not plan[r, c].any():
             pieces.append(leg[1:])
             continue
-        grid = blocked.copy()
+        grid = plan.copy()
         grid[rc(a)] = grid[rc(b)] = False
         nodes = _grid_path(grid, rc(a), rc(b))
+        if nodes is not None:
+            nodes = _shortcut(grid, nodes)
         if nodes is None:
             raise RuntimeSimError(
                 f"no route from ({a[0]:.1f}, {a[1]:.1f}) to ({b[0]:.1f}, {b[1]:.1f}) m avoids "
@@ -220,7 +257,7 @@ def author_route(
             )
         pts = np.column_stack([ox + nodes[:, 1] * cell, oy + nodes[:, 0] * cell])
         pts[0], pts[-1] = a, b
-        pieces.append(pts[1:])
+        pieces.append(resample_xy(pts, cell / 2)[1:])
     dense = resample_xy(np.vstack(pieces), min(spacing_m, 0.05))
     if smooth_m > 0 and len(dense) > 3:
         sigma = smooth_m / 0.05

@@ -12,6 +12,7 @@ Numbers and sources: ``docs/runtime.md``.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,6 +44,11 @@ _BOGIE_HALF_M = 0.5
 
 def wheel_positions_xy(cfg: RoverConfig) -> NDArray[np.float64]:
     """Nominal wheel contact points in ``base_link`` (x, y), shape (6, 2), order of DRIVE_JOINTS."""
+    return _wheel_xy(cfg).copy()
+
+
+@lru_cache(maxsize=16)
+def _wheel_xy(cfg: RoverConfig) -> NDArray[np.float64]:
     half = cfg.track_m / 2.0
     xs = (cfg.wheelbase_front_m, cfg.wheelbase_front_m, 0.0, 0.0,
           -cfg.wheelbase_rear_m, -cfg.wheelbase_rear_m)
@@ -70,7 +76,7 @@ def wheel_commands(
     steer : ndarray of shape (4,)
         Steering angles of the corner wheels (in rad), STEER_JOINTS order, within +-pi/2.
     """
-    xy = wheel_positions_xy(cfg)
+    xy = _wheel_xy(cfg)
     vx = v_m_s - omega_rad_s * xy[:, 1]
     vy = omega_rad_s * xy[:, 0]
     delta = np.arctan2(vy, vx)
@@ -91,17 +97,22 @@ def body_twist_from_wheels(
     Inverse of :func:`wheel_commands`: every wheel's ground velocity
     ``r * rate * (cos d, sin d) = (v - omega * y, omega * x)`` gives two linear equations.
     """
-    xy = wheel_positions_xy(cfg)
     delta = np.zeros(6)
     delta[_STEERED] = steer_rad
     u = cfg.wheel_radius_m * np.asarray(rates_rad_s, dtype=np.float64)
+    b = np.concatenate([u * np.cos(delta), u * np.sin(delta)])
+    sol = _odometry_pinv(cfg) @ b
+    return float(sol[0]), float(sol[1])
+
+
+@lru_cache(maxsize=16)
+def _odometry_pinv(cfg: RoverConfig) -> NDArray[np.float64]:
+    xy = _wheel_xy(cfg)
     a = np.zeros((12, 2))
     a[:6, 0] = 1.0
     a[:6, 1] = -xy[:, 1]
     a[6:, 1] = xy[:, 0]
-    b = np.concatenate([u * np.cos(delta), u * np.sin(delta)])
-    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
-    return float(sol[0]), float(sol[1])
+    return np.linalg.pinv(a)
 
 
 def _body(name: str, pos: tuple[float, float, float], inner: str) -> str:
