@@ -169,7 +169,10 @@ def rpe(
     # E = rel_g^-1 rel_e: rotation Rg^T Re, translation Rg^T (te - tg)
     err_r = np.einsum("nji,njk->nik", rel_g_r, rel_e_r)
     err_t = np.einsum("nji,nj->ni", rel_g_r, rel_e_t - rel_g_t)
-    cos = np.clip((np.trace(err_r, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    cos = (np.trace(err_r, axis1=1, axis2=2) - 1.0) / 2.0
+    axis = np.stack([err_r[:, 2, 1] - err_r[:, 1, 2], err_r[:, 0, 2] - err_r[:, 2, 0],
+                     err_r[:, 1, 0] - err_r[:, 0, 1]], axis=1)
+    angle = np.arctan2(0.5 * np.linalg.norm(axis, axis=1), cos)  # accurate near 0 and pi
     return RPEResult(
-        ErrorStats.of(np.linalg.norm(err_t, axis=1)), ErrorStats.of(np.degrees(np.arccos(cos))), d
+        ErrorStats.of(np.linalg.norm(err_t, axis=1)), ErrorStats.of(np.degrees(angle)), d
     )
