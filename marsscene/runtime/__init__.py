@@ -25,7 +25,15 @@ from marsscene.runtime.config import (
     RoverConfig,
     RunConfig,
 )
-from marsscene.runtime.evaluation import ATEResult, ErrorStats, RPEResult, associate, ate, rpe, umeyama
+from marsscene.runtime.evaluation import (
+    ATEResult,
+    ErrorStats,
+    RPEResult,
+    associate,
+    ate,
+    rpe,
+    umeyama,
+)
 from marsscene.runtime.pursuit import PurePursuit, PursuitConfig
 from marsscene.runtime.route import Obstacles, Route, RouteWarning, author_route, cross_track_m
 from marsscene.runtime.rover import rover_mjcf, wheel_commands
@@ -46,10 +54,10 @@ __all__ = [
     "PurePursuit",
     "PursuitConfig",
     "RPEResult",
-    "RoverConfig",
-    "RoverSim",
     "Route",
     "RouteWarning",
+    "RoverConfig",
+    "RoverSim",
     "RunConfig",
     "Trajectory",
     "associate",

@@ -63,12 +63,16 @@ class RoverConfig:
         check_range("rover.wheelbase_rear_m", self.wheelbase_rear_m, 0.2, 3.0)
         check_range("rover.track_m", self.track_m, 2 * self.wheel_width_m + 0.2, 5.0)
         check_range("rover.ride_height_m", self.ride_height_m, self.wheel_radius_m + 0.2, 3.0)
-        check_range("rover.drive_torque_limit_nm", self.drive_torque_limit_nm, 0.0, 1e4, lo_open=True)
+        check_range(
+            "rover.drive_torque_limit_nm", self.drive_torque_limit_nm, 0.0, 1e4, lo_open=True
+        )
         check_range("rover.drive_kv_nm_s", self.drive_kv_nm_s, 0.0, 1e5, lo_open=True)
         check_range("rover.wheel_speed_limit_rad_s", self.wheel_speed_limit_rad_s, 0.1, 50.0)
         check_range("rover.steer_limit_rad", self.steer_limit_rad, 0.0, math.pi, lo_open=True)
         check_range("rover.steer_kp_nm", self.steer_kp_nm, 0.0, 1e6, lo_open=True)
-        check_range("rover.steer_torque_limit_nm", self.steer_torque_limit_nm, 0.0, 1e5, lo_open=True)
+        check_range(
+            "rover.steer_torque_limit_nm", self.steer_torque_limit_nm, 0.0, 1e5, lo_open=True
+        )
         check_range("rover.friction", self.friction, 0.05, 2.0)
         check_range("rover.mast_height_m", self.mast_height_m, self.ride_height_m, 5.0)
 
@@ -136,7 +140,9 @@ class LidarConfig:
 
     def __post_init__(self) -> None:
         if not 1 <= int(self.channels) <= 256:
-            raise ConfigError(f"lidar.channels = {self.channels!r} is out of range; allowed [1, 256]")
+            raise ConfigError(
+                f"lidar.channels = {self.channels!r} is out of range; allowed [1, 256]"
+            )
         if not 4 <= int(self.horizontal_samples) <= 8192:
             raise ConfigError(
                 f"lidar.horizontal_samples = {self.horizontal_samples!r} is out of range; "

@@ -28,15 +28,22 @@ __all__ = ["DriveResult", "drive"]
 class DriveResult:
     """What a drive produced: trajectories, commands and summary statistics."""
 
-    def __init__(self, gt: Trajectory, odom: Trajectory, cmd: np.ndarray, summary: dict[str, Any],
-                 lidar: list[dict[str, Any]], images: list[tuple[np.ndarray, np.ndarray | None]]):
+    def __init__(
+        self,
+        gt: Trajectory,
+        odom: Trajectory,
+        cmd: np.ndarray,
+        summary: dict[str, Any],
+        lidar: list[dict[str, Any]],
+        images: list[tuple[np.ndarray, np.ndarray | None]],
+    ):
         self.gt, self.odom, self.cmd, self.summary = gt, odom, cmd, summary
         self.lidar_scans, self.images = lidar, images
         self.imu: np.ndarray = np.zeros((0, 7))
 
 
 def _period(sim: Any, rate_hz: float) -> int:
-    return int(round(1.0 / (rate_hz * sim.dt_physics_s)))
+    return round(1.0 / (rate_hz * sim.dt_physics_s))
 
 
 def drive(
@@ -75,8 +82,11 @@ def drive(
 
     if route is None and command is None:
         raise RuntimeSimError("drive needs a route or a command")
-    limit = seconds if seconds is not None else (
-        2.0 * route.length_m / 0.1 + 60.0 if route is not None else None)
+    limit = (
+        seconds
+        if seconds is not None
+        else (2.0 * route.length_m / 0.1 + 60.0 if route is not None else None)
+    )
     if limit is None or limit <= 0:
         raise RuntimeSimError(f"seconds = {seconds!r} must be > 0 when driving without a route")
     run = sim.run
@@ -95,8 +105,14 @@ def drive(
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         logs["cmd"] = CsvLog(out / "cmd.csv", ["t", "v", "omega"])
-        logs["wheels"] = CsvLog(out / "wheels.csv", ["t", *[f"rate_{j[-2:]}" for j in DRIVE_JOINTS],
-                                                     *[f"steer_{j[-2:]}" for j in STEER_JOINTS]])
+        logs["wheels"] = CsvLog(
+            out / "wheels.csv",
+            [
+                "t",
+                *[f"rate_{j[-2:]}" for j in DRIVE_JOINTS],
+                *[f"steer_{j[-2:]}" for j in STEER_JOINTS],
+            ],
+        )
         logs["imu"] = CsvLog(out / "imu.csv", ["t", "ax", "ay", "az", "gx", "gy", "gz"])
         if lidar is not None:
             logs["lidar"] = CsvLog(out / "lidar" / "stamps.csv", ["t", "file", "points"])
@@ -111,7 +127,7 @@ def drive(
     imu_rows: list[np.ndarray] = []
     scans: list[dict[str, Any]] = []
     images: list[tuple[np.ndarray, np.ndarray | None]] = []
-    steps_limit = int(round(limit / sim.dt_physics_s))
+    steps_limit = round(limit / sim.dt_physics_s)
     dt_ctrl = periods["control"] * sim.dt_physics_s
     k = 0
     n_lidar = n_cam = 0
@@ -138,7 +154,8 @@ def drive(
             if follower is not None and follower.done:
                 break
         if k % periods["imu"] == 0:
-            acc, gyr = imu_measure(*sim.imu_true(), run.noise, rng=rng)
+            acc_true, gyr_true = sim.imu_true()
+            acc, gyr = imu_measure(acc_true, gyr_true, run.noise, rng=rng)
             if logs:
                 logs["imu"].row(t, (*acc, *gyr))
             if keep_sensors:
@@ -147,7 +164,9 @@ def drive(
             scan = lidar.scan(sim.model, sim.data, sim.lidar_site)
             if out is not None:
                 name = f"{n_lidar:06d}.ply"
-                (out / "lidar" / name).write_bytes(ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"]))
+                (out / "lidar" / name).write_bytes(
+                    ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"])
+                )
                 logs["lidar"].row(t, (name, len(scan["range_m"])))
             if keep_sensors:
                 scans.append({"t": t, **scan})
@@ -194,22 +213,33 @@ def drive(
         summary["cross_track_max_m"] = round(float(ct.max()), 6)
     if out is not None:
         write_tum(out / "gt.tum", gt, header="ground truth base_link in map (world) frame")
-        write_tum(out / "odom.tum", odom, header="wheel odometry base_link in odom frame (= map at t=0)")
-        write_json(out / "run.json", {
-            "summary": summary,
-            "rover": asdict(sim.rover),
-            "noise": asdict(run.noise),
-            "rates_hz": {"physics": 1.0 / sim.dt_physics_s, "control": run.control_hz,
-                         "imu": run.imu_hz,
-                         "lidar": run.lidar.rate_hz if run.lidar else None,
-                         "camera": run.camera.rate_hz if run.camera else None},
-            "lidar": asdict(run.lidar) if run.lidar else None,
-            "camera": asdict(run.camera) if run.camera else None,
-            "pursuit": asdict(follower.config) if follower is not None else None,
-            "frames": {"world": "map: x east, y north, z up (REP-103/105)",
-                       "base_link": "x forward, y left, z up", "imu": "= base_link",
-                       "lidar": "x forward, y left, z up at the mast top"},
-        })
+        write_tum(
+            out / "odom.tum", odom, header="wheel odometry base_link in odom frame (= map at t=0)"
+        )
+        write_json(
+            out / "run.json",
+            {
+                "summary": summary,
+                "rover": asdict(sim.rover),
+                "noise": asdict(run.noise),
+                "rates_hz": {
+                    "physics": 1.0 / sim.dt_physics_s,
+                    "control": run.control_hz,
+                    "imu": run.imu_hz,
+                    "lidar": run.lidar.rate_hz if run.lidar else None,
+                    "camera": run.camera.rate_hz if run.camera else None,
+                },
+                "lidar": asdict(run.lidar) if run.lidar else None,
+                "camera": asdict(run.camera) if run.camera else None,
+                "pursuit": asdict(follower.config) if follower is not None else None,
+                "frames": {
+                    "world": "map: x east, y north, z up (REP-103/105)",
+                    "base_link": "x forward, y left, z up",
+                    "imu": "= base_link",
+                    "lidar": "x forward, y left, z up at the mast top",
+                },
+            },
+        )
     res = DriveResult(gt, odom, np.array(cmd_rows), summary, scans, images)
     if keep_sensors and imu_rows:
         res.imu = np.array(imu_rows)

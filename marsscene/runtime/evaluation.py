@@ -40,8 +40,16 @@ class ErrorStats:
     @classmethod
     def of(cls, e: NDArray[np.float64]) -> ErrorStats:
         e = np.asarray(e, dtype=np.float64)
-        return cls(float(np.sqrt(np.mean(e**2))), float(e.mean()), float(np.median(e)),
-                   float(e.std()), float(e.min()), float(e.max()), len(e), e)
+        return cls(
+            float(np.sqrt(np.mean(e**2))),
+            float(e.mean()),
+            float(np.median(e)),
+            float(e.std()),
+            float(e.min()),
+            float(e.max()),
+            len(e),
+            e,
+        )
 
     def as_dict(self) -> dict[str, float]:
         return {k: getattr(self, k) for k in ("rmse", "mean", "median", "std", "min", "max", "n")}
@@ -96,7 +104,13 @@ def umeyama(
     return rot, mu_d - scale * rot @ mu_s, scale
 
 
-def _paired(est: Trajectory, gt: Trajectory, max_dt_s: float, align: str):  # type: ignore[no-untyped-def]
+_Paired = tuple[
+    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+    tuple[NDArray[np.float64], NDArray[np.float64], float],
+]
+
+
+def _paired(est: Trajectory, gt: Trajectory, max_dt_s: float, align: str) -> _Paired:
     check_choice("align", align, ("se3", "sim3", "none"))
     ie, ig = associate(est, gt, max_dt_s=max_dt_s)
     pe, pg = est.xyz_m[ie], gt.xyz_m[ig]
@@ -170,8 +184,14 @@ def rpe(
     err_r = np.einsum("nji,njk->nik", rel_g_r, rel_e_r)
     err_t = np.einsum("nji,nj->ni", rel_g_r, rel_e_t - rel_g_t)
     cos = (np.trace(err_r, axis1=1, axis2=2) - 1.0) / 2.0
-    axis = np.stack([err_r[:, 2, 1] - err_r[:, 1, 2], err_r[:, 0, 2] - err_r[:, 2, 0],
-                     err_r[:, 1, 0] - err_r[:, 0, 1]], axis=1)
+    axis = np.stack(
+        [
+            err_r[:, 2, 1] - err_r[:, 1, 2],
+            err_r[:, 0, 2] - err_r[:, 2, 0],
+            err_r[:, 1, 0] - err_r[:, 0, 1],
+        ],
+        axis=1,
+    )
     angle = np.arctan2(0.5 * np.linalg.norm(axis, axis=1), cos)  # accurate near 0 and pi
     return RPEResult(
         ErrorStats.of(np.linalg.norm(err_t, axis=1)), ErrorStats.of(np.degrees(angle)), d

@@ -40,19 +40,21 @@ class CsvLog:
     def __init__(self, path: Path, columns: list[str]) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         self.path = path
-        self._fh = open(path, "w", encoding="utf-8", newline="\n")  # noqa: SIM115
+        self._fh = open(path, "w", encoding="utf-8", newline="\n")
         self._fh.write(",".join(columns) + "\n")
 
     def row(self, t_s: float, values: Any) -> None:
-        self._fh.write(f"{t_s:.6f}," + ",".join(
-            v if isinstance(v, str) else _num(v) for v in values) + "\n")
+        self._fh.write(
+            f"{t_s:.6f}," + ",".join(v if isinstance(v, str) else _num(v) for v in values) + "\n"
+        )
 
     def close(self) -> None:
         self._fh.close()
 
 
-def ply_bytes(xyz_m: NDArray[np.float32], intensity: NDArray[np.float32],
-              ring: NDArray[np.uint16]) -> bytes:
+def ply_bytes(
+    xyz_m: NDArray[np.float32], intensity: NDArray[np.float32], ring: NDArray[np.uint16]
+) -> bytes:
     """Binary little-endian PLY with ``x y z intensity`` float32 and ``ring`` uint16."""
     n = len(xyz_m)
     head = (
@@ -79,5 +81,6 @@ def png_bytes(image: NDArray[Any]) -> bytes:
 
 
 def write_json(path: Path, doc: dict[str, Any]) -> None:
-    path.write_text(json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n",
-                    encoding="utf-8")
+    path.write_text(
+        json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8"
+    )

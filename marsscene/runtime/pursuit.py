@@ -63,7 +63,10 @@ class PurePursuit:
         self._advance(x_m, y_m)
         goal = self.route.xy_m[-1]
         to_go = self.s[-1] - self.s[self.index]
-        if to_go < cfg.lookahead_m and math.hypot(goal[0] - x_m, goal[1] - y_m) < cfg.goal_tolerance_m:
+        if (
+            to_go < cfg.lookahead_m
+            and math.hypot(goal[0] - x_m, goal[1] - y_m) < cfg.goal_tolerance_m
+        ):
             self.done = True
             return 0.0, 0.0
         j = min(int(np.searchsorted(self.s, self.s[self.index] + cfg.lookahead_m)), len(self.s) - 1)
@@ -85,4 +88,6 @@ class PurePursuit:
         if abs(omega) > cfg.omega_max_rad_s:
             v = cfg.omega_max_rad_s / abs(kappa)
             omega = math.copysign(cfg.omega_max_rad_s, kappa)
-        return min(max(v, 0.0), cfg.v_max_m_s), max(-cfg.omega_max_rad_s, min(cfg.omega_max_rad_s, omega))
+        return min(max(v, 0.0), cfg.v_max_m_s), max(
+            -cfg.omega_max_rad_s, min(cfg.omega_max_rad_s, omega)
+        )

@@ -10,6 +10,7 @@ resampled every ``spacing_m``.
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from dataclasses import dataclass
@@ -58,8 +59,9 @@ class Route:
     def length_m(self) -> float:
         return float(self.s_m[-1])
 
-    def to_trajectory(self, hf: Heightfield, *, speed_m_s: float = 0.5,
-                      height_m: float = 0.0) -> Trajectory:
+    def to_trajectory(
+        self, hf: Heightfield, *, speed_m_s: float = 0.5, height_m: float = 0.0
+    ) -> Trajectory:
         """Route as TUM poses: stamps at ``speed_m_s``, z on the terrain (+height), yaw along it."""
         xy = self.xy_m
         d = np.gradient(xy, axis=0)
@@ -81,7 +83,7 @@ def resample_xy(xy: ArrayLike, spacing_m: float) -> NDArray[np.float64]:
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
     if s[-1] == 0.0:
         return p[:1].copy()
-    n = max(int(math.ceil(s[-1] / spacing_m)), 1)
+    n = max(math.ceil(s[-1] / spacing_m), 1)
     t = np.linspace(0.0, s[-1], n + 1)
     return np.column_stack([np.interp(t, s, p[:, 0]), np.interp(t, s, p[:, 1])])
 
@@ -101,16 +103,22 @@ def cross_track_m(route: Route, xy: ArrayLike) -> NDArray[np.float64]:
     return out
 
 
-def _blocked_grid(hf: Heightfield, cell_m: float, max_slope_deg: float,
-                  obstacles: Obstacles | None, max_h: float, clearance_m: float,
-                  inflation_m: float):  # type: ignore[no-untyped-def]
-    step = max(1, int(round(cell_m / hf.cell_size_m)))
+def _blocked_grid(
+    hf: Heightfield,
+    cell_m: float,
+    max_slope_deg: float,
+    obstacles: Obstacles | None,
+    max_h: float,
+    clearance_m: float,
+    inflation_m: float,
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], float, tuple[float, float]]:
+    step = max(1, round(cell_m / hf.cell_size_m))
     slope = maximum_filter(hf.slope_deg(), size=step)[::step, ::step]
     blocked = slope > max_slope_deg
     rows, cols = blocked.shape
     cell = hf.cell_size_m * step
     if inflation_m > 0:
-        k = int(math.ceil(inflation_m / cell))
+        k = math.ceil(inflation_m / cell)
         yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
         steep = blocked
         blocked = binary_dilation(blocked, structure=(xx**2 + yy**2) <= k * k)
@@ -132,7 +140,9 @@ def _blocked_grid(hf: Heightfield, cell_m: float, max_slope_deg: float,
     return blocked, steep, cell, (ox, oy)
 
 
-def _grid_path(blocked: NDArray[np.bool_], start: tuple[int, int], goal: tuple[int, int]):  # type: ignore[no-untyped-def]
+def _grid_path(
+    blocked: NDArray[np.bool_], start: tuple[int, int], goal: tuple[int, int]
+) -> NDArray[np.int64] | None:
     rows, cols = blocked.shape
     idx = np.arange(rows * cols).reshape(rows, cols)
     free = ~blocked
@@ -146,8 +156,10 @@ def _grid_path(blocked: NDArray[np.bool_], start: tuple[int, int], goal: tuple[i
         src.append(a[ok])
         dst.append(b[ok])
         w.append(np.full(int(ok.sum()), math.hypot(dr, dc)))
-    g = sparse.coo_matrix((np.concatenate(w), (np.concatenate(src), np.concatenate(dst))),
-                          shape=(rows * cols, rows * cols)).tocsr()
+    g = sparse.coo_matrix(
+        (np.concatenate(w), (np.concatenate(src), np.concatenate(dst))),
+        shape=(rows * cols, rows * cols),
+    ).tocsr()
     s, t = idx[start], idx[goal]
     dist, pred = dijkstra(g, directed=False, indices=s, return_predecessors=True)
     if not np.isfinite(dist[t]):
@@ -223,8 +235,12 @@ def author_route(
     if wp.ndim != 2 or wp.shape[1] != 2 or len(wp) < 2:
         raise RuntimeSimError(f"waypoints must be an array of shape (K>=2, 2); got {wp.shape}")
     x0, y0, x1, y1 = hf.bounds_xy_m
-    bad = ~((wp[:, 0] >= x0 + margin_m) & (wp[:, 0] <= x1 - margin_m)
-            & (wp[:, 1] >= y0 + margin_m) & (wp[:, 1] <= y1 - margin_m))
+    bad = ~(
+        (wp[:, 0] >= x0 + margin_m)
+        & (wp[:, 0] <= x1 - margin_m)
+        & (wp[:, 1] >= y0 + margin_m)
+        & (wp[:, 1] <= y1 - margin_m)
+    )
     if bad.any():
         i = int(np.argmax(bad))
         raise RuntimeSimError(
@@ -236,9 +252,9 @@ def author_route(
     plan, blocked, cell, (ox, oy) = _blocked_grid(
         hf, cell_m, max_slope_deg, obstacles, max_obstacle_height_m, clearance_m, inflation_m
     )
-    rc = lambda p: (int(round((p[1] - oy) / cell)), int(round((p[0] - ox) / cell)))  # noqa: E731
+    rc = lambda p: (round((p[1] - oy) / cell), round((p[0] - ox) / cell))  # noqa: E731
     pieces = [wp[:1]]
-    for a, b in zip(wp[:-1], wp[1:], strict=True):
+    for a, b in itertools.pairwise(wp):
         leg = resample_xy(np.vstack([a, b]), cell / 2)
         r = np.clip(np.round((leg[:, 1] - oy) / cell).astype(int), 0, blocked.shape[0] - 1)
         c = np.clip(np.round((leg[:, 0] - ox) / cell).astype(int), 0, blocked.shape[1] - 1)
@@ -271,6 +287,8 @@ def author_route(
     if blocked[r, c].any():
         warnings.warn(
             f"the smoothed route touches {int(blocked[r, c].sum())} blocked cells; "
-            "reduce smooth_m or add waypoints", RouteWarning, stacklevel=2,
+            "reduce smooth_m or add waypoints",
+            RouteWarning,
+            stacklevel=2,
         )
     return Route(xy)

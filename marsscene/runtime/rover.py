@@ -50,8 +50,14 @@ def wheel_positions_xy(cfg: RoverConfig) -> NDArray[np.float64]:
 @lru_cache(maxsize=16)
 def _wheel_xy(cfg: RoverConfig) -> NDArray[np.float64]:
     half = cfg.track_m / 2.0
-    xs = (cfg.wheelbase_front_m, cfg.wheelbase_front_m, 0.0, 0.0,
-          -cfg.wheelbase_rear_m, -cfg.wheelbase_rear_m)
+    xs = (
+        cfg.wheelbase_front_m,
+        cfg.wheelbase_front_m,
+        0.0,
+        0.0,
+        -cfg.wheelbase_rear_m,
+        -cfg.wheelbase_rear_m,
+    )
     ys = (half, -half) * 3
     return np.column_stack([xs, ys]).astype(np.float64)
 
@@ -112,7 +118,7 @@ def _odometry_pinv(cfg: RoverConfig) -> NDArray[np.float64]:
     a[:6, 0] = 1.0
     a[:6, 1] = -xy[:, 1]
     a[6:, 1] = xy[:, 0]
-    return np.linalg.pinv(a)
+    return np.asarray(np.linalg.pinv(a), dtype=np.float64)
 
 
 def _body(name: str, pos: tuple[float, float, float], inner: str) -> str:
@@ -122,7 +128,8 @@ def _body(name: str, pos: tuple[float, float, float], inner: str) -> str:
 def _wheel(cfg: RoverConfig, tag: str, pos: tuple[float, float, float], steered: bool) -> str:
     r, hw = cfg.wheel_radius_m, cfg.wheel_width_m / 2.0
     wheel = _body(
-        f"wheel_{tag}", (0.0, 0.0, 0.0),
+        f"wheel_{tag}",
+        (0.0, 0.0, 0.0),
         f'<joint name="drive_{tag}" type="hinge" axis="0 1 0" armature="0.5" damping="0.5"/>'
         f'<geom name="wheel_{tag}" class="wheel" type="cylinder" size="{fmt((r, hw))}" '
         f'quat="0.707107 0.707107 0 0" mass="{fmt(_M_WHEEL)}"/>',
@@ -152,9 +159,11 @@ def _side(cfg: RoverConfig, side: str, sign: float) -> str:
     mid = _wheel(cfg, f"m{s}", (_BOGIE_HALF_M, dy, r - _BOGIE_ABOVE_GROUND_M), False)
     rear = _wheel(cfg, f"r{s}", (-_BOGIE_HALF_M, dy, r - _BOGIE_ABOVE_GROUND_M), True)
     bogie = _body(
-        f"bogie_{side}", (xb, 0.0, bz),
+        f"bogie_{side}",
+        (xb, 0.0, bz),
         f'<joint name="bogie_{side}" type="hinge" axis="0 1 0" range="-0.6 0.6" damping="20"/>'
-        f'<geom class="visual" type="capsule" fromto="{fmt((-_BOGIE_HALF_M, 0, 0, _BOGIE_HALF_M, 0, 0))}" '
+        f'<geom class="visual" type="capsule" '
+        f'fromto="{fmt((-_BOGIE_HALF_M, 0, 0, _BOGIE_HALF_M, 0, 0))}" '
         f'size="0.05" mass="{fmt(_M_BOGIE)}"/>' + mid + rear,
     )
     rocker = (
@@ -186,8 +195,7 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0)
         '<site name="imu" pos="0 0 0" size="0.02"/>'
         f'<site name="lidar" pos="{fmt((0.7, 0.0, mast + 0.12))}" size="0.03"/>'
         f'<camera name="navcam" pos="{fmt((0.75, 0.0, mast))}" xyaxes="{cam_axes}" '
-        f'fovy="{fmt(camera_fovy_deg)}"/>'
-        + _side(cfg, "left", 1.0) + _side(cfg, "right", -1.0)
+        f'fovy="{fmt(camera_fovy_deg)}"/>' + _side(cfg, "left", 1.0) + _side(cfg, "right", -1.0)
     )
     lim, tq = cfg.wheel_speed_limit_rad_s, cfg.drive_torque_limit_nm
     acts = "".join(
@@ -203,19 +211,19 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0)
     return (
         '<mujoco model="rover">\n'
         '  <compiler angle="radian" autolimits="true"/>\n'
-        '  <default>\n'
+        "  <default>\n"
         f'    <default class="wheel"><geom contype="2" conaffinity="1" condim="3" group="2" '
         f'friction="{mu}" rgba="0.6 0.6 0.6 1"/></default>\n'
         '    <default class="body"><geom contype="2" conaffinity="1" condim="3" group="2" '
         'rgba="0.85 0.85 0.8 1"/></default>\n'
         '    <default class="visual"><geom contype="0" conaffinity="0" group="2" '
         'rgba="0.4 0.4 0.4 1"/></default>\n'
-        '  </default>\n'
+        "  </default>\n"
         f'  <worldbody><body name="base_link" pos="0 0 {fmt(ride)}">{base}</body></worldbody>\n'
         '  <equality><joint name="differential" joint1="rocker_left" joint2="rocker_right" '
         'polycoef="0 -1 0 0 0"/></equality>\n'
-        f'  <actuator>{acts}</actuator>\n'
+        f"  <actuator>{acts}</actuator>\n"
         '  <sensor><accelerometer name="imu_accel" site="imu"/><gyro name="imu_gyro" site="imu"/>'
-        '</sensor>\n'
-        '</mujoco>\n'
+        "</sensor>\n"
+        "</mujoco>\n"
     )

@@ -70,7 +70,9 @@ class WheelOdometry:
         self.x_m, self.y_m, self.z_m, self.yaw_rad = float(x_m), float(y_m), float(z_m), yaw_rad
         self.distance_m = 0.0
 
-    def update(self, rates_rad_s: NDArray[np.float64], steer_rad: NDArray[np.float64], dt_s: float) -> None:
+    def update(
+        self, rates_rad_s: NDArray[np.float64], steer_rad: NDArray[np.float64], dt_s: float
+    ) -> None:
         v, w = body_twist_from_wheels(rates_rad_s, steer_rad, self.rover)
         mid = self.yaw_rad + 0.5 * w * dt_s
         self.x_m += v * dt_s * math.cos(mid)
@@ -81,8 +83,10 @@ class WheelOdometry:
     def pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Position (3,) in m and quaternion (w, x, y, z) of the estimate."""
         h = 0.5 * self.yaw_rad
-        return (np.array([self.x_m, self.y_m, self.z_m]),
-                np.array([math.cos(h), 0.0, 0.0, math.sin(h)]))
+        return (
+            np.array([self.x_m, self.y_m, self.z_m]),
+            np.array([math.cos(h), 0.0, 0.0, math.sin(h)]),
+        )
 
 
 def imu_measure(
@@ -93,8 +97,16 @@ def imu_measure(
     rng: np.random.Generator,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Noisy IMU sample: true value + bias + N(0, sigma) on each axis."""
-    a = accel_m_s2 + np.asarray(noise.accel_bias_m_s2) + noise.accel_sigma_m_s2 * rng.standard_normal(3)
-    g = gyro_rad_s + np.asarray(noise.gyro_bias_rad_s) + noise.gyro_sigma_rad_s * rng.standard_normal(3)
+    a = (
+        accel_m_s2
+        + np.asarray(noise.accel_bias_m_s2)
+        + noise.accel_sigma_m_s2 * rng.standard_normal(3)
+    )
+    g = (
+        gyro_rad_s
+        + np.asarray(noise.gyro_bias_rad_s)
+        + noise.gyro_sigma_rad_s * rng.standard_normal(3)
+    )
     return a, g
 
 
@@ -136,8 +148,18 @@ class Lidar:
         dirs_world = self.dirs_sensor @ rot.T
         n = len(dirs_world)
         mujoco.mj_multiRay(
-            model, data, origin, dirs_world.ravel(), self._groups, 1, -1,
-            self._geomid, self._dist, self._normal.ravel(), n, self.config.range_m[1],
+            model,
+            data,
+            origin,
+            dirs_world.ravel(),
+            self._groups,
+            1,
+            -1,
+            self._geomid,
+            self._dist,
+            self._normal.ravel(),
+            n,
+            self.config.range_m[1],
         )
         dist = self._dist
         rmin, rmax = self.config.range_m

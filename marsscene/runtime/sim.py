@@ -16,9 +16,9 @@ from typing import Any
 if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"  # headless offscreen rendering; set MUJOCO_GL to override
 
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
-from numpy.typing import NDArray  # noqa: E402
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
 
 from marsscene.errors import RuntimeSimError
 from marsscene.runtime.config import RoverConfig, RunConfig
@@ -92,12 +92,14 @@ class RoverSim:
         try:
             self.model = spec.compile()
         except Exception as err:
-            raise RuntimeSimError(f"{self.scene_xml}: cannot compile scene + rover: {err}") from None
+            raise RuntimeSimError(
+                f"{self.scene_xml}: cannot compile scene + rover: {err}"
+            ) from None
         self.spec = spec
         self.data = mujoco.MjData(self.model)
         self.heightfield: Heightfield = scene_heightfield(self.model)
         self.dt_physics_s = float(self.model.opt.timestep)
-        self.substeps = int(round(1.0 / (self.run.control_hz * self.dt_physics_s)))
+        self.substeps = round(1.0 / (self.run.control_hz * self.dt_physics_s))
         self._ids()
         self.settle_s = settle_s
         x0, y0, x1, y1 = self.heightfield.bounds_xy_m
@@ -163,7 +165,7 @@ class RoverSim:
         self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy, yaw)
         mujoco.mj_forward(self.model, self.data)
         self.data.ctrl[:] = 0.0
-        steps = int(round(self.settle_s / self.dt_physics_s))
+        steps = round(self.settle_s / self.dt_physics_s)
         for i in range(steps):
             mujoco.mj_step(self.model, self.data)
             if i > 100 and i % 25 == 0:
@@ -228,8 +230,16 @@ class RoverSim:
         w, h = (cam.width_px, cam.height_px) if cam is not None else (320, 240)
         fovy = math.radians(float(self.model.cam_fovy[self.camera_id]))
         f = 0.5 * h / math.tan(fovy / 2)
-        return {"width": w, "height": h, "fx": f, "fy": f, "cx": w / 2, "cy": h / 2,
-                "depth_unit_m": 0.001, "frame": "optical: x right, y down, z forward"}
+        return {
+            "width": w,
+            "height": h,
+            "fx": f,
+            "fy": f,
+            "cx": w / 2,
+            "cy": h / 2,
+            "depth_unit_m": 0.001,
+            "frame": "optical: x right, y down, z forward",
+        }
 
     def write_rover_xml(self, path: str | Path | None = None) -> Path:
         """Write the rover MJCF (default: beside ``scene.xml``, as ``rover.xml``)."""
@@ -260,9 +270,11 @@ class RoverSim:
         return self.data.qpos[self.steer_qpos].copy()
 
     def imu_true(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Noise-free specific force (m/s^2, includes gravity) and angular rate (rad/s), IMU frame."""
+        """Noise-free specific force (m/s^2, incl. gravity) and angular rate (rad/s), IMU frame."""
         s = self.data.sensordata
-        return s[self._acc_adr : self._acc_adr + 3].copy(), s[self._gyr_adr : self._gyr_adr + 3].copy()
+        return s[self._acc_adr : self._acc_adr + 3].copy(), s[
+            self._gyr_adr : self._gyr_adr + 3
+        ].copy()
 
     def wheels_in_contact(self) -> NDArray[np.bool_]:
         """Which of the six wheels touch anything (DRIVE_JOINTS order)."""
@@ -279,8 +291,11 @@ def scene_obstacles(sim: RoverSim) -> Any:
     from marsscene.runtime.route import Obstacles
 
     m, d = sim.model, sim.data
-    world = np.flatnonzero((m.geom_bodyid == 0) & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)
-                           & (m.geom_type != mujoco.mjtGeom.mjGEOM_PLANE))
+    world = np.flatnonzero(
+        (m.geom_bodyid == 0)
+        & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)
+        & (m.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
+    )
     if len(world) == 0:
         return Obstacles(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
     aabb = m.geom_aabb[world]  # (n, 6): centre offset, half sizes in the geom frame
@@ -289,5 +304,8 @@ def scene_obstacles(sim: RoverSim) -> Any:
     centre = d.geom_xpos[world] + np.einsum("nij,nj->ni", rot, aabb[:, :3])
     top = centre[:, 2] + half_world[:, 2]
     ground = sim.heightfield.sample(centre[:, 0], centre[:, 1])
-    return Obstacles(centre[:, :2].copy(), np.hypot(half_world[:, 0], half_world[:, 1]),
-                     np.maximum(top - ground, 0.0))
+    return Obstacles(
+        centre[:, :2].copy(),
+        np.hypot(half_world[:, 0], half_world[:, 1]),
+        np.maximum(top - ground, 0.0),
+    )

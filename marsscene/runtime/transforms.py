@@ -15,11 +15,20 @@ def quat_to_matrix(q_wxyz: ArrayLike) -> NDArray[np.float64]:
     q = np.asarray(q_wxyz, dtype=np.float64)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = np.moveaxis(q, -1, 0)
-    r = np.stack([
-        1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
-    ], axis=-1)
+    r = np.stack(
+        [
+            1 - 2 * (y * y + z * z),
+            2 * (x * y - w * z),
+            2 * (x * z + w * y),
+            2 * (x * y + w * z),
+            1 - 2 * (x * x + z * z),
+            2 * (y * z - w * x),
+            2 * (x * z - w * y),
+            2 * (y * z + w * x),
+            1 - 2 * (x * x + y * y),
+        ],
+        axis=-1,
+    )
     return r.reshape(*q.shape[:-1], 3, 3)
 
 
@@ -28,12 +37,30 @@ def matrix_to_quat(r: ArrayLike) -> NDArray[np.float64]:
     m = np.asarray(r, dtype=np.float64)
     a = m.reshape(-1, 3, 3)
     t = np.trace(a, axis1=1, axis2=2)
-    k = np.stack([
-        t, a[:, 2, 1] - a[:, 1, 2], a[:, 0, 2] - a[:, 2, 0], a[:, 1, 0] - a[:, 0, 1],
-        a[:, 2, 1] - a[:, 1, 2], 2 * a[:, 0, 0] - t, a[:, 0, 1] + a[:, 1, 0], a[:, 0, 2] + a[:, 2, 0],
-        a[:, 0, 2] - a[:, 2, 0], a[:, 0, 1] + a[:, 1, 0], 2 * a[:, 1, 1] - t, a[:, 1, 2] + a[:, 2, 1],
-        a[:, 1, 0] - a[:, 0, 1], a[:, 0, 2] + a[:, 2, 0], a[:, 1, 2] + a[:, 2, 1], 2 * a[:, 2, 2] - t,
-    ], axis=-1).reshape(-1, 4, 4) / 3.0
+    k = (
+        np.stack(
+            [
+                t,
+                a[:, 2, 1] - a[:, 1, 2],
+                a[:, 0, 2] - a[:, 2, 0],
+                a[:, 1, 0] - a[:, 0, 1],
+                a[:, 2, 1] - a[:, 1, 2],
+                2 * a[:, 0, 0] - t,
+                a[:, 0, 1] + a[:, 1, 0],
+                a[:, 0, 2] + a[:, 2, 0],
+                a[:, 0, 2] - a[:, 2, 0],
+                a[:, 0, 1] + a[:, 1, 0],
+                2 * a[:, 1, 1] - t,
+                a[:, 1, 2] + a[:, 2, 1],
+                a[:, 1, 0] - a[:, 0, 1],
+                a[:, 0, 2] + a[:, 2, 0],
+                a[:, 1, 2] + a[:, 2, 1],
+                2 * a[:, 2, 2] - t,
+            ],
+            axis=-1,
+        ).reshape(-1, 4, 4)
+        / 3.0
+    )
     _, vecs = np.linalg.eigh(k)  # Bar-Itzhack (2000): largest eigenvector of K
     out = vecs[:, :, -1]
     out = np.where(out[:, :1] < 0, -out, out)

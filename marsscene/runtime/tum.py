@@ -62,8 +62,12 @@ class Trajectory:
         return self.quat_xyzw[:, [3, 0, 1, 2]]
 
     @classmethod
-    def from_wxyz(cls, timestamps_s: NDArray[np.float64], xyz_m: NDArray[np.float64],
-                  quat_wxyz: NDArray[np.float64]) -> Trajectory:
+    def from_wxyz(
+        cls,
+        timestamps_s: NDArray[np.float64],
+        xyz_m: NDArray[np.float64],
+        quat_wxyz: NDArray[np.float64],
+    ) -> Trajectory:
         q = np.asarray(quat_wxyz, dtype=np.float64).reshape(-1, 4)
         return cls(timestamps_s, xyz_m, q[:, [1, 2, 3, 0]])
 

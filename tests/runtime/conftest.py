@@ -13,19 +13,26 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported (headless
 
 pytest.importorskip("mujoco")
 
-import marsscene as ms  # noqa: E402
-from marsscene.scene import Provenance, Scene  # noqa: E402
-from marsscene.terrain.from_dem import GeoFrame  # noqa: E402
-from marsscene.terrain.heightfield import Heightfield  # noqa: E402
+import marsscene as ms
+from marsscene.scene import Provenance, Scene
+from marsscene.terrain.from_dem import GeoFrame
+from marsscene.terrain.heightfield import Heightfield
 
-_PROC = {"terrain": {"source": "procedural", "size_m": [40, 40], "post_m": 0.25,
-                     "rms_height_m": 0.05}, "craters": {"enabled": False}, "rocks": {"enabled": False}}
+_PROC = {
+    "terrain": {"source": "procedural", "size_m": [40, 40], "post_m": 0.25, "rms_height_m": 0.05},
+    "craters": {"enabled": False},
+    "rocks": {"enabled": False},
+}
 
 
 def _write(z: np.ndarray, out: Path, cell_m: float = 0.25) -> Path:
     cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [10, 10]}})
-    scene = Scene(heightfield=Heightfield.centered(z, cell_m), config=cfg, seed=0,
-                  provenance=Provenance(frame=GeoFrame(0.0, None, None, "", 1.0)))
+    scene = Scene(
+        heightfield=Heightfield.centered(z, cell_m),
+        config=cfg,
+        seed=0,
+        provenance=Provenance(frame=GeoFrame(0.0, None, None, "", 1.0)),
+    )
     ms.write_scene(scene, out, formats=("mjcf",))
     return out
 

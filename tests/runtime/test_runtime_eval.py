@@ -27,7 +27,9 @@ def _gt(n: int = 300) -> Trajectory:
     return Trajectory.from_wxyz(t, xyz, q)
 
 
-def _transform(tr: Trajectory, rot: np.ndarray, trans: np.ndarray, scale: float = 1.0) -> Trajectory:
+def _transform(
+    tr: Trajectory, rot: np.ndarray, trans: np.ndarray, scale: float = 1.0
+) -> Trajectory:
     xyz = scale * tr.xyz_m @ rot.T + trans
     q = matrix_to_quat(rot @ quat_to_matrix(tr.quat_wxyz))
     return Trajectory.from_wxyz(tr.timestamps_s, xyz, q)
@@ -44,13 +46,16 @@ def test_tum_roundtrip(tmp_path: Path) -> None:
     assert write_tum(tmp_path / "c.tum", gt, header="test").read_bytes() == p.read_bytes()
 
 
-@pytest.mark.parametrize(("text", "match"), [
-    ("0 1 2 3 0 0 0 1\n1 1 2 3 0 0 0\n", r"b\.tum:2: expected 8 numbers"),
-    ("0 1 2 3 0 0 0 1\n1 1 x 3 0 0 0 1\n", r"b\.tum:2: not a number"),
-    ("# only a comment\n", "no poses"),
-    ("0 1 2 3 0 0 0 1\n0 1 2 3 0 0 0 1\n", "does not increase"),
-    ("0 1 2 3 0 0 0 2\n", "quaternion norm"),
-])
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("0 1 2 3 0 0 0 1\n1 1 2 3 0 0 0\n", r"b\.tum:2: expected 8 numbers"),
+        ("0 1 2 3 0 0 0 1\n1 1 x 3 0 0 0 1\n", r"b\.tum:2: not a number"),
+        ("# only a comment\n", "no poses"),
+        ("0 1 2 3 0 0 0 1\n0 1 2 3 0 0 0 1\n", "does not increase"),
+        ("0 1 2 3 0 0 0 2\n", "quaternion norm"),
+    ],
+)
 def test_malformed_tum_errors(tmp_path: Path, text: str, match: str) -> None:
     p = tmp_path / "b.tum"
     p.write_text(text)
@@ -117,16 +122,17 @@ def test_ate_rpe_equal_evo(tmp_path: Path, align: str) -> None:
     wobble = [_rot(a, 0.01) for a in rng.normal(size=(len(gt), 3))]  # 0.57 deg per pose
     q = matrix_to_quat(np.array(wobble) @ quat_to_matrix(gt.quat_wxyz))
     noisy = Trajectory.from_wxyz(gt.timestamps_s, gt.xyz_m + drift, q)
-    est = _transform(noisy, rot,
-                     np.array([1.0, 2.0, 0.0]), scale=0.8 if align == "sim3" else 1.0)
+    est = _transform(noisy, rot, np.array([1.0, 2.0, 0.0]), scale=0.8 if align == "sim3" else 1.0)
     # estimate at other stamps: every other pose, shifted by 3 ms
     est = Trajectory(est.timestamps_s[::2] + 0.003, est.xyz_m[::2], est.quat_xyzw[::2])
     pe, pg = write_tum(tmp_path / "est.tum", est), write_tum(tmp_path / "gt.tum", gt)
 
     ours = ate(read_tum(pe), read_tum(pg), align=align)
-    ref, e = sync.associate_trajectories(file_interface.read_tum_trajectory_file(str(pg)),
-                                         file_interface.read_tum_trajectory_file(str(pe)),
-                                         max_diff=0.01)
+    ref, e = sync.associate_trajectories(
+        file_interface.read_tum_trajectory_file(str(pg)),
+        file_interface.read_tum_trajectory_file(str(pe)),
+        max_diff=0.01,
+    )
     if align != "none":
         e.align(ref, correct_scale=align == "sim3")
     ape = metrics.APE(metrics.PoseRelation.translation_part)
@@ -136,16 +142,20 @@ def test_ate_rpe_equal_evo(tmp_path: Path, align: str) -> None:
     for key in ("rmse", "mean", "median", "std", "min", "max"):
         assert getattr(ours.stats, key) == pytest.approx(stats[key], rel=1e-6, abs=1e-9), key
 
-    ref, e = sync.associate_trajectories(file_interface.read_tum_trajectory_file(str(pg)),
-                                         file_interface.read_tum_trajectory_file(str(pe)),
-                                         max_diff=0.01)
+    ref, e = sync.associate_trajectories(
+        file_interface.read_tum_trajectory_file(str(pg)),
+        file_interface.read_tum_trajectory_file(str(pe)),
+        max_diff=0.01,
+    )
     for relation, ours_stats in (
         (metrics.PoseRelation.translation_part, rpe(read_tum(pe), read_tum(pg)).translation),
         (metrics.PoseRelation.rotation_angle_deg, rpe(read_tum(pe), read_tum(pg)).rotation_deg),
     ):
         m = metrics.RPE(relation, delta=1, delta_unit=metrics.Unit.frames, all_pairs=False)
         m.process_data((ref, e))
-        assert ours_stats.rmse == pytest.approx(m.get_statistic(metrics.StatisticsType.rmse),
-                                                rel=1e-6, abs=1e-9)
-        assert ours_stats.max == pytest.approx(m.get_statistic(metrics.StatisticsType.max),
-                                               rel=1e-6, abs=1e-9)
+        assert ours_stats.rmse == pytest.approx(
+            m.get_statistic(metrics.StatisticsType.rmse), rel=1e-6, abs=1e-9
+        )
+        assert ours_stats.max == pytest.approx(
+            m.get_statistic(metrics.StatisticsType.max), rel=1e-6, abs=1e-9
+        )

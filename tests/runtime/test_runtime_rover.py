@@ -113,7 +113,7 @@ def test_climbs_0p3m_rock(flat_scene) -> None:
 
 
 def test_missing_scene_xml_error(tmp_path) -> None:
-    with pytest.raises(RuntimeSimError, match="scene.xml is missing"):
+    with pytest.raises(RuntimeSimError, match=r"scene\.xml is missing"):
         RoverSim(tmp_path)
 
 
