@@ -161,7 +161,7 @@ def drive(
             if keep_sensors:
                 imu_rows.append(np.concatenate([[t], acc, gyr]))
         if lidar is not None and k % periods["lidar"] == 0:
-            scan = lidar.scan(sim.model, sim.data, sim.lidar_site)
+            scan = lidar.scan(sim.model, sim.data, sim.lidar_site, sim.heightfield)
             if out is not None:
                 name = f"{n_lidar:06d}.ply"
                 (out / "lidar" / name).write_bytes(

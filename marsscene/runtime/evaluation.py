@@ -105,7 +105,10 @@ def umeyama(
 
 
 _Paired = tuple[
-    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
     tuple[NDArray[np.float64], NDArray[np.float64], float],
 ]
 

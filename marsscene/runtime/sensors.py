@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.runtime.config import LidarConfig, NoiseConfig, RoverConfig
+from marsscene.runtime.raycast import ray_heightfield
 from marsscene.runtime.rover import body_twist_from_wheels
 from marsscene.terrain.heightfield import Heightfield
 
@@ -133,8 +134,14 @@ class Lidar:
         self._normal = np.zeros((len(self.dirs_sensor), 3), dtype=np.float64)
         self._groups = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)
 
-    def scan(self, model: Any, data: Any, site_id: int) -> dict[str, NDArray[Any]]:
+    def scan(
+        self, model: Any, data: Any, site_id: int, terrain: Heightfield | None = None
+    ) -> dict[str, NDArray[Any]]:
         """One full sweep at the current state.
+
+        With ``terrain`` the heightfield is ray-marched in numpy (fast on large terrains) and
+        MuJoCo rays see geom groups 0 and 1 only (``RoverSim`` moves its terrain geom to
+        group 3); without it MuJoCo casts against groups 0, 1 and 3.
 
         Returns
         -------
@@ -147,26 +154,32 @@ class Lidar:
         origin = data.site_xpos[site_id].copy()
         dirs_world = self.dirs_sensor @ rot.T
         n = len(dirs_world)
+        rmin, rmax = self.config.range_m
+        groups = self._groups if terrain is not None else np.array([1, 1, 0, 1, 0, 0], np.uint8)
         mujoco.mj_multiRay(
             model,
             data,
             origin,
             dirs_world.ravel(),
-            self._groups,
+            groups,
             1,
             -1,
             self._geomid,
             self._dist,
             self._normal.ravel(),
             n,
-            self.config.range_m[1],
+            rmax,
         )
-        dist = self._dist
-        rmin, rmax = self.config.range_m
-        hit = (self._geomid >= 0) & (dist >= rmin) & (dist <= rmax)
+        dist = np.where(self._geomid >= 0, self._dist, np.inf)
+        normals = self._normal.reshape(-1, 3).copy()
+        if terrain is not None:
+            t_dist, t_normal = ray_heightfield(terrain, origin, dirs_world, (rmin, rmax))
+            closer = t_dist < dist
+            dist = np.where(closer, t_dist, dist)
+            normals[closer] = t_normal[closer]
+        hit = np.isfinite(dist) & (dist >= rmin) & (dist <= rmax)
         r = dist[hit]
-        normals = self._normal.reshape(-1, 3)[hit] if self._normal.ndim == 1 else self._normal[hit]
-        cos_inc = np.abs(np.einsum("ij,ij->i", normals, dirs_world[hit]))
+        cos_inc = np.abs(np.einsum("ij,ij->i", normals[hit], dirs_world[hit]))
         intensity = cos_inc * np.exp(-2.0 * self.config.dust_extinction_per_m * r)
         return {
             "xyz_m": (self.dirs_sensor[hit] * r[:, None]).astype(np.float32),

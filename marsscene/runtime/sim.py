@@ -98,6 +98,12 @@ class RoverSim:
         self.spec = spec
         self.data = mujoco.MjData(self.model)
         self.heightfield: Heightfield = scene_heightfield(self.model)
+        # The LiDAR ray-marches the terrain itself (fast); keep MuJoCo rays off the hfield by
+        # moving it to geom group 3 (the camera renders group 3 too). scene.xml is untouched.
+        terrain = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "terrain")
+        self.model.geom_group[terrain] = 3
+        self._vis = mujoco.MjvOption()
+        self._vis.geomgroup[3] = 1
         self.dt_physics_s = float(self.model.opt.timestep)
         self.substeps = round(1.0 / (self.run.control_hz * self.dt_physics_s))
         self._ids()
@@ -212,14 +218,14 @@ class RoverSim:
         """RGB (H, W, 3) uint8 and depth (H, W) float32 in m (None if depth is off)."""
         shadows = self.run.camera.shadows if self.run.camera is not None else False
         renderer.disable_depth_rendering()
-        renderer.update_scene(self.data, camera=self.camera_id)
+        renderer.update_scene(self.data, camera=self.camera_id, scene_option=self._vis)
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
         rgb = renderer.render().copy()
         depth = None
         if self.run.camera is None or self.run.camera.depth:
             renderer.enable_depth_rendering()
-            renderer.update_scene(self.data, camera=self.camera_id)
+            renderer.update_scene(self.data, camera=self.camera_id, scene_option=self._vis)
             depth = renderer.render().astype(np.float32)
             renderer.disable_depth_rendering()
         return rgb, depth
