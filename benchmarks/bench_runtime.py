@@ -14,7 +14,7 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-from _measure import measure  # noqa: E402
+from _measure import measure
 
 SIM_S = 20.0
 _SCENE = Path(tempfile.gettempdir()) / "marsscene_bench_runtime_scene"

@@ -169,6 +169,8 @@ class CameraConfig:
     depth: bool = True
     shadows: bool = False
     """Shadow maps cost ~6x render time on a software (llvmpipe) GL; off by default."""
+    terrain_window_m: float = 60.0
+    """Render a full-resolution terrain window this wide around the rover (speed)."""
 
     def __post_init__(self) -> None:
         if not (16 <= int(self.width_px) <= 4096 and 16 <= int(self.height_px) <= 4096):
@@ -176,6 +178,7 @@ class CameraConfig:
                 f"camera size {self.width_px}x{self.height_px} is out of range; allowed 16..4096 px"
             )
         check_range("camera.fovy_deg", self.fovy_deg, 5.0, 170.0)
+        check_range("camera.terrain_window_m", self.terrain_window_m, 5.0, 1e5)
         _check_rate("camera.rate_hz", self.rate_hz)
 
 

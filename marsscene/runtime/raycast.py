@@ -49,8 +49,10 @@ def ray_heightfield(
     r0, c0 = hf.rowcol_of(origin_m[0], origin_m[1])
     k = int(np.ceil(range_m[1] / hf.cell_size_m)) + 1
     rows, cols = hf.shape
-    win = hf.z_m[max(int(r0) - k, 0) : min(int(r0) + k + 2, rows),
-                 max(int(c0) - k, 0) : min(int(c0) + k + 2, cols)]
+    win = hf.z_m[
+        max(int(r0) - k, 0) : min(int(r0) + k + 2, rows),
+        max(int(c0) - k, 0) : min(int(c0) + k + 2, cols),
+    ]
     z_top = float(win.max()) if win.size else float(hf.z_m.max())
     x0, y0, x1, y1 = hf.bounds_xy_m
     active = np.arange(n)
@@ -68,17 +70,18 @@ def ray_heightfield(
         d = dirs[active]
         p = origin_m[None, None, :] + d[:, None, :] * ts[None, :, None]
         f = p[..., 2] - hf.sample(p[..., 0], p[..., 1])
-        below = f <= 0
+        px, py = p[..., 0], p[..., 1]
+        below = (f <= 0) & (px >= x0) & (px <= x1) & (py >= y0) & (py <= y1)
         hit = below.any(axis=1)
         k = np.argmax(below, axis=1)
-        rows = np.flatnonzero(hit)
-        if len(rows):
-            kk = k[rows]
-            fa = np.where(kk > 0, f[rows, np.maximum(kk - 1, 0)], f_prev[rows])
-            fb = f[rows, kk]
+        hit_rows = np.flatnonzero(hit)
+        if len(hit_rows):
+            kk = k[hit_rows]
+            fa = np.where(kk > 0, f[hit_rows, np.maximum(kk - 1, 0)], f_prev[hit_rows])
+            fb = f[hit_rows, kk]
             ta = ts[kk] - step
             t_hit = ta + step * fa / np.maximum(fa - fb, 1e-12)
-            ids = active[rows]
+            ids = active[hit_rows]
             dist[ids] = t_hit
             q = origin_m[None, :] + dirs[ids] * t_hit[:, None]
             normal[ids] = hf.normal(q[:, 0], q[:, 1])

@@ -82,13 +82,10 @@ class RoverSim:
         self.rover = rover if rover is not None else RoverConfig()
         self.run = run if run is not None else RunConfig()
         self.scene_dir = Path(scene_dir)
-        spec, self.scene_xml = load_scene_spec(scene_dir)
         fovy = self.run.camera.fovy_deg if self.run.camera is not None else 60.0
         self.rover_xml = rover_mjcf(self.rover, camera_fovy_deg=fovy)
-        rover_spec = mujoco.MjSpec.from_string(self.rover_xml)
-        spec.attach(rover_spec, prefix=PREFIX, frame=spec.worldbody.add_frame())
-        if edit_spec is not None:
-            edit_spec(spec)
+        self._edit_spec = edit_spec
+        spec = self.build_spec()
         try:
             self.model = spec.compile()
         except Exception as err:
@@ -114,6 +111,15 @@ class RoverSim:
         self.reset()
 
     # ---- setup -------------------------------------------------------------------------------
+    def build_spec(self) -> Any:
+        """A fresh ``MjSpec`` of scene + rover (+ ``edit_spec``), not yet compiled."""
+        spec, self.scene_xml = load_scene_spec(self.scene_dir)
+        rover_spec = mujoco.MjSpec.from_string(self.rover_xml)
+        spec.attach(rover_spec, prefix=PREFIX, frame=spec.worldbody.add_frame())
+        if self._edit_spec is not None:
+            self._edit_spec(spec)
+        return spec
+
     def _ids(self) -> None:
         m = self.model
         name = lambda kind, n: mujoco.mj_name2id(m, kind, PREFIX + n)  # noqa: E731
@@ -203,32 +209,14 @@ class RoverSim:
 
     # ---- camera ------------------------------------------------------------------------------
     def make_renderer(self) -> Any:
-        """An offscreen ``mujoco.Renderer`` for the mast camera (needs EGL or OSMesa)."""
-        cam = self.run.camera
-        w, h = (cam.width_px, cam.height_px) if cam is not None else (320, 240)
-        try:
-            return mujoco.Renderer(self.model, height=h, width=w)
-        except Exception as err:
-            raise RuntimeSimError(
-                f"cannot create an offscreen renderer (MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}): "
-                f"{err}; install EGL or OSMesa (apt-get install libosmesa6) and set MUJOCO_GL"
-            ) from None
+        """An offscreen mast-camera renderer (:class:`marsscene.runtime.camera.MastCamera`)."""
+        from marsscene.runtime.camera import MastCamera
+
+        return MastCamera(self)
 
     def render(self, renderer: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
         """RGB (H, W, 3) uint8 and depth (H, W) float32 in m (None if depth is off)."""
-        shadows = self.run.camera.shadows if self.run.camera is not None else False
-        renderer.disable_depth_rendering()
-        renderer.update_scene(self.data, camera=self.camera_id, scene_option=self._vis)
-        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
-        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-        rgb = renderer.render().copy()
-        depth = None
-        if self.run.camera is None or self.run.camera.depth:
-            renderer.enable_depth_rendering()
-            renderer.update_scene(self.data, camera=self.camera_id, scene_option=self._vis)
-            depth = renderer.render().astype(np.float32)
-            renderer.disable_depth_rendering()
-        return rgb, depth
+        return renderer.render(self)
 
     def camera_intrinsics(self) -> dict[str, Any]:
         """Pinhole intrinsics of the mast camera (OpenCV convention, pixels)."""
