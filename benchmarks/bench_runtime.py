@@ -29,25 +29,36 @@ def _build() -> None:
 def _drive(kind: str) -> dict[str, float]:
     import numpy as np
 
-    from marsscene.runtime import CameraConfig, LidarConfig, RunConfig
+    from marsscene.runtime import CameraConfig, LidarConfig, RoverConfig, RunConfig
     from marsscene.runtime.drive import drive
     from marsscene.runtime.sim import RoverSim
     from marsscene.seeding import stage_rng
 
-    run = RunConfig(lidar=LidarConfig() if kind == "lidar" else None,
-                    camera=CameraConfig() if kind == "camera" else None)
+    rover = RoverConfig(wheel_collision="sphere" if kind == "sphere" else "cylinder")
+    run = RunConfig(
+        lidar=LidarConfig() if kind == "lidar" else None,
+        camera=CameraConfig() if kind == "camera" else None,
+    )
     t0 = time.perf_counter()
-    sim = RoverSim(_SCENE, run=run)
+    sim = RoverSim(_SCENE, run=run, rover=rover)
     load = time.perf_counter() - t0
     t0 = time.perf_counter()
     res = drive(sim, command=(0.5, 0.05), seconds=SIM_S, rng=stage_rng(0, "sensors"))
     wall = time.perf_counter() - t0
-    return {"load_s": load, "wall_s": wall, "ratio": SIM_S / wall,
-            "dist_m": float(np.linalg.norm(res.gt.xyz_m[-1] - res.gt.xyz_m[0]))}
+    return {
+        "load_s": load,
+        "wall_s": wall,
+        "ratio": SIM_S / wall,
+        "dist_m": float(np.linalg.norm(res.gt.xyz_m[-1] - res.gt.xyz_m[0])),
+    }
 
 
 def _physics() -> dict[str, float]:
     return _drive("physics")
+
+
+def _sphere() -> dict[str, float]:
+    return _drive("sphere")
 
 
 def _lidar() -> dict[str, float]:
@@ -74,18 +85,26 @@ def main() -> None:
     wall, peak, _ = measure(_build)
     print(f"default scene build + MJCF write: {wall:.2f} s, peak {peak:.0f} MB")
     _, _, raw = measure(_raw_steps)
-    print(f"raw mj_step (rover on default scene): {raw['steps_per_s']:.0f} steps/s "
-          f"= {raw['steps_per_s'] * 0.002:.1f}x real time")
-    for name, fn in (("physics only", _physics), ("+ LiDAR 16x360 @10 Hz", _lidar),
-                     ("+ RGB-D 320x240 @10 Hz", _camera)):
+    print(
+        f"raw mj_step (rover on default scene): {raw['steps_per_s']:.0f} steps/s "
+        f"= {raw['steps_per_s'] * 0.002:.1f}x real time"
+    )
+    for name, fn in (
+        ("physics only", _physics),
+        ("physics, sphere wheels", _sphere),
+        ("+ LiDAR 16x360 @10 Hz", _lidar),
+        ("+ RGB-D 320x240 @10 Hz", _camera),
+    ):
         try:
             wall, peak, r = measure(fn)
         except Exception as err:  # e.g. no headless GL for the camera
             print(f"{name:>24}: failed: {err}")
             continue
-        print(f"{name:>24}: {SIM_S:.0f} sim s in {r['wall_s']:.2f} s wall = {r['ratio']:.1f}x "
-              f"real time (load+settle {r['load_s']:.2f} s, drove {r['dist_m']:.1f} m, "
-              f"peak {peak:.0f} MB)")
+        print(
+            f"{name:>24}: {SIM_S:.0f} sim s in {r['wall_s']:.2f} s wall = {r['ratio']:.1f}x "
+            f"real time (load+settle {r['load_s']:.2f} s, drove {r['dist_m']:.1f} m, "
+            f"peak {peak:.0f} MB)"
+        )
 
 
 if __name__ == "__main__":

@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from marsscene._validate import check_range, dataclass_from_mapping
+from marsscene._validate import check_choice, check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError
 
 __all__ = ["CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig", "RunConfig"]
@@ -54,6 +54,8 @@ class RoverConfig:
     """Wheel/ground sliding friction (matches the scene's regolith, tan 38.7 deg)."""
     mast_height_m: float = 1.98
     """Navcam height above the ground."""
+    wheel_collision: str = "cylinder"
+    """``"cylinder"`` (true width, default) or ``"sphere"`` (~1.5x faster physics, point contact)."""
 
     def __post_init__(self) -> None:
         check_range("rover.mass_kg", self.mass_kg, 50.0, 5000.0)
@@ -75,6 +77,7 @@ class RoverConfig:
         )
         check_range("rover.friction", self.friction, 0.05, 2.0)
         check_range("rover.mast_height_m", self.mast_height_m, self.ride_height_m, 5.0)
+        check_choice("rover.wheel_collision", self.wheel_collision, ("cylinder", "sphere"))
 
 
 @dataclass(frozen=True, kw_only=True)

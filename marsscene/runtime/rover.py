@@ -130,9 +130,15 @@ def _wheel(cfg: RoverConfig, tag: str, pos: tuple[float, float, float], steered:
     wheel = _body(
         f"wheel_{tag}",
         (0.0, 0.0, 0.0),
-        f'<joint name="drive_{tag}" type="hinge" axis="0 1 0" armature="0.5" damping="0.5"/>'
-        f'<geom name="wheel_{tag}" class="wheel" type="cylinder" size="{fmt((r, hw))}" '
-        f'quat="0.707107 0.707107 0 0" mass="{fmt(_M_WHEEL)}"/>',
+        f'<joint name="drive_{tag}" type="hinge" axis="0 1 0" armature="0.5" damping="0.5"/>'(
+            f'<geom name="wheel_{tag}" class="wheel" type="cylinder" size="{fmt((r, hw))}" '
+            f'quat="0.707107 0.707107 0 0" mass="{fmt(_M_WHEEL)}"/>'
+            if cfg.wheel_collision == "cylinder"
+            else f'<geom name="wheel_{tag}" class="wheel" type="sphere" size="{fmt(r)}" '
+            f'rgba="0 0 0 0" mass="{fmt(_M_WHEEL)}"/>'
+            f'<geom class="visual" type="cylinder" size="{fmt((r, hw))}" '
+            f'quat="0.707107 0.707107 0 0" rgba="0.6 0.6 0.6 1" mass="0"/>'
+        ),
     )
     if not steered:
         return _body(f"hub_{tag}", pos, wheel)

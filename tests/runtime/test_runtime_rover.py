@@ -128,3 +128,12 @@ def test_scene_xml_stays_rover_free_and_rover_xml(flat_scene, tmp_path) -> None:
     path = sim.write_rover_xml(tmp_path / "rover.xml")
     m = mujoco.MjModel.from_xml_path(str(path))
     assert m.body_mass.sum() == pytest.approx(1025.0)
+
+
+def test_sphere_wheels_drive_straight(flat_scene) -> None:
+    sim = RoverSim(flat_scene, rover=RoverConfig(wheel_collision="sphere"))
+    assert sim.wheels_in_contact().all()
+    p0 = sim.pose()[0]
+    for _ in range(250):
+        sim.step(0.3, 0.0)
+    assert np.linalg.norm(sim.pose()[0][:2] - p0[:2]) == pytest.approx(1.5, rel=0.05)
