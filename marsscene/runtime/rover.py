@@ -127,18 +127,23 @@ def _body(name: str, pos: tuple[float, float, float], inner: str) -> str:
 
 def _wheel(cfg: RoverConfig, tag: str, pos: tuple[float, float, float], steered: bool) -> str:
     r, hw = cfg.wheel_radius_m, cfg.wheel_width_m / 2.0
-    wheel = _body(
-        f"wheel_{tag}",
-        (0.0, 0.0, 0.0),
-        f'<joint name="drive_{tag}" type="hinge" axis="0 1 0" armature="0.5" damping="0.5"/>'(
+    if cfg.wheel_collision == "cylinder":
+        geom = (
             f'<geom name="wheel_{tag}" class="wheel" type="cylinder" size="{fmt((r, hw))}" '
             f'quat="0.707107 0.707107 0 0" mass="{fmt(_M_WHEEL)}"/>'
-            if cfg.wheel_collision == "cylinder"
-            else f'<geom name="wheel_{tag}" class="wheel" type="sphere" size="{fmt(r)}" '
+        )
+    else:  # collision sphere + visual cylinder
+        geom = (
+            f'<geom name="wheel_{tag}" class="wheel" type="sphere" size="{fmt(r)}" '
             f'rgba="0 0 0 0" mass="{fmt(_M_WHEEL)}"/>'
             f'<geom class="visual" type="cylinder" size="{fmt((r, hw))}" '
             f'quat="0.707107 0.707107 0 0" rgba="0.6 0.6 0.6 1" mass="0"/>'
-        ),
+        )
+    wheel = _body(
+        f"wheel_{tag}",
+        (0.0, 0.0, 0.0),
+        f'<joint name="drive_{tag}" type="hinge" axis="0 1 0" armature="0.5" damping="0.5"/>'
+        + geom,
     )
     if not steered:
         return _body(f"hub_{tag}", pos, wheel)
