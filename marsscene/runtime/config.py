@@ -55,7 +55,7 @@ class RoverConfig:
     mast_height_m: float = 1.98
     """Navcam height above the ground."""
     wheel_collision: str = "cylinder"
-    """``"cylinder"`` (true width, default) or ``"sphere"`` (~1.5x faster physics, point contact)."""
+    """``"cylinder"`` (true width, default) or ``"sphere"`` (~1.5x faster, point contact)."""
 
     def __post_init__(self) -> None:
         check_range("rover.mass_kg", self.mass_kg, 50.0, 5000.0)
