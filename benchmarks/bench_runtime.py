@@ -30,7 +30,7 @@ def _drive(kind: str) -> dict[str, float]:
     import numpy as np
 
     from marsscene.runtime import CameraConfig, LidarConfig, RoverConfig, RunConfig
-    from marsscene.runtime.drive import drive
+    from marsscene.runtime.driver import drive
     from marsscene.runtime.sim import RoverSim
     from marsscene.seeding import stage_rng
 

@@ -119,7 +119,7 @@ def drive(
         read_tum,
         write_tum,
     )
-    from marsscene.runtime.drive import drive as run_drive
+    from marsscene.runtime.driver import drive as run_drive
     from marsscene.runtime.sim import RoverSim, scene_obstacles
     from marsscene.seeding import stage_rng
 

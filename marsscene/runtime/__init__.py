@@ -40,7 +40,7 @@ from marsscene.runtime.rover import rover_mjcf, wheel_commands
 from marsscene.runtime.tum import Trajectory, read_tum, write_tum
 
 if TYPE_CHECKING:
-    from marsscene.runtime.drive import DriveResult, drive
+    from marsscene.runtime.driver import DriveResult, drive
     from marsscene.runtime.sim import RoverSim, scene_obstacles
 
 __all__ = [
@@ -74,7 +74,7 @@ __all__ = [
     "write_tum",
 ]
 
-_LAZY = {"RoverSim": "sim", "scene_obstacles": "sim", "drive": "drive", "DriveResult": "drive"}
+_LAZY = {"RoverSim": "sim", "scene_obstacles": "sim", "drive": "driver", "DriveResult": "driver"}
 
 
 def __getattr__(name: str) -> Any:  # mujoco is imported on first use of the simulator

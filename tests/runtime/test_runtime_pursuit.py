@@ -16,7 +16,7 @@ from marsscene.runtime import (
     author_route,
     cross_track_m,
 )
-from marsscene.runtime.drive import drive
+from marsscene.runtime.driver import drive
 from marsscene.runtime.sim import RoverSim
 from marsscene.seeding import stage_rng
 from marsscene.terrain.heightfield import Heightfield

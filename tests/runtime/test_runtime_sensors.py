@@ -17,7 +17,7 @@ from marsscene.runtime import (
     ate,
     read_tum,
 )
-from marsscene.runtime.drive import drive
+from marsscene.runtime.driver import drive
 from marsscene.runtime.sensors import Lidar, WheelOdometry, measure_wheels
 from marsscene.runtime.sim import RoverSim
 from marsscene.runtime.transforms import quat_to_matrix
