@@ -168,12 +168,26 @@ class RoverSim:
         return np.concatenate([pos, quat])
 
     def reset(
-        self, *, xy_m: tuple[float, float] | None = None, yaw_rad: float | None = None
+        self,
+        *,
+        xy_m: tuple[float, float] | None = None,
+        yaw_rad: float | None = None,
+        rng: np.random.Generator | None = None,
+        jitter_xy_m: float = 0.5,
+        jitter_yaw_rad: float = 0.2,
     ) -> None:
-        """Spawn the rover on the terrain, let it settle (wheels braked), set time to 0."""
+        """Spawn the rover on the terrain, let it settle (wheels braked), set time to 0.
+
+        With ``rng`` the spawn pose is perturbed uniformly by up to ``jitter_xy_m`` in x and y
+        and ``jitter_yaw_rad`` in heading (randomised episodes); without it, it is exact.
+        """
         mujoco.mj_resetData(self.model, self.data)
         xy = xy_m if xy_m is not None else self.start_xy_m
         yaw = self.start_yaw_rad if yaw_rad is None else float(yaw_rad)
+        if rng is not None:
+            dx, dy, dyaw = rng.uniform(-1.0, 1.0, size=3)
+            xy = (float(xy[0]) + jitter_xy_m * dx, float(xy[1]) + jitter_xy_m * dy)
+            yaw += jitter_yaw_rad * dyaw
         self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy, yaw)
         mujoco.mj_forward(self.model, self.data)
         self.data.ctrl[:] = 0.0

@@ -137,3 +137,28 @@ def test_sphere_wheels_drive_straight(flat_scene) -> None:
     for _ in range(250):
         sim.step(0.3, 0.0)
     assert np.linalg.norm(sim.pose()[0][:2] - p0[:2]) == pytest.approx(1.5, rel=0.05)
+
+
+def test_reset_with_rng_is_seeded(flat_scene) -> None:
+    sim = RoverSim(flat_scene)
+    poses = []
+    for seed in (1, 1, 2):
+        sim.reset(xy_m=(0.0, 0.0), yaw_rad=0.0, rng=np.random.default_rng(seed))
+        assert sim.time_s == 0.0 and sim.wheels_in_contact().all()
+        poses.append(np.r_[sim.pose()[0][:2], sim.yaw_rad()])
+    np.testing.assert_array_equal(poses[0], poses[1])
+    assert np.abs(poses[0] - poses[2]).max() > 1e-3
+    assert np.abs(poses[2][:2]).max() <= 0.5 + 0.02 and abs(poses[2][2]) <= 0.2 + 0.01
+
+
+def test_scene_obstacles_from_rock_geoms(flat_scene) -> None:
+    from marsscene.runtime.sim import scene_obstacles
+
+    def add_rock(spec) -> None:  # type: ignore[no-untyped-def]
+        g = spec.worldbody.add_geom()
+        g.type, g.size, g.pos = mujoco.mjtGeom.mjGEOM_BOX, [0.3, 0.4, 0.25], [5.0, -3.0, 0.1]
+
+    obs = scene_obstacles(RoverSim(flat_scene, edit_spec=add_rock))
+    np.testing.assert_allclose(obs.xy_m, [[5.0, -3.0]])
+    np.testing.assert_allclose(obs.radius_m, [0.5])
+    np.testing.assert_allclose(obs.height_m, [0.35])
