@@ -15,6 +15,7 @@ from marsscene.terrain.heightfield import Heightfield
 __all__ = ["ray_heightfield"]
 
 _CHUNK = 24
+_GROW_M = 8.0  # the march step is one post out to 8 m, then grows linearly with range
 
 
 def ray_heightfield(
@@ -44,7 +45,7 @@ def ray_heightfield(
     n = len(dirs)
     dist = np.full(n, np.inf)
     normal = np.zeros((n, 3))
-    step = hf.cell_size_m
+    step = hf.cell_size_m  # near field: one post per sample (posts are the surface's knots)
     # highest post within reach: rays climbing above it can never hit
     r0, c0 = hf.rowcol_of(origin_m[0], origin_m[1])
     k = int(np.ceil(range_m[1] / hf.cell_size_m)) + 1
@@ -65,8 +66,9 @@ def ray_heightfield(
     active = active[f_prev > 0]  # rays starting under the ground see nothing
     f_prev = f_prev[f_prev > 0]
     while len(active) and t0 < range_m[1]:
-        ts = t0 + step * np.arange(1, _CHUNK + 1)
-        ts = ts[ts <= range_m[1] + step]
+        h = step * max(1.0, t0 / _GROW_M)  # coarser far away (angular spacing grows too)
+        ts = t0 + h * np.arange(1, _CHUNK + 1)
+        ts = ts[ts <= range_m[1] + h]
         d = dirs[active]
         p = origin_m[None, None, :] + d[:, None, :] * ts[None, :, None]
         f = p[..., 2] - hf.sample(p[..., 0], p[..., 1])
@@ -79,8 +81,8 @@ def ray_heightfield(
             kk = k[hit_rows]
             fa = np.where(kk > 0, f[hit_rows, np.maximum(kk - 1, 0)], f_prev[hit_rows])
             fb = f[hit_rows, kk]
-            ta = ts[kk] - step
-            t_hit = ta + step * fa / np.maximum(fa - fb, 1e-12)
+            ta = ts[kk] - h
+            t_hit = ta + h * fa / np.maximum(fa - fb, 1e-12)
             ids = active[hit_rows]
             dist[ids] = t_hit
             q = origin_m[None, :] + dirs[ids] * t_hit[:, None]
