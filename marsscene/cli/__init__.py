@@ -47,12 +47,16 @@ def main(verbose: int, quiet: int) -> None:
 
 def _register() -> None:
     from marsscene.cli.build import build
+    from marsscene.cli.drive import drive
+    from marsscene.cli.eval import eval_cmd
     from marsscene.cli.info import info
     from marsscene.cli.sun import sun
 
     main.add_command(build)
     main.add_command(info)
     main.add_command(sun)
+    main.add_command(drive)
+    main.add_command(eval_cmd)
 
 
 _register()

@@ -1,0 +1,200 @@
+"""Runtime configs: rover geometry/limits, sensor noise, sensor rates (frozen, validated)."""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from marsscene._validate import check_choice, check_range, dataclass_from_mapping
+from marsscene.errors import ConfigError
+
+__all__ = ["CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig", "RunConfig"]
+
+_PHYSICS_HZ = 500.0  # scene.xml timestep 0.002 s
+
+
+def _check_rate(key: str, rate_hz: float) -> None:
+    check_range(key, rate_hz, 0.0, _PHYSICS_HZ, lo_open=True)
+    ratio = _PHYSICS_HZ / rate_hz
+    if abs(ratio - round(ratio)) > 1e-9:
+        raise ConfigError(
+            f"{key} = {rate_hz!r} must divide the 500 Hz physics rate (e.g. 10, 50, 100, 250)"
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class RoverConfig:
+    """Perseverance-class rover (see docs/runtime.md for sources of every number).
+
+    Lengths in m, masses in kg, torques in N m, speeds in rad/s.
+    """
+
+    mass_kg: float = 1025.0
+    wheel_radius_m: float = 0.2625
+    wheel_width_m: float = 0.40
+    wheelbase_front_m: float = 1.05
+    """x of the front wheel axle ahead of the middle axle."""
+    wheelbase_rear_m: float = 1.00
+    """x of the rear wheel axle behind the middle axle."""
+    track_m: float = 2.0
+    """Distance between left and right wheel centres."""
+    ride_height_m: float = 0.75
+    """Height of the chassis frame (base_link) above the ground on flat terrain."""
+    drive_torque_limit_nm: float = 300.0
+    drive_kv_nm_s: float = 3000.0
+    wheel_speed_limit_rad_s: float = 3.0
+    steer_limit_rad: float = math.radians(100.0)
+    steer_kp_nm: float = 2000.0
+    steer_torque_limit_nm: float = 500.0
+    friction: float = 0.8
+    """Wheel/ground sliding friction (matches the scene's regolith, tan 38.7 deg)."""
+    mast_height_m: float = 1.98
+    """Navcam height above the ground."""
+    wheel_collision: str = "cylinder"
+    """``"cylinder"`` (true width, default) or ``"sphere"`` (~1.5x faster, point contact)."""
+
+    def __post_init__(self) -> None:
+        check_range("rover.mass_kg", self.mass_kg, 50.0, 5000.0)
+        check_range("rover.wheel_radius_m", self.wheel_radius_m, 0.05, 1.0)
+        check_range("rover.wheel_width_m", self.wheel_width_m, 0.02, 1.0)
+        check_range("rover.wheelbase_front_m", self.wheelbase_front_m, 0.2, 3.0)
+        check_range("rover.wheelbase_rear_m", self.wheelbase_rear_m, 0.2, 3.0)
+        check_range("rover.track_m", self.track_m, 2 * self.wheel_width_m + 0.2, 5.0)
+        check_range("rover.ride_height_m", self.ride_height_m, self.wheel_radius_m + 0.2, 3.0)
+        check_range(
+            "rover.drive_torque_limit_nm", self.drive_torque_limit_nm, 0.0, 1e4, lo_open=True
+        )
+        check_range("rover.drive_kv_nm_s", self.drive_kv_nm_s, 0.0, 1e5, lo_open=True)
+        check_range("rover.wheel_speed_limit_rad_s", self.wheel_speed_limit_rad_s, 0.1, 50.0)
+        check_range("rover.steer_limit_rad", self.steer_limit_rad, 0.0, math.pi, lo_open=True)
+        check_range("rover.steer_kp_nm", self.steer_kp_nm, 0.0, 1e6, lo_open=True)
+        check_range(
+            "rover.steer_torque_limit_nm", self.steer_torque_limit_nm, 0.0, 1e5, lo_open=True
+        )
+        check_range("rover.friction", self.friction, 0.05, 2.0)
+        check_range("rover.mast_height_m", self.mast_height_m, self.ride_height_m, 5.0)
+        check_choice("rover.wheel_collision", self.wheel_collision, ("cylinder", "sphere"))
+
+
+@dataclass(frozen=True, kw_only=True)
+class NoiseConfig:
+    """Sensor noise (zero-mean Gaussian unless a bias is given), drawn from a seeded rng.
+
+    Wheel odometry measures each wheel rate as ``w * (1 + slip) + n`` with
+    ``slip ~ N(slip_mean, slip_sigma)`` and ``n ~ N(0, wheel_rate_sigma)`` per sample and wheel.
+    """
+
+    wheel_rate_sigma_rad_s: float = 0.0
+    slip_mean: float = 0.0
+    slip_sigma: float = 0.0
+    steer_sigma_rad: float = 0.0
+    accel_sigma_m_s2: float = 0.0
+    gyro_sigma_rad_s: float = 0.0
+    accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    gyro_bias_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        check_range("noise.wheel_rate_sigma_rad_s", self.wheel_rate_sigma_rad_s, 0.0, 10.0)
+        check_range("noise.slip_mean", self.slip_mean, -0.5, 0.9)
+        check_range("noise.slip_sigma", self.slip_sigma, 0.0, 1.0)
+        check_range("noise.steer_sigma_rad", self.steer_sigma_rad, 0.0, 1.0)
+        check_range("noise.accel_sigma_m_s2", self.accel_sigma_m_s2, 0.0, 10.0)
+        check_range("noise.gyro_sigma_rad_s", self.gyro_sigma_rad_s, 0.0, 10.0)
+        for key in ("accel_bias_m_s2", "gyro_bias_rad_s"):
+            value = tuple(getattr(self, key))
+            if len(value) != 3:
+                raise ConfigError(f"noise.{key} = {value!r} must have 3 components (x, y, z)")
+            for i, v in enumerate(value):
+                check_range(f"noise.{key}[{i}]", v, -10.0, 10.0)
+            object.__setattr__(self, key, tuple(float(v) for v in value))
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> NoiseConfig:
+        """Read a ``.toml`` (optionally with a ``[noise]`` table) or ``.json`` noise config."""
+        p = Path(path)
+        try:
+            text = p.read_text(encoding="utf-8")
+            doc: Any = json.loads(text) if p.suffix == ".json" else tomllib.loads(text)
+        except (OSError, ValueError) as err:
+            raise ConfigError(f"cannot read noise config {p}: {err}") from None
+        if isinstance(doc, dict) and "noise" in doc:
+            doc = doc["noise"]
+        return dataclass_from_mapping(cls, doc, "noise")
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class LidarConfig:
+    """3D LiDAR by ray casting (defaults: a 16-channel spinning unit at 10 Hz)."""
+
+    channels: int = 16
+    horizontal_samples: int = 360
+    vertical_fov_deg: tuple[float, float] = (-15.0, 15.0)
+    range_m: tuple[float, float] = (0.3, 50.0)
+    rate_hz: float = 10.0
+    dust_extinction_per_m: float = 0.0
+    """Two-way Beer-Lambert attenuation ``exp(-2 alpha r)`` of intensity only (not of range)."""
+
+    def __post_init__(self) -> None:
+        if not 1 <= int(self.channels) <= 256:
+            raise ConfigError(
+                f"lidar.channels = {self.channels!r} is out of range; allowed [1, 256]"
+            )
+        if not 4 <= int(self.horizontal_samples) <= 8192:
+            raise ConfigError(
+                f"lidar.horizontal_samples = {self.horizontal_samples!r} is out of range; "
+                "allowed [4, 8192]"
+            )
+        lo, hi = self.vertical_fov_deg
+        check_range("lidar.vertical_fov_deg[0]", lo, -90.0, 90.0)
+        check_range("lidar.vertical_fov_deg[1]", hi, lo, 90.0)
+        rmin, rmax = self.range_m
+        check_range("lidar.range_m[0]", rmin, 0.0, 10.0)
+        check_range("lidar.range_m[1]", rmax, rmin, 1000.0, lo_open=True)
+        _check_rate("lidar.rate_hz", self.rate_hz)
+        check_range("lidar.dust_extinction_per_m", self.dust_extinction_per_m, 0.0, 1.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class CameraConfig:
+    """Mast RGB-D camera rendered offscreen (``MUJOCO_GL=egl`` or ``osmesa``)."""
+
+    width_px: int = 320
+    height_px: int = 240
+    fovy_deg: float = 60.0
+    rate_hz: float = 10.0
+    depth: bool = True
+    shadows: bool = False
+    """Shadow maps cost ~6x render time on a software (llvmpipe) GL; off by default."""
+    terrain_window_m: float = 60.0
+    """Render a full-resolution terrain window this wide around the rover (speed)."""
+
+    def __post_init__(self) -> None:
+        if not (16 <= int(self.width_px) <= 4096 and 16 <= int(self.height_px) <= 4096):
+            raise ConfigError(
+                f"camera size {self.width_px}x{self.height_px} is out of range; allowed 16..4096 px"
+            )
+        check_range("camera.fovy_deg", self.fovy_deg, 5.0, 170.0)
+        check_range("camera.terrain_window_m", self.terrain_window_m, 5.0, 1e5)
+        _check_rate("camera.rate_hz", self.rate_hz)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunConfig:
+    """Rates of the control loop and of the logs (all divide the 500 Hz physics rate)."""
+
+    control_hz: float = 50.0
+    imu_hz: float = 100.0
+    lidar: LidarConfig | None = None
+    camera: CameraConfig | None = None
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
+
+    def __post_init__(self) -> None:
+        _check_rate("run.control_hz", self.control_hz)
+        _check_rate("run.imu_hz", self.imu_hz)

@@ -1,0 +1,86 @@
+"""Log writers: TUM, CSV, binary PLY point clouds, PNG images (deterministic bytes).
+
+Run folder layout (all stamps in s on the simulation clock, t = 0 after settling)::
+
+    RUN_DIR/
+      run.json            config, seed, rates, frames, counts, tracking statistics
+      gt.tum              base_link ground truth in the world (map) frame, control rate
+      odom.tum            wheel odometry (odom frame = map at t = 0), control rate
+      cmd.csv             t, v (m/s), omega (rad/s) sent to the rover
+      wheels.csv          t, measured wheel rates (rad/s) x6, steering angles (rad) x4
+      imu.csv             t, ax ay az (m/s^2, specific force incl. gravity), gx gy gz (rad/s)
+      lidar/stamps.csv    t, file, points
+      lidar/NNNNNN.ply    x y z (m, lidar frame) intensity ring
+      camera/stamps.csv   t, rgb file, depth file
+      camera/rgb/NNNNNN.png, camera/depth/NNNNNN.png (uint16, mm; 0 = no return)
+      camera/intrinsics.json
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["CsvLog", "ply_bytes", "png_bytes", "write_json"]
+
+
+def _num(v: float) -> str:
+    s = f"{float(v):.9g}"
+    return "0" if s in ("-0", "0") else s
+
+
+class CsvLog:
+    """Append rows to a CSV with a header; numbers formatted with 9 significant digits."""
+
+    def __init__(self, path: Path, columns: list[str]) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._fh = open(path, "w", encoding="utf-8", newline="\n")
+        self._fh.write(",".join(columns) + "\n")
+
+    def row(self, t_s: float, values: Any) -> None:
+        self._fh.write(
+            f"{t_s:.6f}," + ",".join(v if isinstance(v, str) else _num(v) for v in values) + "\n"
+        )
+
+    def close(self) -> None:
+        self._fh.close()
+
+
+def ply_bytes(
+    xyz_m: NDArray[np.float32], intensity: NDArray[np.float32], ring: NDArray[np.uint16]
+) -> bytes:
+    """Binary little-endian PLY with ``x y z intensity`` float32 and ``ring`` uint16."""
+    n = len(xyz_m)
+    head = (
+        "ply\nformat binary_little_endian 1.0\ncomment marsscene lidar, sensor frame\n"
+        f"element vertex {n}\nproperty float x\nproperty float y\nproperty float z\n"
+        "property float intensity\nproperty ushort ring\nend_header\n"
+    ).encode("ascii")
+    rec = np.zeros(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("i", "<f4"), ("r", "<u2")])
+    rec["x"], rec["y"], rec["z"] = xyz_m[:, 0], xyz_m[:, 1], xyz_m[:, 2]
+    rec["i"], rec["r"] = intensity, ring
+    return head + rec.tobytes()
+
+
+def png_bytes(image: NDArray[Any]) -> bytes:
+    """PNG of an RGB uint8 (H, W, 3) or a uint16 (H, W) image."""
+    from PIL import Image
+
+    buf = io.BytesIO()
+    if image.dtype == np.uint16:
+        Image.fromarray(image.astype("<u2"), mode="I;16").save(buf, format="PNG")
+    else:
+        Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def write_json(path: Path, doc: dict[str, Any]) -> None:
+    path.write_text(
+        json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8"
+    )

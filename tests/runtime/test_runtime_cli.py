@@ -1,0 +1,102 @@
+"""``marsscene drive`` and ``marsscene eval`` end to end, and their error messages."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from marsscene.cli import main
+from marsscene.runtime import Trajectory, ate, read_tum, write_tum
+
+
+def test_drive_waypoints_then_eval(runner, gentle_scene: Path, tmp_path: Path) -> None:
+    wp = tmp_path / "wp.txt"
+    wp.write_text("# x y\n-8 -8\n-2 -8\n")
+    noise = tmp_path / "noise.toml"
+    noise.write_text("[noise]\nwheel_rate_sigma_rad_s = 0.05\n")
+    out = tmp_path / "run"
+    res = runner.invoke(
+        main,
+        [
+            "drive",
+            str(gentle_scene),
+            "--waypoints",
+            str(wp),
+            "--seconds",
+            "4",
+            "--out",
+            str(out),
+            "--lidar",
+            "--noise-config",
+            str(noise),
+            "--seed",
+            "3",
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    assert "x real time" in res.output
+    for name in (
+        "gt.tum",
+        "odom.tum",
+        "route.tum",
+        "imu.csv",
+        "wheels.csv",
+        "run.json",
+        "lidar/000000.ply",
+    ):
+        assert (out / name).is_file(), name
+    gt = read_tum(out / "gt.tum")
+    assert gt.timestamps_s[-1] == pytest.approx(4.0)
+    assert gt.path_length_m() > 1.0  # moved towards the second waypoint
+    run = json.loads((out / "run.json").read_text())
+    assert run["noise"]["wheel_rate_sigma_rad_s"] == 0.05
+    res = runner.invoke(main, ["eval", str(out / "odom.tum"), str(out / "gt.tum"), "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.output)
+    expected = ate(read_tum(out / "odom.tum"), gt).stats.rmse
+    assert doc["ate_m"]["rmse"] == pytest.approx(expected)
+    assert doc["ate_m"]["n"] == len(gt)
+
+
+def test_drive_route_tum_outside_terrain(runner, gentle_scene: Path, tmp_path: Path) -> None:
+    xy = np.c_[np.linspace(0, 60, 20), np.zeros(20)]
+    route = Trajectory(np.arange(20.0), np.c_[xy, np.zeros(20)], np.tile([0, 0, 0, 1.0], (20, 1)))
+    write_tum(tmp_path / "route.tum", route)
+    res = runner.invoke(
+        main,
+        [
+            "drive",
+            str(gentle_scene),
+            "--route",
+            str(tmp_path / "route.tum"),
+            "--out",
+            str(tmp_path / "r"),
+        ],
+    )
+    assert res.exit_code == 1
+    assert "outside the terrain" in res.output
+
+
+def test_drive_errors(runner, tmp_path: Path) -> None:
+    (tmp_path / "empty").mkdir()
+    wp = tmp_path / "wp.txt"
+    wp.write_text("0 0\n1 0\n")
+    res = runner.invoke(main, ["drive", str(tmp_path / "empty"), "--waypoints", str(wp)])
+    assert res.exit_code == 1 and "scene.xml is missing" in res.output
+    res = runner.invoke(main, ["drive", str(tmp_path / "empty")])
+    assert res.exit_code == 2 and "exactly one of --route or --waypoints" in res.output
+
+
+def test_eval_reports_bad_tum_line(runner, tmp_path: Path) -> None:
+    good = tmp_path / "gt.tum"
+    good.write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n2 2 0 0 0 0 0 1\n3 3 1 0 0 0 0 1\n")
+    bad = tmp_path / "est.tum"
+    bad.write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 1\n")
+    res = runner.invoke(main, ["eval", str(bad), str(good)])
+    assert res.exit_code == 1
+    assert "est.tum:2: expected 8 numbers" in res.output
+    res = runner.invoke(main, ["eval", str(good), str(good)])
+    assert res.exit_code == 0 and "ATE (m):     rmse 0.000000" in res.output
