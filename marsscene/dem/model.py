@@ -7,6 +7,7 @@ Pixel convention (GDAL "area"): ``transform`` maps the upper-left **corner** of 
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -38,8 +39,9 @@ class _Georef:
     transform: Transform
 
     @property
+    @abstractmethod
     def shape(self) -> tuple[int, int]:
-        raise NotImplementedError
+        """Grid shape ``(rows, cols)`` (defined by each raster class)."""
 
     def xy_of(
         self, rows: ArrayLike, cols: ArrayLike
