@@ -85,6 +85,13 @@ def _read_waypoints(path: Path) -> Any:
     help="Route authoring: steepest slope allowed (deg).",
 )
 @click.option("--write-rover-xml", is_flag=True, help="Also write SCENE_DIR/mjcf/rover.xml.")
+@click.option(
+    "--corridor",
+    type=click.FloatRange(min=1.0),
+    default=15.0,
+    show_default=True,
+    help="Only MJCF rocks within this distance of the route are simulated (m).",
+)
 def drive(
     scene_dir: Path,
     route_path: Path | None,
@@ -98,6 +105,7 @@ def drive(
     lookahead: float,
     max_slope: float,
     write_rover_xml: bool,
+    corridor: float,
 ) -> None:
     """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz).
 
@@ -152,6 +160,11 @@ def drive(
                 max_slope_deg=max_slope,
                 obstacles=scene_obstacles(sim),
             )
+        if sim.rocks_kept[1]:  # simulate only the rocks the rover can meet along its route
+            sim = RoverSim(scene_dir, run=run, settle_s=0.0, contact_corridor_xy_m=route.xy_m,
+                           contact_corridor_m=corridor)
+            click.echo(f"   rocks: {sim.rocks_kept[0]} of {sim.rocks_kept[1]} MJCF rocks lie "
+                       f"within {corridor:g} m of the route and are simulated", err=True)
         a, b = route.xy_m[0], route.xy_m[min(5, len(route.xy_m) - 1)]
         sim.settle_s = 3.0
         sim.reset(xy_m=(float(a[0]), float(a[1])), yaw_rad=math.atan2(b[1] - a[1], b[0] - a[0]))
