@@ -116,3 +116,16 @@ def test_info_on_a_dem(runner: CliRunner, synthetic_dem_path: Path) -> None:
 def test_info_on_a_folder_that_is_not_a_scene(runner: CliRunner, tmp_path: Path) -> None:
     result = runner.invoke(main, ["info", str(tmp_path)])
     assert result.exit_code == 1 and "not a marsscene scene folder" in result.output
+
+
+def test_warnings_are_one_line_messages(
+    runner: CliRunner, synthetic_dem_path: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "o"
+    result = runner.invoke(main, ["build", "--dem", str(synthetic_dem_path), "--format", "mjcf",
+                                  "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "marsscene: warning: bowl: filled 9 missing posts" in result.output
+    assert "fill_nodata(" not in result.output  # no source-line excerpt
+    info = runner.invoke(main, ["info", "--band", "1", str(synthetic_dem_path)])
+    assert info.exit_code == 0 and "48 rows x 64 cols" in info.output

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import sys
+import warnings
 
 import click
 
@@ -20,6 +21,18 @@ __all__ = ["main"]
 class _StderrFormatter(logging.Formatter):
     def format(self, record: logging.LogRecord) -> str:
         return f"marsscene: {record.getMessage()}"
+
+
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: object = None,
+    line: str | None = None,
+) -> None:
+    """Print library warnings as one line (no source excerpt) for command-line users."""
+    click.echo(f"marsscene: warning: {message}", err=True)
 
 
 def configure_logging(verbosity: int) -> None:
@@ -34,6 +47,7 @@ def configure_logging(verbosity: int) -> None:
     handler._marsscene_cli = True  # type: ignore[attr-defined]
     logger.addHandler(handler)
     logger.setLevel(level)
+    warnings.showwarning = _show_warning
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})

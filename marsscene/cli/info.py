@@ -33,12 +33,12 @@ def _scene_info(folder: Path) -> list[str]:
     return lines
 
 
-def _dem_info(path: Path) -> list[str]:
+def _dem_info(path: Path, band: int | None) -> list[str]:
     import numpy as np
 
     from marsscene.dem.io import read_dem
 
-    dem = read_dem(path)
+    dem = read_dem(path, band=band)
     z = dem.elevation_m
     valid = np.isfinite(z)
     lines = [
@@ -59,8 +59,10 @@ def _dem_info(path: Path) -> list[str]:
 
 @click.command(short_help="Describe a DEM file or a built scene folder.")
 @click.argument("path", type=click.Path(exists=True, path_type=Path))
-def info(path: Path) -> None:
+@click.option("--band", type=click.IntRange(min=1), default=None,
+              help="Band of a multi-band DTM to describe.")
+def info(path: Path, band: int | None) -> None:
     """Print what PATH (a DEM raster or a scene folder) contains."""
     with user_errors():
-        lines = _scene_info(path) if path.is_dir() else _dem_info(path)
+        lines = _scene_info(path) if path.is_dir() else _dem_info(path, band)
     click.echo("\n".join(lines))
