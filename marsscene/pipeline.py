@@ -148,6 +148,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             craters, cstats = sample_craters(
                 hf.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters"), heightfield=hf,
                 origin_lonlat_deg=frame.origin_lonlat_deg,
+                grid_convergence_deg=frame.grid_convergence_deg,
             )
             hf = stamp_craters(hf, craters, profile_kwargs=ccfg.profile_kwargs())
         for w in caught:  # re-emit once each, and record in the manifest
@@ -201,7 +202,8 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             else:
                 lat_deg, lon_e_deg = DEFAULT_SITE_LAT_LON_EAST_DEG
                 site_src = "default site (Jezero)"
-            lighting = compute_lighting(lcfg, lat_deg=lat_deg, lon_east_deg=lon_e_deg)
+            lighting = compute_lighting(lcfg, lat_deg=lat_deg, lon_east_deg=lon_e_deg,
+                                        grid_convergence_deg=frame.grid_convergence_deg)
             if lcfg.sun_mode in ("utc", "local"):
                 models.append(ModelRef("lighting", "Mars24 sun position", MARS24_CITATION))
             diffuse_ref = DELTA_EDDINGTON_CITATION if lcfg.diffuse_model == "delta_eddington" \

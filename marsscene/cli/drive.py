@@ -90,7 +90,8 @@ def _read_waypoints(path: Path) -> Any:
     type=click.FloatRange(min=1.0),
     default=15.0,
     show_default=True,
-    help="Only MJCF rocks within this distance of the route are simulated (m).",
+    help="Only MJCF rocks within this distance of the route are simulated (m); widened to "
+    "the LiDAR range / camera window when those sensors are on.",
 )
 def drive(
     scene_dir: Path,
@@ -160,7 +161,11 @@ def drive(
                 max_slope_deg=max_slope,
                 obstacles=scene_obstacles(sim),
             )
-        if sim.rocks_kept[1]:  # simulate only the rocks the rover can meet along its route
+        if sim.rocks_kept[1]:  # simulate only the rocks the rover can meet or sense
+            if run.lidar is not None:
+                corridor = max(corridor, run.lidar.range_m[1])
+            if run.camera is not None:
+                corridor = max(corridor, run.camera.terrain_window_m / 2.0)
             sim = RoverSim(scene_dir, run=run, settle_s=0.0, contact_corridor_xy_m=route.xy_m,
                            contact_corridor_m=corridor)
             click.echo(f"   rocks: {sim.rocks_kept[0]} of {sim.rocks_kept[1]} MJCF rocks lie "

@@ -141,6 +141,7 @@ def sample_craters(
     rng: np.random.Generator,
     heightfield: Heightfield | None = None,
     origin_lonlat_deg: tuple[float, float] | None = None,
+    grid_convergence_deg: float = 0.0,
 ) -> tuple[CraterTable, PopulationStats]:
     """Sample a crater population over a scene footprint.
 
@@ -155,6 +156,8 @@ def sample_craters(
         Grid for raster resurfacing masks.
     origin_lonlat_deg : tuple, optional
         Scene origin for lon/lat resurfacing polygons.
+    grid_convergence_deg : float
+        Angle from true north to scene +y (polar stereographic DEMs).
 
     Returns
     -------
@@ -215,7 +218,8 @@ def sample_craters(
     fam = profile_family(**config.profile_kwargs())
     if config.resurfacing:
         weights = [
-            mask_weights(ev, centers, heightfield=heightfield, origin_lonlat_deg=origin_lonlat_deg)
+            mask_weights(ev, centers, heightfield=heightfield, origin_lonlat_deg=origin_lonlat_deg,
+                         grid_convergence_deg=grid_convergence_deg)
             for ev in config.resurfacing
         ]
         alive = erase_by_events(

@@ -53,6 +53,7 @@ def mask_weights(
     heightfield: Heightfield | None = None,
     origin_lonlat_deg: tuple[float, float] | None = None,
     raster: NDArray[np.floating] | None = None,
+    grid_convergence_deg: float = 0.0,
 ) -> FloatArray:
     """Erasure weight (0-1) of an event's mask at crater centres.
 
@@ -66,6 +67,8 @@ def mask_weights(
         nearest edge post.
     origin_lonlat_deg : tuple, optional
         Scene origin, needed for ``polygon_lonlat_deg``.
+    grid_convergence_deg : float
+        Angle from true north to scene +y (polar stereographic DEMs).
     raster : ndarray of shape (rows, cols), optional
         In-memory raster mask (overrides ``event.mask_path``), row 0 = south, values 0-1.
 
@@ -83,7 +86,8 @@ def mask_weights(
                 "(the scene frame has no lon/lat); use polygon_xy_m instead"
             )
         lon, lat = np.asarray(event.polygon_lonlat_deg, dtype=np.float64).T
-        px, py = lonlat_to_xy_m(lon, lat, origin_lonlat_deg=origin_lonlat_deg)
+        px, py = lonlat_to_xy_m(lon, lat, origin_lonlat_deg=origin_lonlat_deg,
+                                grid_convergence_deg=grid_convergence_deg)
         return points_in_polygon(x, y, list(zip(px, py, strict=True))).astype(np.float64)
     if raster is None and event.mask_path is not None:
         try:

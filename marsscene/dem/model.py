@@ -106,7 +106,7 @@ class Ortho(_Georef):
     metadata: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        img = np.asarray(self.image, dtype=np.float32)
+        img = np.array(self.image, dtype=np.float32, copy=True)  # never freeze the caller's
         if img.ndim == 2:
             img = img[:, :, None]
         if img.ndim != 3 or min(img.shape[:2]) < 1 or img.shape[2] not in (1, 3, 4):
@@ -159,7 +159,7 @@ class DEM(_Georef):
     ortho: Ortho | None = None
 
     def __post_init__(self) -> None:
-        z = np.asarray(self.elevation_m, dtype=np.float32)
+        z = np.array(self.elevation_m, dtype=np.float32, copy=True)  # caller's array untouched
         if z.ndim != 2 or min(z.shape) < 2:
             raise ConfigError(f"elevation_m must be a 2-D grid of at least 2x2; got {z.shape}")
         z.setflags(write=False)

@@ -229,5 +229,8 @@ def resample(
     meta = {**dem.metadata, "resampling": method}
     if xy_scale != 1.0 or z_scale != 1.0:
         meta.update(xy_scale=xy_scale, z_scale_applied=z_scale)
-    return dem.replace(elevation_m=z, transform=(new_post, 0.0, c, 0.0, -new_post, f),
-                       metadata=meta)
+    out = dem.replace(elevation_m=z, transform=(new_post, 0.0, c, 0.0, -new_post, f),
+                      metadata=meta)
+    if xy_scale == 1.0:  # the footprint may shrink by < 1 post: keep the centre lon/lat true
+        out = out.replace(center_lonlat_deg=_center_lonlat(out))
+    return out

@@ -37,7 +37,8 @@ def crater_catalog_text(scene: Any) -> str:
     header = ["id", "x_m", "y_m"]
     if geo:
         header += ["lon_deg", "lat_deg"]
-        lon, lat = xy_to_lonlat_deg(x, y, origin_lonlat_deg=tuple(frame.origin_lonlat_deg))
+        lon, lat = xy_to_lonlat_deg(x, y, origin_lonlat_deg=tuple(frame.origin_lonlat_deg),
+                                    grid_convergence_deg=frame.grid_convergence_deg)
     header += ["diameter_m", "diameter_km", "depth_m", "rim_height_m", "age_ga", "axis_ratio",
                "azimuth_deg", "profile", "in_scene"]
     lines = [",".join(header)]

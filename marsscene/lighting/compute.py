@@ -66,7 +66,13 @@ def resolve_sun(
     return DEFAULT_SUN_AZIMUTH_DEG, DEFAULT_SUN_ELEVATION_DEG, dist, None
 
 
-def compute_lighting(config: LightingConfig, *, lat_deg: float, lon_east_deg: float) -> Lighting:
+def compute_lighting(
+    config: LightingConfig,
+    *,
+    lat_deg: float,
+    lon_east_deg: float,
+    grid_convergence_deg: float = 0.0,
+) -> Lighting:
     """Sun position, irradiances, sky colour and visibility for a site.
 
     Parameters
@@ -74,6 +80,10 @@ def compute_lighting(config: LightingConfig, *, lat_deg: float, lon_east_deg: fl
     config : LightingConfig
     lat_deg, lon_east_deg : float
         The site (used when the sun comes from a time; recorded otherwise).
+    grid_convergence_deg : float
+        Angle from true north to the scene's +y axis (non-zero on polar stereographic DEMs).
+        ``sun_azimuth_deg`` stays clockwise from true north; ``sun_direction_enu`` is in the
+        scene frame, i.e. at scene azimuth ``azimuth - grid_convergence_deg``.
 
     Examples
     --------
@@ -95,7 +105,7 @@ def compute_lighting(config: LightingConfig, *, lat_deg: float, lon_east_deg: fl
     ))
     bh = dni * max(math.sin(math.radians(el)), 0.0)
     m = float(air_mass(min(max(zen, 0.0), 90.0), model="spherical"))
-    vec = sun_direction_enu(az, el)
+    vec = sun_direction_enu(az - grid_convergence_deg, el)
     return Lighting(
         sun_azimuth_deg=float(az % 360.0),
         sun_elevation_deg=float(el),

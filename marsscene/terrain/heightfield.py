@@ -40,7 +40,7 @@ class Heightfield:
     origin_xy_m: tuple[float, float] = field(default=(0.0, 0.0))
 
     def __post_init__(self) -> None:
-        z = np.asarray(self.z_m, dtype=np.float32)
+        z = np.array(self.z_m, dtype=np.float32, copy=True)  # never freeze the caller's array
         if z.ndim != 2 or min(z.shape) < 2:
             raise ConfigError(f"z_m must be a 2-D grid of at least 2x2 posts; got shape {z.shape}")
         if not np.isfinite(z).all():
