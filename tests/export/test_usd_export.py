@@ -85,6 +85,9 @@ def test_binary_and_packaged_formats_open(tmp_path: Path, usd_format: str) -> No
          "rocks": {"enabled": False}, "craters": {"enabled": False}}
     )
     ms.write_scene(ms.build_scene(cfg, seed=1), tmp_path / "s")
+    if usd_format == "usdz":  # everything is packaged: no loose assets or empty folders
+        assert sorted(p.name for p in (tmp_path / "s").iterdir()) == ["manifest.json",
+                                                                       "scene.usdz"]
     stage = Usd.Stage.Open(str(tmp_path / "s" / f"scene.{usd_format}"))
     meshes = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
     assert len(meshes) == 1

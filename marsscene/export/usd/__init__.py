@@ -82,6 +82,9 @@ def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda") -> l
         tmp.unlink()
         for p in written:  # packaged inside the .usdz
             p.unlink()
+        for folder in sorted({p.parent for p in written}, reverse=True):
+            if folder != out and not any(folder.iterdir()):
+                folder.rmdir()
         written = [target]
     else:
         target = out / f"scene.{usd_format}"
