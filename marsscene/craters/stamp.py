@@ -102,17 +102,23 @@ def stamp_craters(
     ox, oy = heightfield.origin_xy_m
     cs = heightfield.cell_size_m
     half = p.reach * p.semi_major
-    r0 = np.maximum(np.ceil((p.cy - half - oy) / cs), 0).astype(np.int64)
-    r1 = np.minimum(np.floor((p.cy + half - oy) / cs), rows - 1).astype(np.int64)
-    c0 = np.maximum(np.ceil((p.cx - half - ox) / cs), 0).astype(np.int64)
-    c1 = np.minimum(np.floor((p.cx + half - ox) / cs), cols - 1).astype(np.int64)
+    # the whole footprint in post indices (it may extend past the grid) ...
+    fr0 = np.ceil((p.cy - half - oy) / cs).astype(np.int64)
+    fr1 = np.floor((p.cy + half - oy) / cs).astype(np.int64)
+    fc0 = np.ceil((p.cx - half - ox) / cs).astype(np.int64)
+    fc1 = np.floor((p.cx + half - ox) / cs).astype(np.int64)
+    # ... and its part on the grid
+    r0, r1 = np.maximum(fr0, 0), np.minimum(fr1, rows - 1)
+    c0, c1 = np.maximum(fc0, 0), np.minimum(fc1, cols - 1)
     order = np.argsort(-craters.age_ga, kind="stable")
     order = order[(r0[order] <= r1[order]) & (c0[order] <= c1[order])]
-    # batched craters use a square padded box of side S centred on the crater's nearest post
-    side = np.maximum(r1 - r0, c1 - c0) + 3
-    size_class = np.searchsorted(_SIZES, side)
+    # batched craters use a square padded box of side S centred on the crater's nearest post,
+    # sized from the whole footprint (not its clipped part): the box [rc - S/2, rc + S/2 - 1]
+    # then holds the footprint, and a box of side <= _PAD that meets the grid lies in the pad
     rc = np.rint((p.cy - oy) / cs).astype(np.int64)
     cc = np.rint((p.cx - ox) / cs).astype(np.int64)
+    reach_posts = np.maximum.reduce([rc - fr0, fr1 - rc, cc - fc0, fc1 - cc])
+    size_class = np.searchsorted(_SIZES, 2 * reach_posts + 2)
     small = size_class < _SIZES.size
     s_of = _SIZES[np.minimum(size_class, _SIZES.size - 1)]
     br0 = np.where(small, rc - s_of // 2, r0)
