@@ -13,7 +13,17 @@ from marsscene.errors import ConfigError
 
 T = TypeVar("T")
 
-__all__ = ["check_choice", "check_range", "dataclass_from_mapping"]
+__all__ = ["check_choice", "check_range", "dataclass_from_mapping", "plain"]
+
+
+def plain(value: Any) -> Any:
+    """``value`` with numpy scalars turned into Python ones, so messages print ``1.0``, not
+    ``np.float64(1.0)`` (numpy >= 2 reprs); containers are converted element by element."""
+    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
+        return value.item()
+    if isinstance(value, list | tuple):
+        return type(value)(plain(v) for v in value)
+    return value
 
 
 def check_range(
@@ -32,14 +42,19 @@ def check_range(
     if not ok:
         left = "(" if lo_open else "["
         right = ")" if hi_open else "]"
-        raise ConfigError(f"{key} = {value!r} is out of range; allowed {left}{lo}, {hi}{right}")
+        raise ConfigError(
+            f"{key} = {plain(value)!r} is out of range; "
+            f"allowed {left}{plain(lo)}, {plain(hi)}{right}"
+        )
 
 
 def check_choice(key: str, value: object, choices: typing.Iterable[object]) -> None:
     """Raise :class:`ConfigError` unless ``value`` is one of ``choices``."""
     allowed = tuple(choices)
     if value not in allowed:
-        raise ConfigError(f"{key} = {value!r} is not allowed; choose one of {list(allowed)}")
+        raise ConfigError(
+            f"{key} = {plain(value)!r} is not allowed; choose one of {list(allowed)}"
+        )
 
 
 def _coerce(value: Any, annotation: Any) -> Any:

@@ -17,6 +17,7 @@ __all__ = [
     "MarsSceneWarning",
     "MemoryBudgetError",
     "MissingDependencyError",
+    "NoGeoreferenceWarning",
     "NodataFilledWarning",
     "RuntimeSimError",
 ]
@@ -60,6 +61,10 @@ class MarsSceneWarning(UserWarning):
 
 class NodataFilledWarning(MarsSceneWarning):
     """Missing DEM posts were filled by interpolation."""
+
+
+class NoGeoreferenceWarning(MarsSceneWarning):
+    """An input raster has no coordinate reference system (no lon/lat, default sun site)."""
 
 
 class ExtrapolationWarning(MarsSceneWarning):

@@ -12,12 +12,13 @@ import time
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 from marsscene.config import SceneConfig
 from marsscene.craters import crater_models, sample_craters, stamp_craters
 from marsscene.craters.table import CraterTable
 from marsscene.dem.model import DEM
-from marsscene.errors import MarsSceneWarning
+from marsscene.errors import MarsSceneWarning, NoGeoreferenceWarning
 from marsscene.inputs import HIRISE_DTM_CITATION, drape_ortho, load_inputs
 from marsscene.lighting.compute import compute_lighting
 from marsscene.lighting.config import DEFAULT_SITE_LAT_LON_EAST_DEG
@@ -58,6 +59,18 @@ class _Timer:
         dt = time.perf_counter() - t0
         self.timings_s[name] = round(dt, 4)
         log.info("[%s] done in %.2f s", name, dt)
+
+
+def _warn_no_georeference(dem: DEM, config: SceneConfig) -> None:
+    lcfg = config.lighting
+    sun = ""
+    if lcfg.enabled and (lcfg.site_lat_deg is None or lcfg.site_lon_east_deg is None):
+        lat, lon = DEFAULT_SITE_LAT_LON_EAST_DEG
+        sun = (f"; the sun uses the default site (lat {lat}, lon {lon} E) unless "
+               "lighting.site_lat_deg and lighting.site_lon_east_deg are set")
+    name = Path(str(dem.source_path)).name if dem.source_path else "the DEM"
+    warnings.warn(f"{name} has no geo-reference (no CRS): the scene has no lon/lat{sun}",
+                  NoGeoreferenceWarning, stacklevel=3)
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
@@ -115,6 +128,8 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                 inputs["dem_data"] = str(dem.metadata["data_file"])
             summary.update(dem_summary)
             hf, frame = heightfield_from_dem(dem, z_scale=tcfg.z_scale)
+            if not frame.crs_wkt:
+                _warn_no_georeference(dem, config)
             if tcfg.source == "default":
                 models.append(ModelRef("terrain", "default DEM", DEFAULT_DEM_CITATION))
             if "HIRISE" in str(dem.metadata.get("DATA_SET_ID", "")).upper():

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from marsscene._validate import plain
 from marsscene.errors import ConfigError
 
 __all__ = ["STAGE_IDS", "as_generator", "stage_rng"]
@@ -30,7 +31,7 @@ STAGE_IDS: dict[str, int] = {
 
 def _check_seed(seed: int) -> int:
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ConfigError(f"seed must be a non-negative integer; got {seed!r}")
+        raise ConfigError(f"seed must be a non-negative integer; got {plain(seed)!r}")
     return int(seed)
 
 

@@ -69,8 +69,10 @@ def build(
       marsscene build --procedural --format usdc --format mjcf
     """
     from marsscene import SceneConfig, build_scene, write_scene
+    from marsscene.export import check_output_dir
 
     with user_errors():
+        check_output_dir(out_dir)
         cfg = SceneConfig.from_toml(config_path) if config_path else SceneConfig()
         cfg = _apply_core(cfg, dem=dem, procedural=procedural, formats=formats)
         cfg = options_dem.apply(cfg, stage_options)

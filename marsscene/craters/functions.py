@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from marsscene._validate import plain
 from marsscene.errors import ConfigError, ExtrapolationWarning
 
 __all__ = [
@@ -101,7 +102,7 @@ def _check_ages(age: FloatArray, cs: ChronologySystem) -> None:
     if age.size and (not np.isfinite(age).all() or age.min() < lo or age.max() > hi):
         bad = age[~((age >= lo) & (age <= hi))]
         raise ConfigError(
-            f"age_ga = {bad.ravel()[0]!r} is outside the {cs.chronology} chronology range "
+            f"age_ga = {plain(bad.ravel()[0])!r} is outside the {cs.chronology} chronology range "
             f"[{lo}, {hi}] Ga"
         )
 
@@ -213,7 +214,7 @@ def production_shape(diameter_m: ArrayLike, *, system: str = "neukum-ivanov-2001
     cs = chronology_system(system)
     d = np.asarray(diameter_m, dtype=np.float64)
     if d.size and not (d > 0).all():
-        raise ConfigError(f"diameter_m must be > 0; got min {d.min()!r}")
+        raise ConfigError(f"diameter_m must be > 0; got min {plain(d.min())!r}")
     _warn_diameters(d, cs)
     return np.asarray(10.0 ** _log_shape(cs.production, d / 1e3), dtype=np.float64)
 

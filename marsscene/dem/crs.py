@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from marsscene._validate import plain
 from marsscene.errors import CRSError
 
 __all__ = [
@@ -91,7 +92,10 @@ def lonlat_to_xy(
     x = np.asarray(x, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
     if not (np.isfinite(x).all() and np.isfinite(y).all()):
-        raise CRSError(f"lon/lat ({lon_deg!r}, {lat_deg!r}) cannot be projected into the DEM's CRS")
+        raise CRSError(
+            f"lon/lat ({plain(lon_deg)!r}, {plain(lat_deg)!r}) cannot be projected into the "
+            "DEM's CRS"
+        )
     return x, y
 
 

@@ -17,7 +17,7 @@ from marsscene.dem.crs import lonlat_to_xy, xy_to_lonlat
 from marsscene.dem.fill import detrend, fill_nodata
 from marsscene.dem.model import DEM
 from marsscene.dem.resample import RESAMPLING, resample_separable
-from marsscene.errors import ConfigError, MarsSceneWarning, MemoryBudgetError
+from marsscene.errors import ConfigError, CRSError, MarsSceneWarning, MemoryBudgetError
 
 __all__ = [
     "AutoCropWarning",
@@ -120,6 +120,11 @@ def crop_window(
     else:
         assert spec.center_lonlat_deg is not None and spec.size_m is not None
         lon, lat = spec.center_lonlat_deg
+        if not crs_wkt:
+            raise CRSError(
+                "the DEM has no geo-reference (no CRS), so a lon/lat crop cannot be placed; "
+                "crop by pixels or projected metres instead"
+            )
         x, y = lonlat_to_xy(crs_wkt, lon, lat)
         cc = int(np.floor((float(x) - c) / a))
         rc = int(np.floor((float(y) - f) / e))

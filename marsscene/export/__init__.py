@@ -16,7 +16,7 @@ from typing import Any
 
 from marsscene.errors import ExportError, MarsSceneError
 
-__all__ = ["WRITERS", "write_scene"]
+__all__ = ["WRITERS", "check_output_dir", "write_scene"]
 
 
 def _write_usd(scene: Any, out: Path) -> list[Path]:
@@ -40,6 +40,28 @@ def _write_catalogs(scene: Any, out: Path) -> list[Path]:
 
 #: Format name -> writer(scene, out_dir) -> written paths. Extend to add a format.
 WRITERS: dict[str, Callable[[Any, Path], list[Path]]] = {"usd": _write_usd, "mjcf": _write_mjcf}
+
+
+def _make_temp_dir(final: Path) -> Path:
+    """A fresh temporary folder beside ``final`` (same filesystem: the final rename is atomic)."""
+    try:
+        final.parent.mkdir(parents=True, exist_ok=True)
+        return Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
+    except OSError as err:
+        reason = err.strerror or type(err).__name__
+        raise ExportError(f"cannot write the output folder {final}: {reason}") from None
+
+
+def check_output_dir(out_dir: str | os.PathLike[str]) -> Path:
+    """Fail early (before a long build) if ``out_dir`` cannot be written; returns its full path.
+
+    Creates the parent folder if needed and probes it with a temporary folder, removed again.
+    """
+    final = Path(out_dir).resolve()
+    if final.exists() and not final.is_dir():
+        raise ExportError(f"the output {final} exists and is not a folder")
+    shutil.rmtree(_make_temp_dir(final), ignore_errors=True)
+    return final
 
 
 def write_scene(
@@ -73,8 +95,7 @@ def write_scene(
     final = Path(out_dir).resolve()
     if final.exists() and not overwrite:
         raise ExportError(f"{final} exists; pass overwrite=True to replace it")
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
+    tmp = _make_temp_dir(final)
     try:
         written: dict[str, list[Path]] = {}
         timings = dict(scene.provenance.timings_s)

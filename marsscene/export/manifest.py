@@ -38,10 +38,12 @@ def package_versions() -> dict[str, str | None]:
 
 
 def _input_files(paths: dict[str, str]) -> dict[str, dict[str, str]]:
+    """Each input's file name and SHA-256: no absolute path, so the manifest does not depend on
+    where the inputs (or the package's bundled DEM) live on disk."""
     out = {}
     for role, path in sorted(paths.items()):
         p = Path(path)
-        out[role] = {"path": str(p), "sha256": sha256_file(p) if p.is_file() else ""}
+        out[role] = {"name": p.name, "sha256": sha256_file(p) if p.is_file() else ""}
     return out
 
 

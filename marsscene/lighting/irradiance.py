@@ -21,7 +21,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from marsscene._validate import check_choice, check_range
+from marsscene._validate import check_choice, check_range, plain
 from marsscene.errors import ConfigError, ExtrapolationWarning
 from marsscene.lighting._netflux import (
     TABLE_TAU_MAX,
@@ -72,14 +72,14 @@ DELTA_EDDINGTON_CITATION = (
 def _z(zenith_deg: ArrayLike) -> NDArray[np.float64]:
     z = np.asarray(zenith_deg, dtype=np.float64)
     if not np.all(np.isfinite(z)):
-        raise ConfigError(f"zenith_deg must be finite; got {zenith_deg!r}")
+        raise ConfigError(f"zenith_deg must be finite; got {plain(zenith_deg)!r}")
     return z
 
 
 def _tau(tau: ArrayLike) -> NDArray[np.float64]:
     t = np.asarray(tau, dtype=np.float64)
     if not np.all(np.isfinite(t)) or np.any(t < 0):
-        raise ConfigError(f"tau = {tau!r} is out of range; optical depth must be >= 0")
+        raise ConfigError(f"tau = {plain(tau)!r} is out of range; optical depth must be >= 0")
     return t
 
 
@@ -89,7 +89,7 @@ def toa_irradiance_w_m2(
     """Top-of-atmosphere normal irradiance ``S / r^2`` (W m^-2); 586.2 at 1.523679 AU."""
     r = np.asarray(distance_au, dtype=np.float64)
     if not np.all(np.isfinite(r)) or np.any(r <= 0):
-        raise ConfigError(f"distance_au = {distance_au!r} must be > 0")
+        raise ConfigError(f"distance_au = {plain(distance_au)!r} must be > 0")
     return solar_constant_w_m2 / r**2
 
 

@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from marsscene._validate import check_range
+from marsscene._validate import check_range, plain
 from marsscene.errors import ConfigError
 
 __all__ = [
@@ -100,7 +100,7 @@ def extinction_coefficient_per_m(
     check_range("dust_scale_height_m", dust_scale_height_m, 0.0, 1e6, lo_open=True)
     t = np.asarray(tau, dtype=np.float64)
     if np.any(~np.isfinite(t)) or np.any(t < 0):
-        raise ConfigError(f"tau = {tau!r} is out of range; optical depth must be >= 0")
+        raise ConfigError(f"tau = {plain(tau)!r} is out of range; optical depth must be >= 0")
     return t / dust_scale_height_m
 
 

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene._validate import plain
 from marsscene.errors import ConfigError
 from marsscene.rocks.config import RockConfig
 from marsscene.rocks.placement import (
@@ -78,7 +79,7 @@ def k_per_cell(
             raise ConfigError(f"k_map has shape {km.shape}; expected the heightfield's {hf.shape}")
         if not (np.isfinite(km).all() and km.min() > 0.0 and km.max() <= 0.9):
             raise ConfigError(
-                f"k_map values must be in (0, 0.9]; got [{km.min()!r}, {km.max()!r}]"
+                f"k_map values must be in (0, 0.9]; got [{plain(km.min())!r}, {plain(km.max())!r}]"
             )
         r, c = hf.rowcol_of(xc, yc)
         k = km[np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)]

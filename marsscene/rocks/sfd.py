@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import exp1
 
+from marsscene._validate import plain
 from marsscene.errors import ConfigError, ExtrapolationWarning
 
 __all__ = [
@@ -43,10 +44,10 @@ FITTED_K_RANGE = (0.05, 0.40)
 
 def _check_k(k: float) -> float:
     if isinstance(k, bool) or not isinstance(k, int | float | np.floating) or not 0.0 < k <= 0.9:
-        raise ConfigError(f"rocks.k = {k!r} is out of range; allowed (0, 0.9]")
+        raise ConfigError(f"rocks.k = {plain(k)!r} is out of range; allowed (0, 0.9]")
     if not FITTED_K_RANGE[0] <= k <= FITTED_K_RANGE[1]:
         warnings.warn(
-            f"rocks.k = {k!r} is outside the fitted range {list(FITTED_K_RANGE)} of the "
+            f"rocks.k = {plain(k)!r} is outside the fitted range {list(FITTED_K_RANGE)} of the "
             "Golombek-Rapp model (extrapolation; HiRISE counts support k up to 0.9)",
             ExtrapolationWarning,
             stacklevel=3,

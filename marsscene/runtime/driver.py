@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from marsscene._validate import plain
 from marsscene.runtime.logs import CsvLog, ply_bytes, png_bytes, write_json
 from marsscene.runtime.pursuit import PurePursuit, PursuitConfig
 from marsscene.runtime.route import Route, cross_track_m
@@ -88,7 +89,9 @@ def drive(
         else (2.0 * route.length_m / 0.1 + 60.0 if route is not None else None)
     )
     if limit is None or limit <= 0:
-        raise RuntimeSimError(f"seconds = {seconds!r} must be > 0 when driving without a route")
+        raise RuntimeSimError(
+            f"seconds = {plain(seconds)!r} must be > 0 when driving without a route"
+        )
     run = sim.run
     follower = PurePursuit(route, pursuit) if route is not None else None
     lidar = Lidar(run.lidar) if run.lidar is not None else None

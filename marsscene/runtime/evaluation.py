@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene._validate import check_choice
+from marsscene._validate import check_choice, plain
 from marsscene.errors import RuntimeSimError
 from marsscene.runtime.transforms import quat_to_matrix
 from marsscene.runtime.tum import Trajectory
@@ -173,7 +173,7 @@ def rpe(
 ) -> RPEResult:
     """Relative pose error over ``delta_frames`` associated poses (drift per step)."""
     if int(delta_frames) < 1:
-        raise RuntimeSimError(f"delta_frames = {delta_frames!r} must be >= 1")
+        raise RuntimeSimError(f"delta_frames = {plain(delta_frames)!r} must be >= 1")
     pe, pg, re, rg, _ = _paired(est, gt, max_dt_s, align)
     d = int(delta_frames)
     if len(pe) <= d:

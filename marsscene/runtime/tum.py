@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene._validate import plain
 from marsscene.errors import RuntimeSimError
 
 __all__ = ["Trajectory", "read_tum", "write_tum"]
@@ -44,11 +45,12 @@ class Trajectory:
         norm = np.linalg.norm(q, axis=1)
         if n and (not np.all(np.isfinite(norm)) or np.any(np.abs(norm - 1.0) > 1e-3)):
             i = int(np.argmax(~np.isfinite(norm) | (np.abs(norm - 1.0) > 1e-3)))
-            raise RuntimeSimError(f"pose {i}: quaternion norm {norm[i]!r} is not 1 (+-1e-3)")
+            raise RuntimeSimError(f"pose {i}: quaternion norm {plain(norm[i])!r} is not 1 (+-1e-3)")
         if n > 1 and np.any(np.diff(t) <= 0):
             i = int(np.argmax(np.diff(t) <= 0)) + 1
             raise RuntimeSimError(
-                f"pose {i}: timestamp {t[i]!r} s does not increase (previous {t[i - 1]!r} s)"
+                f"pose {i}: timestamp {plain(t[i])!r} s does not increase "
+                f"(previous {plain(t[i - 1])!r} s)"
             )
         object.__setattr__(self, "timestamps_s", t)
         object.__setattr__(self, "xyz_m", xyz)

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from marsscene._validate import plain
 from marsscene.errors import ConfigError
 
 XY = tuple[NDArray[np.float64], NDArray[np.float64]]
@@ -46,7 +47,7 @@ class Heightfield:
         if not np.isfinite(z).all():
             raise ConfigError("z_m contains NaN or inf; fill missing posts before building terrain")
         if not (self.cell_size_m > 0 and np.isfinite(self.cell_size_m)):
-            raise ConfigError(f"cell_size_m must be > 0; got {self.cell_size_m!r}")
+            raise ConfigError(f"cell_size_m must be > 0; got {plain(self.cell_size_m)!r}")
         z.setflags(write=False)
         object.__setattr__(self, "z_m", z)
         object.__setattr__(self, "cell_size_m", float(self.cell_size_m))

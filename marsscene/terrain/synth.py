@@ -155,8 +155,10 @@ def _spline_resample(hf: Heightfield, cols: int, rows: int, post_m: float) -> ND
     y_old = np.arange(r_old) * hf.cell_size_m
     x_new = np.minimum(np.arange(cols) * post_m, x_old[-1])
     y_new = np.minimum(np.arange(rows) * post_m, y_old[-1])
-    tmp = make_interp_spline(x_old, hf.z_m.astype(np.float64), k=3, axis=1)(x_new)
-    return make_interp_spline(y_old, tmp, k=3, axis=0)(y_new).astype(np.float32)
+    # cubic where there are enough posts (a not-a-knot cubic needs 4), else linear
+    kx, ky = (3 if n >= 4 else 1 for n in (c_old, r_old))
+    tmp = make_interp_spline(x_old, hf.z_m.astype(np.float64), k=kx, axis=1)(x_new)
+    return make_interp_spline(y_old, tmp, k=ky, axis=0)(y_new).astype(np.float32)
 
 
 def _target_shape(hf: Heightfield, post_m: float) -> tuple[int, int]:

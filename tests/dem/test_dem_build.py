@@ -129,7 +129,7 @@ def test_cli_build_with_dem_ortho_and_crop(tmp_path: Path, runner,  # type: igno
     assert doc["frame"]["z_scale"] == 1.5
     assert doc["config"]["terrain"]["crop_px"] == [10, 20, 60, 80]
     assert set(doc["inputs"]) == {"dem", "ortho", "ortho_data"}
-    assert doc["inputs"]["ortho_data"]["path"].endswith(".JP2")
+    assert doc["inputs"]["ortho_data"]["name"].endswith(".JP2")
     assert len(doc["inputs"]["ortho_data"]["sha256"]) == 64
     assert doc["summary"]["dem_product_id"] == "DTEEC_045994_1985_046060_1985_U01"
 
