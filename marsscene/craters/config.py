@@ -134,8 +134,11 @@ class CraterConfig:
     """Radius (in crater radii) at which the ejecta blanket reaches zero."""
     degradation: str = "diffusion"
     """``"diffusion"`` (topographic diffusion with age) or ``"none"`` (all craters fresh)."""
-    diffusivity_m2_per_myr: float = 0.01
-    """Topographic diffusivity kappa (in m^2/Myr) used for degradation."""
+    diffusivity_m2_per_myr: float = 0.0
+    """Background (non-impact, e.g. aeolian) topographic diffusivity (in m^2/Myr), added to the
+    impact-driven degradation implied by the equilibrium. 0 keeps the recognisable craters at
+    ``min(production, equilibrium)``; a positive value removes small craters faster and lowers
+    their density below equilibrium (see docs/craters.md for published Mars values)."""
     axis_ratio_min: float = 1.0
     """Minor/major axis ratio drawn uniformly in [axis_ratio_min, 1] (1 = circular)."""
     resurfacing: tuple[ResurfacingEvent, ...] = ()

@@ -39,11 +39,15 @@ def crater_models(config: CraterConfig) -> list[tuple[str, str]]:
     out.append((f"crater profile {config.profile}",
                 PROFILE_CITATIONS[config.profile]))
     if config.degradation == "diffusion":
+        background = (f"; background kappa = {config.diffusivity_m2_per_myr} m^2/Myr"
+                      if config.diffusivity_m2_per_myr > 0 else "")
         out.append((
             "crater degradation by topographic diffusion",
-            f"linear diffusion (Culling 1960; Soderblom 1970, doi:10.1029/JB075i014p02655), "
-            f"kappa = {config.diffusivity_m2_per_myr} m^2/Myr (placeholder, not a fitted Mars "
-            "value) or the equilibrium-consistent kappa_eq(D)",
+            "linear diffusion (Culling 1960; Soderblom 1970, doi:10.1029/JB075i014p02655), "
+            "impact-driven on the crater-count clock so that craters stay recognisable "
+            "(s <= 0.6) exactly until their size reaches the Hartmann (1984) equilibrium "
+            "(size-dependent diffusivity as in Fassett & Thomson 2014, "
+            f"doi:10.1002/2014JE004698){background}",
         ))
     if config.resurfacing:
         out.append(("partial resurfacing forward model", RESURFACING_CITATION))

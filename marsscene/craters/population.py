@@ -1,22 +1,36 @@
 """Seeded crater populations (SCIENCE.md sections 2.5-2.6, 4.1).
 
+The catalogue holds the *recognisable* craters of a surface: those whose relief has not been
+degraded below the recognisability limit ``s <= S_ERASE`` (see :mod:`.morphology`). Their
+cumulative density follows ``min(production isochron, equilibrium)`` at every diameter, the
+density that crater counters see on old surfaces (Hartmann 1984), with the degradation states
+of a steady-state population: young craters fresh, older ones shallower.
+
 Algorithm (all vectorised):
 
 1. Tabulate the production function of a surface of age ``T`` on a fine log-D grid over
    [``d_min_m``, ``d_max_m``]; the mass of each cell is ``N(>=D_i) - N(>=D_i+1)``.
-2. Equilibrium cap (Hartmann 1984): per cell, the visible mass is ``min(production,
-   equilibrium)`` (a *differential* cap, so the cumulative density never exceeds equilibrium);
-   equivalently a crater of size D is erased when older than its equilibrium age
-   ``t_eq(D)`` with ``N1(t_eq) = N1(T) * mass_eq / mass_prod``.
+2. Equilibrium (Hartmann 1984): per cell, the recognisable mass is ``min(production,
+   equilibrium)`` (a *differential* cap, so the cumulative density never exceeds equilibrium).
+   Equivalently, a crater of size D stays recognisable while fewer than ``N1_eq(D) = N1(T) *
+   mass_eq / mass_prod`` craters >= 1 km per km^2 (the crater-count clock) have formed since
+   it did; for sizes below equilibrium ``N1_eq > N1(T)``.
 3. Each cell's mass is multiplied by the area of the scene grown by the crater's footprint
    reach (``ejecta_reach * R``) so craters centred outside whose ejecta or rim crosses the edge
    are included; the count is ``Poisson(sum)``.
 4. Diameters: cell by inverse CDF, then the exact local power law inside the cell.
-5. Formation ages: ``tau = N1^-1(u * N1(min(T, t_eq(D))))`` (the PF shape is time-invariant).
-6. Positions uniform in the grown box (corners beyond the reach rejected), optional
-   ellipticity; resurfacing events; degradation by diffusion for ``kappa * tau``; craters whose
-   relief fell below ~25 % of fresh (``s > S_ERASE = 0.6``) are no longer recognisable and
-   are dropped (counted as degraded away).
+5. Formation ages, uniform in the crater-count clock: ``N1(tau) = u * min(N1(T), N1_eq(D))``
+   (the PF shape is time-invariant).
+6. Degradation (topographic diffusion, ``s = sqrt(2 K) / R`` with ``K`` the accumulated
+   diffusivity-time): impact-driven, ``K_imp = (S_ERASE R)^2 / 2 * N1(tau) / N1_eq(D)``, so a
+   crater reaches the limit exactly when its size reaches equilibrium (a diffusivity growing
+   about linearly with D, as found for the Moon by Fassett & Thomson 2014); plus an optional
+   background ``kappa_bg * tau`` (``diffusivity_m2_per_myr``, aeolian infill, default 0),
+   which removes small craters faster and lowers their density *below* equilibrium, as
+   observed on parts of Mars. Craters beyond ``S_ERASE`` are dropped (``degraded_away``: 0
+   unless a background diffusivity is set).
+7. Positions uniform in the grown box (corners beyond the reach rejected), optional
+   ellipticity; resurfacing events.
 """
 
 from __future__ import annotations
@@ -50,7 +64,7 @@ MAX_CRATERS = 5e6
 
 @dataclass(frozen=True, eq=False)
 class SizeDistribution:
-    """Tabulated visible crater density of a surface on log-spaced diameter cells.
+    """Tabulated recognisable crater density of a surface on log-spaced diameter cells.
 
     Attributes
     ----------
@@ -59,32 +73,47 @@ class SizeDistribution:
     production_cum_per_km2 : ndarray of shape (n + 1,)
         Production isochron N(>=D) at the edges (per km^2).
     visible_mass_per_km2 : ndarray of shape (n,)
-        Craters per km^2 in each cell after the equilibrium cap.
+        Recognisable craters per km^2 in each cell (``min(production, equilibrium)``).
+    n1_eq_per_km2 : ndarray of shape (n,)
+        Crater-count clock ``N1`` (craters >= 1 km per km^2 formed since) at which a crater of
+        the cell becomes unrecognisable; ``inf`` without an equilibrium.
     age_cap_ga : ndarray of shape (n,)
-        Oldest surviving formation age in each cell (``min(T, t_eq)``) (in Ga).
+        Oldest recognisable formation age in each cell (``min(T, t_eq)``) (in Ga).
     """
 
     edges_m: FloatArray
     production_cum_per_km2: FloatArray
     visible_mass_per_km2: FloatArray
+    n1_eq_per_km2: FloatArray
     age_cap_ga: FloatArray
 
 
 def size_distribution(config: CraterConfig, *, n_cells: int = _N_CELLS) -> SizeDistribution:
-    """Tabulate the (equilibrium-capped) crater density of ``config``'s surface."""
+    """Tabulate the recognisable crater density of ``config``'s surface."""
     edges = np.geomspace(config.d_min_m, config.d_max_m, n_cells + 1)
     n1_t = float(n1_per_km2(config.age_ga, system=config.system))
     cum = production_shape(edges, system=config.system) * n1_t
     mass = cum[:-1] - cum[1:]
     cap = np.full(n_cells, float(config.age_ga))
+    n1_eq = np.full(n_cells, np.inf)
     if config.equilibrium == "hartmann-1984":
+        # the cumulative cap V(D) = min(PF(>=D), EQ(>=D)); a differential cap (min of the cell
+        # masses) would fall up to ~20 % below it above the crossover, where the PF is steeper
         eq = equilibrium_density_per_km2(edges)
-        mass_eq = eq[:-1] - eq[1:]
-        capped = mass_eq < mass
-        frac = np.where(capped, mass_eq / np.where(mass > 0, mass, 1.0), 1.0)
-        cap = np.where(capped, age_from_n1_ga(frac * n1_t, system=config.system), cap)
-        mass = np.minimum(mass, mass_eq)
-    return SizeDistribution(edges, cum, mass, cap)
+        vis = np.minimum(cum, eq)
+        vis_mass = np.minimum(vis[:-1] - vis[1:], mass)
+        frac = np.divide(vis_mass, mass, out=np.ones_like(mass), where=mass > 0)
+        mid = np.sqrt(edges[:-1] * edges[1:])
+        to_eq = (equilibrium_density_per_km2(mid)
+                 / (production_shape(mid, system=config.system) * n1_t))
+        capped = frac < 1.0 - 1e-12
+        # lifetime on the crater-count clock: the recognisable fraction of the production for
+        # capped cells; the time for the isochron to reach equilibrium (>= T) otherwise
+        n1_eq = n1_t * np.where(capped, frac, np.maximum(to_eq, 1.0))
+        cap = np.where(capped, age_from_n1_ga(np.minimum(n1_eq, n1_t), system=config.system),
+                       cap)
+        mass = vis_mass
+    return SizeDistribution(edges, cum, mass, n1_eq, cap)
 
 
 @dataclass(frozen=True)
@@ -101,10 +130,10 @@ class PopulationStats:
 
 
 def _relief_fn(
-    config: CraterConfig, fam: ProfileFamily, cap_ga: FloatArray
-) -> Callable[[FloatArray, FloatArray], FloatArray]:
-    def relief(d_m: FloatArray, elapsed_ga: FloatArray) -> FloatArray:
-        state = fam.state_of_s(_s_of(config, d_m, elapsed_ga, cap_ga))
+    config: CraterConfig, fam: ProfileFamily, n1_eq: FloatArray
+) -> Callable[[FloatArray, FloatArray, FloatArray], FloatArray]:
+    def relief(d_m: FloatArray, formed_ga: FloatArray, at_ga: FloatArray) -> FloatArray:
+        state = fam.state_of_s(_s_of(config, d_m, n1_eq, formed_ga, at_ga))
         return np.asarray(
             d_m * np.interp(state, np.arange(fam.s.size), fam.depth_over_d + fam.rim_over_d),
             dtype=np.float64,
@@ -114,24 +143,28 @@ def _relief_fn(
 
 
 def _s_of(
-    config: CraterConfig, d_m: FloatArray, age_ga: FloatArray, cap_ga: FloatArray
+    config: CraterConfig,
+    d_m: FloatArray,
+    n1_eq: FloatArray,
+    formed_ga: FloatArray,
+    at_ga: FloatArray | float = 0.0,
 ) -> FloatArray:
-    """Diffusion length over radius, ``sqrt(2 kappa tau) / R``.
+    """Diffusion length over radius, ``sqrt(2 K) / R``, of craters formed ``formed_ga`` ago,
+    seen ``at_ga`` ago (0: today).
 
-    ``kappa = max(diffusivity_m2_per_myr, kappa_eq(D))``: for sizes capped at equilibrium,
-    ``kappa_eq = (S_ERASE R)^2 / (2 t_eq(D))`` degrades a crater to the erased state exactly at its
-    equilibrium age, so the cap acts by degradation rather than by sudden removal.
+    ``2 K / R^2 = S_ERASE^2 * dN1 / N1_eq(D) + 2 kappa_bg dt / R^2``: the impact-driven part
+    runs on the crater-count clock ``dN1 = N1(formed) - N1(at)`` and reaches ``S_ERASE`` when
+    the crater's size class reaches equilibrium; the background part on time.
     """
     if config.degradation == "none":
         return np.zeros_like(d_m)
     radius = d_m / 2.0
-    kappa = np.full(d_m.shape, config.diffusivity_m2_per_myr)
-    if config.equilibrium != "none":
-        capped = cap_ga < config.age_ga
-        k_eq = (S_ERASE * radius) ** 2 / (2.0 * np.maximum(cap_ga, 1e-12) * 1e3)
-        kappa = np.where(capped, np.maximum(kappa, k_eq), kappa)
-    kappa_t = kappa * age_ga * 1e3  # m^2
-    return np.asarray(np.sqrt(2.0 * kappa_t) / radius, dtype=np.float64)
+    at = np.minimum(np.asarray(at_ga, dtype=np.float64), formed_ga)
+    dn1 = n1_per_km2(formed_ga, system=config.system) - n1_per_km2(at, system=config.system)
+    with np.errstate(divide="ignore"):
+        s2 = S_ERASE**2 * np.maximum(dn1, 0.0) / n1_eq
+    s2 = s2 + 2.0 * config.diffusivity_m2_per_myr * (formed_ga - at) * 1e3 / radius**2
+    return np.asarray(np.sqrt(s2), dtype=np.float64)
 
 
 def sample_craters(
@@ -198,8 +231,8 @@ def sample_craters(
     v = rng.random(n)
     diameter = d_lo * ((c_lo - v * (c_lo - c_hi)) / c_lo) ** (1.0 / k)
     diameter = np.clip(diameter, d_lo, d_hi)
-    cap = dist.age_cap_ga[cell]
-    n1_cap = n1_per_km2(cap, system=config.system)
+    n1_eq = dist.n1_eq_per_km2[cell]
+    n1_cap = np.minimum(n1_eq, n1_per_km2(config.age_ga, system=config.system))
     age = age_from_n1_ga(rng.random(n) * n1_cap, system=config.system)
     if config.axis_ratio_min < 1.0:
         ratio = rng.uniform(config.axis_ratio_min, 1.0, n)
@@ -224,13 +257,13 @@ def sample_craters(
         ]
         alive = erase_by_events(
             diameter, age, weights, config.resurfacing,
-            relief_at=_relief_fn(config, fam, cap), rng=rng,
+            relief_at=_relief_fn(config, fam, n1_eq), rng=rng,
         )
     else:
         alive = np.ones(n, dtype=bool)
     n_resurfaced = int((keep & ~alive).sum())
     keep &= alive
-    s = _s_of(config, diameter, age, cap)
+    s = _s_of(config, diameter, n1_eq, age)
     gone = s > S_ERASE * (1 + 1e-9)
     n_degraded = int((keep & gone).sum())
     keep &= ~gone

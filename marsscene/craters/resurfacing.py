@@ -127,7 +127,7 @@ def erase_by_events(
     weights: Sequence[FloatArray],
     events: Sequence[ResurfacingEvent],
     *,
-    relief_at: Callable[[FloatArray, FloatArray], FloatArray],
+    relief_at: Callable[[FloatArray, FloatArray, FloatArray], FloatArray],
     rng: np.random.Generator,
 ) -> NDArray[np.bool_]:
     """Which craters survive a sequence of resurfacing events.
@@ -141,8 +141,8 @@ def erase_by_events(
     events : sequence of ResurfacingEvent
         Applied oldest first (sorted here).
     relief_at : callable
-        ``relief_at(diameter_m, elapsed_ga)`` -> floor depth + rim height (in m) of craters
-        degraded for ``elapsed_ga`` (used by the burial rule).
+        ``relief_at(diameter_m, formed_ga, at_ga)`` -> floor depth + rim height (in m) of
+        craters formed ``formed_ga`` ago, degraded until ``at_ga`` ago (the burial rule).
     rng : numpy.random.Generator
 
     Returns
@@ -156,7 +156,7 @@ def erase_by_events(
         ev = events[i]
         u = rng.random(diameter_m.shape)  # one draw per crater and event: stable streams
         before = age_ga > ev.age_ga
-        relief = relief_at(diameter_m, np.maximum(age_ga - ev.age_ga, 0.0))
+        relief = relief_at(diameter_m, age_ga, np.full(age_ga.shape, ev.age_ga))
         p = weights[i] * _rule_probability(ev, diameter_m, relief)
         alive &= ~(before & (u < p))
     return alive
