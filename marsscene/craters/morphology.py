@@ -164,6 +164,12 @@ class ProfileFamily:
         return np.asarray(np.interp(np.asarray(state, dtype=np.float64), rows, self.s),
                           dtype=np.float64)
 
+    def recognisable_depth_over_d(self) -> float:
+        """Floor depth over D at the recognisability limit ``s = S_ERASE``: shallower craters
+        are no longer counted (the population sampler drops them)."""
+        state = float(self.state_of_s(S_ERASE))
+        return float(np.interp(state, np.arange(self.s.size), self.depth_over_d))
+
     def state_of_s(self, s: ArrayLike) -> FloatArray:
         """Fractional row index of given ``s`` values (clipped to the table)."""
         rows = np.arange(self.s.size, dtype=np.float64)
