@@ -101,22 +101,28 @@ def laser_scan(scan: NDArray[Any], lidar: dict[str, Any]) -> dict[str, Any]:
             "intensities": inten, "ring": ring, "elevation_deg": float(elev[ring])}
 
 
+#: The run's depth PNGs saturate here (>= 65.535 m, e.g. the sky).
+FAR_MM = 65535
+
+
 def depth_m(depth_mm: NDArray[np.uint16]) -> NDArray[np.float32]:
-    """uint16 mm (0 = no return) -> float32 m with NaN for no return (REP-118)."""
+    """uint16 mm -> float32 m (REP-118): 0 (no return) -> NaN, 65535 (too far) -> +inf."""
     d = depth_mm.astype(np.float32) * np.float32(0.001)
     d[depth_mm == 0] = np.nan
+    d[depth_mm == FAR_MM] = np.inf
     return d
 
 
 def depth_points(
     depth_mm: NDArray[np.uint16], k: NDArray[np.float64], stride_px: int
 ) -> NDArray[np.float32]:
-    """Organised (H/s, W/s, 3) float32 points in the optical frame; NaN where there is no return."""
-    d = depth_mm[::stride_px, ::stride_px].astype(np.float32) * np.float32(0.001)
+    """Organised (H/s, W/s, 3) float32 points in the optical frame; NaN: no return or too far."""
+    mm = depth_mm[::stride_px, ::stride_px]
+    d = mm.astype(np.float32) * np.float32(0.001)
     h, w = d.shape
     v, u = np.mgrid[0:h, 0:w].astype(np.float32) * np.float32(stride_px)
     x = (u - np.float32(k[0, 2])) / np.float32(k[0, 0]) * d
     y = (v - np.float32(k[1, 2])) / np.float32(k[1, 1]) * d
     pts = np.stack([x, y, d], axis=-1)
-    pts[d == 0] = np.nan
+    pts[(mm == 0) | (mm == FAR_MM)] = np.nan
     return pts

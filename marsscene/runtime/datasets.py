@@ -14,6 +14,7 @@ Commands to run ORB-SLAM3 on them: ``docs/ros.md``.
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
@@ -131,7 +132,7 @@ def _euroc(run: RunLog, cams: list[CameraStream], statics: list, out: Path) -> N
             f"sensor_type: camera\ncomment: marsscene {camera_frame(cam.name)}\n"
             + _t_bs(tbc) + f"rate_hz: {_rate(cam.stamps_s):g}\n"
             f"resolution: [{i['width']}, {i['height']}]\ncamera_model: pinhole\n"
-            f"intrinsics: [{i['fx']!r}, {i['fy']!r}, {i['cx']!r}, {i['cy']!r}]\n"
+            f"intrinsics: [{i['fx']:.9g}, {i['fy']:.9g}, {i['cx']:.9g}, {i['cy']:.9g}]\n"
             "distortion_model: radial-tangential\ndistortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n"
         )
         if k == 0:
@@ -147,8 +148,8 @@ def _euroc(run: RunLog, cams: list[CameraStream], statics: list, out: Path) -> N
     (imu / "sensor.yaml").write_text(
         "sensor_type: imu\ncomment: marsscene IMU (body = base_link), white noise + constant "
         "bias\n" + _t_bs(np.eye(4)) + f"rate_hz: {_rate(run.imu[:, 0]):g}\n"
-        f"gyroscope_noise_density: {nd[0]!r}\ngyroscope_random_walk: 0.0\n"
-        f"accelerometer_noise_density: {nd[1]!r}\naccelerometer_random_walk: 0.0\n"
+        f"gyroscope_noise_density: {nd[0]:.9g}\ngyroscope_random_walk: 0.0\n"
+        f"accelerometer_noise_density: {nd[1]:.9g}\naccelerometer_random_walk: 0.0\n"
     )
     gt = mav / "state_groundtruth_estimate0"
     gt.mkdir()
@@ -191,7 +192,7 @@ def _rate(stamps: NDArray[np.float64]) -> float:
 def _noise_density(run: RunLog) -> tuple[float, float]:
     """Continuous-time white-noise densities: sigma_discrete / sqrt(rate) (per sqrt(Hz))."""
     noise, rate = run.meta.get("noise", {}), _rate(run.imu[:, 0])
-    root = np.sqrt(rate) if rate > 0 else 1.0
+    root = math.sqrt(rate) if rate > 0 else 1.0
     return (float(noise.get("gyro_sigma_rad_s", 0.0)) / root,
             float(noise.get("accel_sigma_m_s2", 0.0)) / root)
 

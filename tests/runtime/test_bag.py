@@ -108,17 +108,21 @@ def test_images_and_camera_info_match_the_run(bag_msgs, stereo_run):
     assert depth.encoding == "32FC1" and depth.step * depth.height == len(depth.data)
     metres = depth.data.view("<f4").reshape(60, 80)
     mm = read_image(cam.depth_files[5])
-    np.testing.assert_allclose(metres[mm > 0], mm[mm > 0] / 1000.0, rtol=1e-6)
-    assert np.isnan(metres[mm == 0]).all()
+    ok = (mm > 0) & (mm < 65535)
+    np.testing.assert_allclose(metres[ok], mm[ok] / 1000.0, rtol=1e-6)
+    assert np.isnan(metres[mm == 0]).all() and np.isposinf(metres[mm == 65535]).all()
+    assert ok.any() and (mm == 65535).any()  # ground and sky both in view
     _, cloud = msgs["/rover/depth/points"][5]
     pts = np.frombuffer(cloud.data.tobytes(), "<f4").reshape(cloud.height, cloud.width, 3)
     assert (cloud.height, cloud.width) == (15, 20)  # stride 4
-    sub = mm[::4, ::4] / 1000.0
-    np.testing.assert_allclose(pts[..., 2][sub > 0], sub[sub > 0], rtol=1e-6)
-    v, u = 8 * 4, 15 * 4  # a pixel reprojects through K
-    if mm[v, u] > 0:
-        np.testing.assert_allclose(pts[8, 15, 0], (u - cam.k[0, 2]) / cam.k[0, 0] * mm[v, u] / 1e3,
-                                   rtol=1e-5)
+    sub, ok4 = mm[::4, ::4] / 1000.0, ok[::4, ::4]
+    np.testing.assert_allclose(pts[..., 2][ok4], sub[ok4], rtol=1e-6)
+    assert np.isnan(pts[~ok4]).all()
+    v, u = np.nonzero(ok4)  # pixels reproject through K
+    np.testing.assert_allclose(pts[v, u, 0], (4 * u - cam.k[0, 2]) / cam.k[0, 0] * sub[v, u],
+                               rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(pts[v, u, 1], (4 * v - cam.k[1, 2]) / cam.k[1, 1] * sub[v, u],
+                               rtol=1e-5, atol=1e-6)
     # stereo: right camera_info carries Tx = -fx * baseline (ROS convention)
     _, right = msgs["/rover/stereo/right/camera_info"][0]
     assert right.p[3] == pytest.approx(-cam.k[0, 0] * 0.3)
