@@ -269,3 +269,9 @@ def test_cli_bag_and_drive_bag(runner, bag_run, gentle_scene, tmp_path):
     assert res.exit_code == 0, res.output
     msgs, _ = _read_rosbags(out / "bag")
     assert len(msgs["/rover/odom"]) == len(read_tum(out / "odom.tum"))
+    before = (out / "gt.tum").read_bytes()
+    (out / "gt.tum").write_text("# marker\n" + before.decode())
+    res = runner.invoke(main, ["drive", str(gentle_scene), "--waypoints", str(wp),
+                               "--seconds", "2", "--out", str(out), "--bag"])
+    assert res.exit_code == 1 and "--overwrite" in res.output  # refused before driving
+    assert (out / "gt.tum").read_text().startswith("# marker")
