@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import sys
+from contextlib import ExitStack
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -27,6 +30,14 @@ def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool) -
     """
     from marsscene.runtime.datasets import export_dataset
 
-    with user_errors():
-        out = export_dataset(run_dir, fmt, out_dir, overwrite=overwrite)
+    with user_errors(), ExitStack() as stack:
+        bars: list[Any] = []
+
+        def progress(done: int, total: int) -> None:  # the bar starts once the input is valid
+            if not bars:
+                bars.append(stack.enter_context(click.progressbar(
+                    length=total, label=f"writing {fmt} (images)", file=sys.stderr)))
+            bars[0].update(1)
+
+        out = export_dataset(run_dir, fmt, out_dir, overwrite=overwrite, progress=progress)
     click.echo(f"  {fmt}: {out}")

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -40,12 +41,14 @@ def export_dataset(
     out_dir: str | os.PathLike[str] | None = None,
     *,
     overwrite: bool = False,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Path:
     """Write ``RUN_DIR`` as a ``tum-rgbd`` or ``euroc`` folder (default ``RUN_DIR/<format>``).
 
     Needs camera logs (``euroc`` also uses ``camera/left`` and ``camera/right`` when present);
     a camera-less run raises :class:`~marsscene.errors.RuntimeSimError`, an existing output
-    folder :class:`~marsscene.errors.ExportError` unless ``overwrite``. Returns the folder.
+    folder :class:`~marsscene.errors.ExportError` unless ``overwrite``. ``progress(done,
+    total)`` is called per image written. Returns the folder.
     """
     if fmt not in FORMATS:
         raise ExportError(f"format = {fmt!r}; expected one of {', '.join(FORMATS)}")
@@ -59,12 +62,20 @@ def export_dataset(
     final = Path(out_dir) if out_dir is not None else run.path / fmt.replace("-", "_")
     stereo = [c for c in cams[1:] if c.name in ("left", "right")]
     statics = static_transforms(run.rover, {c.name: c.intrinsics for c in stereo})
+    pair = sorted(stereo, key=lambda c: c.name)  # left, right
+    used = [cams[0]] if fmt == "tum-rgbd" or len(pair) != 2 else pair
+    total = sum(len(c.stamps_s) for c in used)
+    done = iter(range(1, total + 1))
+
+    def tick() -> None:
+        if progress is not None:
+            progress(next(done), total)
+
     with replace_dir(final, overwrite=overwrite) as tmp:
         if fmt == "tum-rgbd":
-            _tum_rgbd(run, cams[0], statics, tmp)
+            _tum_rgbd(run, cams[0], statics, tmp, tick)
         else:
-            pair = sorted(stereo, key=lambda c: c.name)  # left, right
-            _euroc(run, pair if len(pair) == 2 else [cams[0]], statics, tmp)
+            _euroc(run, used, statics, tmp, tick)
     return final
 
 
@@ -82,7 +93,9 @@ def _lines(rows: list[str], head: str) -> str:
     return head + "".join(r + "\n" for r in rows)
 
 
-def _tum_rgbd(run: RunLog, cam: CameraStream, statics: list, out: Path) -> None:
+def _tum_rgbd(
+    run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None]
+) -> None:
     (out / "rgb").mkdir(parents=True)
     (out / "depth").mkdir()
     stamps = [f"{t:.6f}" for t in cam.stamps_s]
@@ -91,6 +104,7 @@ def _tum_rgbd(run: RunLog, cam: CameraStream, statics: list, out: Path) -> None:
         mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // 1000)
         (out / "depth" / f"{s}.png").write_bytes(
             png_bytes(np.where(mm > 65535, 0, mm).astype(np.uint16)))
+        tick()
     src = f"# file: marsscene run {run.path.name}\n"
     (out / "rgb.txt").write_text(_lines([f"{s} rgb/{s}.png" for s in stamps],
                                         "# color images\n" + src + "# timestamp filename\n"))
@@ -114,7 +128,9 @@ def _tum_rgbd(run: RunLog, cam: CameraStream, statics: list, out: Path) -> None:
     ) + _ORB_TAIL)
 
 
-def _euroc(run: RunLog, cams: list[CameraStream], statics: list, out: Path) -> None:
+def _euroc(
+    run: RunLog, cams: list[CameraStream], statics: list, out: Path, tick: Callable[[], None]
+) -> None:
     mav = out / "mav0"
     t_b_c = [frame_in_base(statics, camera_frame(c.name)) for c in cams]
     for k, (cam, tbc) in enumerate(zip(cams, t_b_c, strict=True)):
@@ -125,6 +141,7 @@ def _euroc(run: RunLog, cams: list[CameraStream], statics: list, out: Path) -> N
             img = read_image(rgb)
             mono = img if img.ndim == 2 else np.round(img @ [0.299, 0.587, 0.114]).astype(np.uint8)
             (d / "data" / f"{n}.png").write_bytes(png_bytes(mono))
+            tick()
         (d / "data.csv").write_text(_lines([f"{n},{n}.png" for n in ns],
                                            "#timestamp [ns],filename\n"))
         i = cam.intrinsics

@@ -63,7 +63,9 @@ def test_tum_rgbd_export_equals_the_run(bag_run, tmp_path) -> None:
 
 
 def test_euroc_export_equals_the_run(stereo_run, tmp_path) -> None:
-    out = export_dataset(stereo_run, "euroc", tmp_path / "euroc")
+    calls: list[tuple[int, int]] = []
+    out = export_dataset(stereo_run, "euroc", tmp_path / "euroc",
+                         progress=lambda d, n: calls.append((d, n)))
     run = RunLog(stereo_run)
     cams = {c.name: c for c in run.camera_streams()}
     for k, side in enumerate(("left", "right")):
@@ -73,6 +75,8 @@ def test_euroc_export_equals_the_run(stereo_run, tmp_path) -> None:
                                       np.round(cams[side].stamps_s * 1e9).astype(np.int64))
         for (_, f), src in zip(rows, cams[side].rgb_files, strict=True):
             np.testing.assert_array_equal(read_image(d / "data" / f), read_image(src))
+    n = 2 * len(cams["left"].stamps_s)
+    assert calls == [(i, n) for i in range(1, n + 1)]  # one call per image written
     # cam1 sits 0.3 m to the right of cam0: T_c1_c2 = +x 0.3 m, no rotation
     settings = (out / "orbslam3_stereo_inertial.yaml").read_text()
     np.testing.assert_allclose(_yaml_matrix(settings, "Stereo.T_c1_c2"),
