@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from marsscene.errors import RuntimeSimError
 from marsscene.runtime import bag_data as bd
 from marsscene.runtime.frames import camera_frame, rover_urdf, static_transforms
 from marsscene.runtime.rover import DRIVE_JOINTS, STEER_JOINTS
@@ -153,6 +154,8 @@ def add_lidar(
     bag: MessageBuilder, run: RunLog, stamps: np.ndarray, files: tuple[Path, ...]
 ) -> None:
     cfg = run.meta.get("lidar") or {}
+    if "channels" not in cfg:
+        raise RuntimeSimError(f"{run.path / 'run.json'} has no LiDAR configuration")
     bag.topic("/rover/lidar/points", "sensor_msgs/msg/PointCloud2")
     bag.topic("/rover/scan", "sensor_msgs/msg/LaserScan")
     scan_t = bag.T["sensor_msgs/msg/LaserScan"]

@@ -171,6 +171,10 @@ class RunLog:
             for p in sorted(root.iterdir())
             if p.is_dir() and (p / "stamps.csv").is_file()
         ]
+        base = (self.meta.get("camera") or {}).get("stereo_baseline_m")
+        for cam in extra:  # the run's camera config may carry the stereo baseline
+            if base is not None and "baseline_m" not in cam.intrinsics:
+                cam.intrinsics.setdefault("stereo_baseline_m", base)
         return [main, *extra]
 
 

@@ -275,3 +275,27 @@ def test_cli_bag_and_drive_bag(runner, bag_run, gentle_scene, tmp_path):
                                "--seconds", "2", "--out", str(out), "--bag"])
     assert res.exit_code == 1 and "--overwrite" in res.output  # refused before driving
     assert (out / "gt.tum").read_text().startswith("# marker")
+
+
+def test_stereo_placement_from_run_config_or_refused(stereo_run, tmp_path):
+    run = tmp_path / "run"
+    shutil.copytree(stereo_run, run, ignore=shutil.ignore_patterns("bag"))
+    for side in ("left", "right"):
+        path = run / "camera" / side / "intrinsics.json"
+        intr = json.loads(path.read_text())
+        del intr["baseline_m"]
+        path.write_text(json.dumps(intr))
+    with pytest.raises(RuntimeSimError, match="cannot place it"):
+        write_bag(run, sensors=["stereo"])
+    assert not (run / "bag").exists()
+    meta = json.loads((run / "run.json").read_text())
+    meta["camera"]["stereo_baseline_m"] = 0.2
+    (run / "run.json").write_text(json.dumps(meta))
+    msgs, _ = _read_rosbags(write_bag(run, sensors=["stereo"]).path)
+    right = msgs["/rover/stereo/right/camera_info"][0][1]
+    assert right.p[3] == pytest.approx(-right.k[0] * 0.2)
+    (tf_static,) = [m for _, m in msgs["/tf_static"]]
+    y = {t.child_frame_id: t.transform.translation.y for t in tf_static.transforms}
+    assert y["stereo_left_optical_frame"] == pytest.approx(0.1)
+    assert y["stereo_right_optical_frame"] == pytest.approx(-0.1)
+    assert "/rover/rgb/image_raw" not in msgs and "/rover/scan" not in msgs
