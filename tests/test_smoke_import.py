@@ -9,7 +9,8 @@ import sys
 def test_import_pulls_no_heavy_dependencies() -> None:
     code = (
         "import sys, marsscene\n"
-        "heavy = [m for m in ('pxr', 'mujoco', 'coacd', 'click', 'rasterio') if m in sys.modules]\n"
+        "heavy = ('pxr', 'mujoco', 'coacd', 'click', 'rasterio', 'rosbags', 'mcap')\n"
+        "heavy = [m for m in heavy if m in sys.modules]\n"
         "print(','.join(heavy))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -60,9 +60,11 @@ def main(verbose: int, quiet: int) -> None:
 
 
 def _register() -> None:
+    from marsscene.cli.bag import bag
     from marsscene.cli.build import build
     from marsscene.cli.drive import drive
     from marsscene.cli.eval import eval_cmd
+    from marsscene.cli.export import export_cmd
     from marsscene.cli.info import info
     from marsscene.cli.sun import sun
 
@@ -71,6 +73,8 @@ def _register() -> None:
     main.add_command(sun)
     main.add_command(drive)
     main.add_command(eval_cmd)
+    main.add_command(bag)
+    main.add_command(export_cmd)
 
 
 _register()

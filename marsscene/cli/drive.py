@@ -11,6 +11,7 @@ from typing import Any
 import click
 
 from marsscene.cli._common import user_errors
+from marsscene.cli.bag import bag_options, write_run_bag
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
 
@@ -93,6 +94,10 @@ def _read_waypoints(path: Path) -> Any:
     help="Only MJCF rocks within this distance of the route are simulated (m); widened to "
     "the LiDAR range / camera window when those sensors are on.",
 )
+@click.option("--bag", "write_bag", is_flag=True,
+              help="Also write RUN_DIR/bag, a ROS 2 bag of the run (see `marsscene bag`).")
+@click.option("--overwrite", is_flag=True, help="With --bag: replace an existing RUN_DIR/bag.")
+@bag_options
 def drive(
     scene_dir: Path,
     route_path: Path | None,
@@ -107,6 +112,9 @@ def drive(
     max_slope: float,
     write_rover_xml: bool,
     corridor: float,
+    write_bag: bool = False,
+    overwrite: bool = False,
+    **bag_opts: Any,
 ) -> None:
     """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz).
 
@@ -117,6 +125,8 @@ def drive(
     """
     if (route_path is None) == (waypoints_path is None):
         raise click.UsageError("give exactly one of --route or --waypoints")
+    if write_bag and (out_dir / "bag").exists() and not overwrite:
+        raise click.ClickException(f"{out_dir / 'bag'} exists; pass --overwrite to replace it")
     from marsscene.runtime import (
         CameraConfig,
         LidarConfig,
@@ -203,3 +213,9 @@ def drive(
         f"{s['goal_reached']}, cross-track RMS {s.get('cross_track_rms_m', float('nan')):.3f} m"
     )
     click.echo(f"    logs: {out_dir}")
+    if write_bag:
+        t0 = time.perf_counter()
+        with user_errors():
+            write_run_bag(out_dir, None, overwrite=overwrite, **bag_opts)
+        click.echo(f"          bag written in {time.perf_counter() - t0:.1f} s "
+                   f"(drive: {wall:.1f} s)")

@@ -117,6 +117,7 @@ def drive(
             ],
         )
         logs["imu"] = CsvLog(out / "imu.csv", ["t", "ax", "ay", "az", "gx", "gy", "gz"])
+        logs["imu_true"] = CsvLog(out / "imu_true.csv", ["t", "ax", "ay", "az", "gx", "gy", "gz"])
         if lidar is not None:
             logs["lidar"] = CsvLog(out / "lidar" / "stamps.csv", ["t", "file", "points"])
         if renderer is not None:
@@ -161,6 +162,7 @@ def drive(
             acc, gyr = imu_measure(acc_true, gyr_true, run.noise, rng=rng)
             if logs:
                 logs["imu"].row(t, (*acc, *gyr))
+                logs["imu_true"].row(t, (*acc_true, *gyr_true))
             if keep_sensors:
                 imu_rows.append(np.concatenate([[t], acc, gyr]))
         if lidar is not None and k % periods["lidar"] == 0:

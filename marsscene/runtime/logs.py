@@ -9,6 +9,7 @@ Run folder layout (all stamps in s on the simulation clock, t = 0 after settling
       cmd.csv             t, v (m/s), omega (rad/s) sent to the rover
       wheels.csv          t, measured wheel rates (rad/s) x6, steering angles (rad) x4
       imu.csv             t, ax ay az (m/s^2, specific force incl. gravity), gx gy gz (rad/s)
+      imu_true.csv        the same without noise and bias
       lidar/stamps.csv    t, file, points
       lidar/NNNNNN.ply    x y z (m, lidar frame) intensity ring
       camera/stamps.csv   t, rgb file, depth file
@@ -74,7 +75,7 @@ def png_bytes(image: NDArray[Any]) -> bytes:
 
     buf = io.BytesIO()
     if image.dtype == np.uint16:
-        Image.fromarray(image.astype("<u2"), mode="I;16").save(buf, format="PNG")
+        Image.fromarray(image.astype("<u2")).save(buf, format="PNG")  # mode I;16
     else:
         Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(buf, format="PNG")
     return buf.getvalue()

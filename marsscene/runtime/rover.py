@@ -23,7 +23,9 @@ from marsscene.runtime.config import RoverConfig
 __all__ = [
     "DRIVE_JOINTS",
     "STEER_JOINTS",
+    "body_twists_from_wheels",
     "rover_mjcf",
+    "sensor_mounts",
     "wheel_commands",
     "wheel_positions_xy",
 ]
@@ -40,6 +42,9 @@ _ROCKER_Y_FRAC = 0.375  # rocker pivot |y| as a fraction of the track
 _PIVOT_ABOVE_GROUND_M = 0.65
 _BOGIE_ABOVE_GROUND_M = 0.45
 _BOGIE_HALF_M = 0.5
+# Sensor mounts in base_link (m): LiDAR on the mast top, navcam at the mast height, tilted down.
+_LIDAR_X_M, _LIDAR_ABOVE_CAMERA_M = 0.7, 0.12
+_CAMERA_X_M, _CAMERA_TILT_DEG = 0.75, 20.0
 
 
 def wheel_positions_xy(cfg: RoverConfig) -> NDArray[np.float64]:
@@ -109,6 +114,32 @@ def body_twist_from_wheels(
     b = np.concatenate([u * np.cos(delta), u * np.sin(delta)])
     sol = _odometry_pinv(cfg) @ b
     return float(sol[0]), float(sol[1])
+
+
+def body_twists_from_wheels(
+    rates_rad_s: NDArray[np.float64], steer_rad: NDArray[np.float64], cfg: RoverConfig
+) -> NDArray[np.float64]:
+    """Vectorised :func:`body_twist_from_wheels`: (N, 6) rates, (N, 4) steering -> (N, 2)."""
+    rates = np.asarray(rates_rad_s, dtype=np.float64).reshape(-1, 6)
+    delta = np.zeros_like(rates)
+    delta[:, _STEERED] = np.asarray(steer_rad, dtype=np.float64).reshape(-1, 4)
+    u = cfg.wheel_radius_m * rates
+    b = np.concatenate([u * np.cos(delta), u * np.sin(delta)], axis=1)
+    return np.asarray(b @ _odometry_pinv(cfg).T, dtype=np.float64)
+
+
+def sensor_mounts(cfg: RoverConfig) -> dict[str, tuple[tuple[float, float, float], float]]:
+    """Sensor mounts in ``base_link``: ``{name: ((x, y, z) in m, pitch in rad)}``.
+
+    ``lidar`` and ``camera`` (the navcam body: x forward, y left, z up, pitched down by
+    ``pitch``); the IMU sits at the ``base_link`` origin. The MJCF below uses the same numbers.
+    """
+    mast = cfg.mast_height_m - cfg.ride_height_m
+    return {
+        "imu": ((0.0, 0.0, 0.0), 0.0),
+        "lidar": ((_LIDAR_X_M, 0.0, mast + _LIDAR_ABOVE_CAMERA_M), 0.0),
+        "camera": ((_CAMERA_X_M, 0.0, mast), math.radians(_CAMERA_TILT_DEG)),
+    }
 
 
 @lru_cache(maxsize=16)
@@ -194,7 +225,7 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0)
     cfg = cfg if cfg is not None else RoverConfig()
     chassis_kg = cfg.mass_kg - 2 * (_M_ROCKER + _M_BOGIE) - 4 * _M_STEER - 6 * _M_WHEEL
     ride, mast = cfg.ride_height_m, cfg.mast_height_m - cfg.ride_height_m
-    tilt = math.radians(20.0)
+    tilt = math.radians(_CAMERA_TILT_DEG)
     cam_axes = fmt((0, -1, 0, math.sin(tilt), 0, math.cos(tilt)))
     mu = fmt((cfg.friction, 0.02, 0.002))
     base = (
@@ -204,8 +235,9 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0)
         f'<geom class="visual" type="cylinder" size="0.06 {fmt(mast / 2)}" '
         f'pos="{fmt((0.7, 0.0, 0.25 + mast / 2 - 0.125))}" mass="0"/>'
         '<site name="imu" pos="0 0 0" size="0.02"/>'
-        f'<site name="lidar" pos="{fmt((0.7, 0.0, mast + 0.12))}" size="0.03"/>'
-        f'<camera name="navcam" pos="{fmt((0.75, 0.0, mast))}" xyaxes="{cam_axes}" '
+        f'<site name="lidar" pos="{fmt((_LIDAR_X_M, 0.0, mast + _LIDAR_ABOVE_CAMERA_M))}" '
+        'size="0.03"/>'
+        f'<camera name="navcam" pos="{fmt((_CAMERA_X_M, 0.0, mast))}" xyaxes="{cam_axes}" '
         f'fovy="{fmt(camera_fovy_deg)}"/>' + _side(cfg, "left", 1.0) + _side(cfg, "right", -1.0)
     )
     lim, tq = cfg.wheel_speed_limit_rad_s, cfg.drive_torque_limit_nm

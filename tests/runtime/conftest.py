@@ -58,3 +58,61 @@ def slope_scene(tmp_path_factory: pytest.TempPathFactory) -> Path:
     x = (np.arange(161) - 80) * 0.25
     z = np.tile(math.tan(math.radians(15.0)) * x, (65, 1)).astype(np.float32)
     return _write(z, tmp_path_factory.mktemp("slope") / "scene")
+
+
+@pytest.fixture(scope="session")
+def bag_run(gentle_scene: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A 3 s run folder with noisy IMU/odometry, an 80 x 60 RGB-D camera and a 3-ring LiDAR."""
+    from marsscene.errors import RuntimeSimError
+    from marsscene.runtime import CameraConfig, LidarConfig, NoiseConfig, RunConfig
+    from marsscene.runtime.driver import drive
+    from marsscene.runtime.sim import RoverSim
+    from marsscene.seeding import stage_rng
+
+    run = RunConfig(
+        noise=NoiseConfig(wheel_rate_sigma_rad_s=0.05, accel_sigma_m_s2=0.05,
+                          gyro_sigma_rad_s=0.01),
+        camera=CameraConfig(width_px=80, height_px=60),
+        lidar=LidarConfig(channels=3, horizontal_samples=90, vertical_fov_deg=(-30.0, -10.0)),
+    )
+    sim = RoverSim(gentle_scene, run=run)
+    out = tmp_path_factory.mktemp("bagrun") / "run"
+    try:
+        drive(sim, command=(0.3, 0.05), seconds=3.0, out_dir=out, rng=stage_rng(0, "sensors"))
+    except RuntimeSimError as err:
+        pytest.skip(f"no headless OpenGL (EGL/OSMesa) here: {err}")
+    return out
+
+
+@pytest.fixture(scope="session")
+def stereo_run(bag_run: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``bag_run`` plus ``camera/left`` and ``camera/right`` folders made here (0.3 m baseline).
+
+    The right images are the left ones shifted by 4 px, mono8; each folder has its own
+    ``intrinsics.json`` with ``baseline_m``, as a stereo head would log it.
+    """
+    import json
+    import shutil
+
+    from marsscene.runtime.logs import png_bytes
+    from marsscene.runtime.runlog import read_image
+
+    out = tmp_path_factory.mktemp("stereorun") / "run"
+    shutil.copytree(bag_run, out)
+    cam = out / "camera"
+    intr = json.loads((cam / "intrinsics.json").read_text()) | {"baseline_m": 0.3}
+    lines = (cam / "stamps.csv").read_text().splitlines()[1:]
+    for side in ("left", "right"):
+        (cam / side / "rgb").mkdir(parents=True)
+        rows = ["t,rgb"]
+        for line in lines:
+            t, rgb, _ = line.split(",")
+            img = read_image(cam / rgb)
+            mono = img.mean(axis=2).astype(np.uint8)
+            if side == "right":
+                mono = np.roll(mono, -4, axis=1)
+            (cam / side / rgb).write_bytes(png_bytes(mono))
+            rows.append(f"{t},{rgb}")
+        (cam / side / "stamps.csv").write_text("\n".join(rows) + "\n")
+        (cam / side / "intrinsics.json").write_text(json.dumps(intr))
+    return out
