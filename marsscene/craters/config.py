@@ -24,6 +24,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from marsscene._validate import check_choice, check_range, dataclass_from_mapping
+from marsscene.craters.morphometry import (
+    CAVITY_EXPONENT,
+    EJECTA_EXPONENT,
+    RIM_HEIGHT_TO_DIAMETER,
+    range_depth_to_diameter,
+)
 from marsscene.errors import ConfigError
 
 __all__ = ["CraterConfig", "ResurfacingEvent"]
@@ -122,13 +128,16 @@ class CraterConfig:
     """Cap small-crater densities at saturation equilibrium (``"hartmann-1984"`` or ``"none"``)."""
     profile: str = "watters-2015"
     """Fresh profile model: ``"watters-2015"``, ``"fassett-thomson-2014"`` or ``"ftmod"``."""
-    depth_to_diameter: float = 0.18
-    """Fresh rim-crest-to-floor depth over diameter (``watters-2015`` and ``ftmod``)."""
-    rim_height_to_diameter: float = 0.036
-    """Fresh rim height over diameter (``watters-2015``)."""
-    cavity_exponent: float = 1.75
+    depth_to_diameter: float | None = None
+    """Fresh rim-crest-to-floor depth over diameter (``watters-2015`` and ``ftmod``). Default:
+    the Garvin & Frawley (1998) MOLA law, held constant below 50 m (Millot et al. 2024), at the
+    geometric mean of [d_min_m, d_max_m] (0.189 for craters up to ~50 m); see
+    :mod:`marsscene.craters.morphometry`."""
+    rim_height_to_diameter: float = RIM_HEIGHT_TO_DIAMETER
+    """Fresh rim height over diameter (``watters-2015``; Melosh 1989)."""
+    cavity_exponent: float = CAVITY_EXPONENT
     """Power-law cavity exponent (Watters et al. 2015 average)."""
-    ejecta_exponent: float = 3.0
+    ejecta_exponent: float = EJECTA_EXPONENT
     """Ejecta thickness decay exponent, ``(r/R)^-beta`` (McGetchin et al. 1973)."""
     ejecta_reach: float = 2.5
     """Radius (in crater radii) at which the ejecta blanket reaches zero."""
@@ -157,7 +166,8 @@ class CraterConfig:
             )
         check_choice("craters.equilibrium", self.equilibrium, ("hartmann-1984", "none"))
         check_choice("craters.profile", self.profile, _PROFILES)
-        check_range("craters.depth_to_diameter", self.depth_to_diameter, 0.05, 0.5)
+        if self.depth_to_diameter is not None:
+            check_range("craters.depth_to_diameter", self.depth_to_diameter, 0.05, 0.5)
         check_range("craters.rim_height_to_diameter", self.rim_height_to_diameter, 0.0, 0.1)
         check_range("craters.cavity_exponent", self.cavity_exponent, 1.0, 4.0)
         check_range("craters.ejecta_exponent", self.ejecta_exponent, 1.0, 6.0)
@@ -179,11 +189,18 @@ class CraterConfig:
             events.append(ev)
         object.__setattr__(self, "resurfacing", tuple(events))
 
+    @property
+    def effective_depth_to_diameter(self) -> float:
+        """``depth_to_diameter``, or the cited default for this diameter range."""
+        if self.depth_to_diameter is not None:
+            return float(self.depth_to_diameter)
+        return round(range_depth_to_diameter(self.d_min_m, self.d_max_m), 6)
+
     def profile_kwargs(self) -> dict[str, float | str]:
         """Keyword arguments of :func:`marsscene.craters.profile_family` for this config."""
         return {
             "model": self.profile,
-            "depth_to_diameter": self.depth_to_diameter,
+            "depth_to_diameter": self.effective_depth_to_diameter,
             "rim_height_to_diameter": self.rim_height_to_diameter,
             "cavity_exponent": self.cavity_exponent,
             "ejecta_exponent": self.ejecta_exponent,

@@ -12,9 +12,10 @@ __all__ = ["PROFILE_CITATIONS", "crater_models"]
 PROFILE_CITATIONS: dict[str, str] = {
     "watters-2015": (
         "power-law cavity, exponent 1.75 (Watters, Geiger, Fendrock et al. 2015, JGR Planets "
-        "120, doi:10.1002/2014JE004630); d/D and rim height configurable (defaults d/D = 0.18 "
-        "rim-to-floor, h_r/D = 0.036: MOLA fresh craters, Garvin et al. 2003 / Melosh 1989); "
-        "ejecta (r/R)^-3 (McGetchin, Settle & Head 1973, doi:10.1016/0012-821X(73)90118-0)"
+        "120, doi:10.1002/2014JE004630); fresh d/D from Garvin & Frawley (1998, "
+        "doi:10.1029/1998GL900177) held constant below 50 m (Millot et al. 2024, "
+        "doi:10.1029/2024JE008844); rim height 0.036 D (Melosh 1989); ejecta (r/R)^-3 "
+        "(McGetchin, Settle & Head 1973, doi:10.1016/0012-821X(73)90118-0)"
     ),
     "fassett-thomson-2014": (
         "Fassett, C. I., Thomson, B. J. (2014), Crater degradation on the lunar maria, JGR "

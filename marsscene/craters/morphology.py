@@ -28,6 +28,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigh_tridiagonal
 
+from marsscene.craters.morphometry import (
+    CAVITY_EXPONENT,
+    DEFAULT_DEPTH_TO_DIAMETER,
+    EJECTA_EXPONENT,
+    RIM_HEIGHT_TO_DIAMETER,
+)
 from marsscene.errors import ConfigError
 
 __all__ = [
@@ -71,10 +77,10 @@ def profile_over_diameter(
     rho: ArrayLike,
     *,
     model: str = "watters-2015",
-    depth_to_diameter: float = 0.18,
-    rim_height_to_diameter: float = 0.036,
-    cavity_exponent: float = 1.75,
-    ejecta_exponent: float = 3.0,
+    depth_to_diameter: float = DEFAULT_DEPTH_TO_DIAMETER,
+    rim_height_to_diameter: float = RIM_HEIGHT_TO_DIAMETER,
+    cavity_exponent: float = CAVITY_EXPONENT,
+    ejecta_exponent: float = EJECTA_EXPONENT,
     ejecta_reach: float = 2.5,
 ) -> FloatArray:
     """Fresh profile in units of the diameter, ``h / D`` at ``rho = r / R``.
@@ -201,10 +207,10 @@ def _radial_diffusion_table(rho: FloatArray, h0: FloatArray, s: FloatArray) -> F
 @lru_cache(maxsize=16)
 def profile_family(
     model: str,
-    depth_to_diameter: float = 0.18,
-    rim_height_to_diameter: float = 0.036,
-    cavity_exponent: float = 1.75,
-    ejecta_exponent: float = 3.0,
+    depth_to_diameter: float = DEFAULT_DEPTH_TO_DIAMETER,
+    rim_height_to_diameter: float = RIM_HEIGHT_TO_DIAMETER,
+    cavity_exponent: float = CAVITY_EXPONENT,
+    ejecta_exponent: float = EJECTA_EXPONENT,
     ejecta_reach: float = 2.5,
 ) -> ProfileFamily:
     """Tabulate a profile model and its diffused states (cached; ~0.2 s per new parameter set)."""
@@ -250,10 +256,10 @@ def crater_profile(
     *,
     diameter_m: float,
     model: str = "watters-2015",
-    depth_to_diameter: float = 0.18,
-    rim_height_to_diameter: float = 0.036,
-    cavity_exponent: float = 1.75,
-    ejecta_exponent: float = 3.0,
+    depth_to_diameter: float = DEFAULT_DEPTH_TO_DIAMETER,
+    rim_height_to_diameter: float = RIM_HEIGHT_TO_DIAMETER,
+    cavity_exponent: float = CAVITY_EXPONENT,
+    ejecta_exponent: float = EJECTA_EXPONENT,
     ejecta_reach: float = 2.5,
     diffusion_length_m: float = 0.0,
 ) -> FloatArray:
@@ -278,8 +284,8 @@ ejecta_reach
 
     Examples
     --------
-    >>> float(crater_profile(0.0, diameter_m=10.0))  # floor: rim - depth = (0.036 - 0.18) D
-    -1.44
+    >>> round(float(crater_profile(0.0, diameter_m=10.0)), 3)  # floor: (0.036 - 0.1889) D
+    -1.529
     """
     r = np.abs(np.asarray(rho, dtype=np.float64))
     kw = (model, depth_to_diameter, rim_height_to_diameter, cavity_exponent, ejecta_exponent,

@@ -89,10 +89,10 @@ def stamp_craters(
     --------
     >>> import numpy as np
     >>> hf = Heightfield.centered(np.zeros((41, 41), np.float32), 0.5)
-    >>> t = CraterTable(np.zeros((1, 2)), [8.0], [1.152], [0.288], [0.0], [0])
+    >>> t = CraterTable(np.zeros((1, 2)), [8.0], [1.223], [0.288], [0.0], [0])
     >>> out = stamp_craters(hf, t)
-    >>> round(float(out.z_m[20, 20]), 3)  # floor = rim - depth = (0.036 - 0.18) * 8
-    -1.152
+    >>> round(float(out.z_m[20, 20]), 3)  # fresh floor = rim - depth = (0.036 - 0.1889) * 8
+    -1.223
     """
     if len(craters) == 0:
         return heightfield

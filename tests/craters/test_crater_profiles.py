@@ -7,7 +7,7 @@ import pytest
 from scipy.special import ive
 
 from marsscene.craters import crater_profile, profile_family
-from marsscene.craters.morphology import profile_over_diameter
+from marsscene.craters.morphology import S_ERASE, profile_over_diameter
 
 
 def test_fassett_thomson_reference_values() -> None:
@@ -69,7 +69,11 @@ def test_diffusion_conserves_volume_and_matches_heat_kernel() -> None:
     fam = profile_family("watters-2015")
     w = 2 * np.pi * fam.rho * (fam.rho[1] - fam.rho[0])
     vols = fam.h_over_d @ w
-    np.testing.assert_allclose(vols, vols[0], rtol=1e-3)
+    # exact while a raised rim remains to take back the trimmed tail (every state up to and
+    # well past the recognisability limit S_ERASE)
+    alive = fam.rim_over_d > 0
+    assert fam.s[alive].max() > 2 * S_ERASE
+    np.testing.assert_allclose(vols[alive], vols[0], rtol=1e-3)
     # exact axisymmetric heat kernel: h(r) = int h0(r') r'/s^2 exp(-(r-r')^2/2s^2) ive0(r r'/s^2)
     fine = np.arange(0.0, 2.5, 0.0005) + 0.00025
     h0 = profile_over_diameter(fine)
@@ -85,7 +89,8 @@ def test_diffusion_conserves_volume_and_matches_heat_kernel() -> None:
 def test_degraded_states_are_monotonic() -> None:
     fam = profile_family("watters-2015")
     assert np.all(np.diff(fam.depth_over_d) < 0)
-    assert np.all(np.diff(fam.rim_over_d) < 0)
+    rim = fam.rim_over_d
+    assert np.all(np.diff(rim[rim > 0]) < 0) and np.all(np.diff(rim) <= 0)
     assert fam.depth_over_d[-1] < 0.1 * fam.depth_over_d[0]
     h = crater_profile(0.0, diameter_m=10.0, diffusion_length_m=2.0)
-    assert -1.44 < float(h) < -0.3
+    assert -10.0 * fam.depth_over_d[0] < float(h) < -0.3

@@ -111,9 +111,10 @@ def test_burial_and_ramp_rules(rule: str) -> None:
         table, _ = sample_craters((0, 0, 2000, 2000), cfg, rng=np.random.default_rng(3))
     old = table.age_ga > 0.5
     relief = table.depth_m + table.rim_height_m
-    if rule == "burial":  # fresh relief = 0.18 D: erased below 3 / 0.18 = 16.7 m
+    if rule == "burial":  # fresh relief = d/D * D (rim crest to floor): erased below 3 m
         assert relief[old].min() >= 3.0 - 1e-9
-        assert (old & (table.diameter_m < 16.0)).sum() == 0
+        d_erased = 3.0 / cfg.effective_depth_to_diameter  # 15.9 m
+        assert (old & (table.diameter_m < d_erased * (1 - 1e-9))).sum() == 0
     else:
         assert (old & (table.diameter_m < 20.0)).sum() == 0
         mid = old & (table.diameter_m >= 20.0) & (table.diameter_m < 40.0)

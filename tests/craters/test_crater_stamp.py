@@ -13,6 +13,7 @@ from marsscene.craters import (
     stamp_craters,
 )
 from marsscene.craters import stamp as stamp_mod
+from marsscene.craters.morphometry import DEFAULT_DEPTH_TO_DIAMETER, RIM_HEIGHT_TO_DIAMETER
 from marsscene.terrain.heightfield import Heightfield
 
 
@@ -22,10 +23,15 @@ def _flat(n: int = 161, cs: float = 0.25, slope: float = 0.0) -> Heightfield:
     return Heightfield.centered(z, cs)
 
 
+#: Fresh floor depth below the pre-impact surface and rim height over D (default profile).
+FLOOR = DEFAULT_DEPTH_TO_DIAMETER - RIM_HEIGHT_TO_DIAMETER
+RIM = RIM_HEIGHT_TO_DIAMETER
+
+
 def _one(x: float, y: float, d: float, age: float = 0.0, depth: float | None = None,
          q: float = 1.0, az: float = 0.0) -> CraterTable:
-    depth = 0.144 * d if depth is None else depth
-    return CraterTable(np.array([[x, y]]), [d], [depth], [0.036 * d], [age], [0], [q], [az])
+    depth = FLOOR * d if depth is None else depth
+    return CraterTable(np.array([[x, y]]), [d], [depth], [RIM * d], [age], [0], [q], [az])
 
 
 @pytest.mark.parametrize("d", [4.0, 12.0])  # 4 m: batched boxes; 12 m: slice path
@@ -33,11 +39,11 @@ def test_flat_ground_depth_rim_and_volume(d: float) -> None:
     hf = _flat()
     out = stamp_craters(hf, _one(0.0, 0.0, d))
     z = out.z_m.astype(np.float64)
-    assert z[80, 80] == pytest.approx(-0.144 * d, abs=2e-3 * d)
+    assert z[80, 80] == pytest.approx(-FLOOR * d, abs=2e-3 * d)
     x, y = hf.grid_xy()
     r = np.hypot(x[None, :], y[:, None])
     rim = z[np.abs(r - d / 2) < 0.13]
-    assert rim.max() == pytest.approx(0.036 * d, rel=0.05)
+    assert rim.max() == pytest.approx(RIM * d, rel=0.05)
     # net volume on the grid = analytic 2 pi R^2 int h/D rho drho * D
     rho = np.linspace(0, 2.5, 250001)
     from marsscene.craters.morphology import profile_over_diameter
@@ -72,8 +78,8 @@ def test_young_crater_cuts_old_one() -> None:
     old = _one(-3.0, 0.0, 12.0, age=2.0)
     young = _one(3.0, 0.0, 8.0, age=0.5)
     both = CraterTable(
-        np.vstack([old.center_xy_m, young.center_xy_m]), [12.0, 8.0], [0.144 * 12, 0.144 * 8],
-        [0.036 * 12, 0.036 * 8], [2.0, 0.5], [0, 0])
+        np.vstack([old.center_xy_m, young.center_xy_m]), [12.0, 8.0], [FLOOR * 12, FLOOR * 8],
+        [RIM * 12, RIM * 8], [2.0, 0.5], [0, 0])
     swapped = CraterTable(both.center_xy_m, both.diameter_m, both.depth_m, both.rim_height_m,
                           [0.5, 2.0], [0, 0])
     a = stamp_craters(hf, both).z_m.astype(np.float64)
@@ -86,7 +92,7 @@ def test_young_crater_cuts_old_one() -> None:
     r = np.hypot(x[None, :] - 3.0, y[:, None])
     crest = np.median(a[np.abs(r - 4.0) < 0.13])
     floor = a[80, 80 + 12]
-    assert crest - floor == pytest.approx(0.18 * 8, rel=0.1)
+    assert crest - floor == pytest.approx(DEFAULT_DEPTH_TO_DIAMETER * 8, rel=0.1)
     # and the older crater's rim is cut where the young bowl overlaps it (at x = 3, y = 0)
     single_old = stamp_craters(hf, old).z_m.astype(np.float64)
     assert a[80, 80 + 12] < single_old[80, 80 + 12] - 0.5
