@@ -19,6 +19,7 @@ __all__ = [
     "MissingDependencyError",
     "NodataFilledWarning",
     "RuntimeSimError",
+    "SweepError",
 ]
 
 
@@ -52,6 +53,10 @@ class MissingDependencyError(MarsSceneError, ImportError):
 
 class RuntimeSimError(MarsSceneError, RuntimeError):
     """The MuJoCo runtime cannot load a scene, a route or a log."""
+
+
+class SweepError(MarsSceneError, RuntimeError):
+    """A sweep cannot run (no scheduler at the address, output folder not shared, ...)."""
 
 
 class MarsSceneWarning(UserWarning):

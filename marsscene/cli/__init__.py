@@ -65,12 +65,14 @@ def _register() -> None:
     from marsscene.cli.eval import eval_cmd
     from marsscene.cli.info import info
     from marsscene.cli.sun import sun
+    from marsscene.cli.sweep import sweep
 
     main.add_command(build)
     main.add_command(info)
     main.add_command(sun)
     main.add_command(drive)
     main.add_command(eval_cmd)
+    main.add_command(sweep)
 
 
 _register()
