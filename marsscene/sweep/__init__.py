@@ -9,8 +9,12 @@ Examples
 --------
 >>> from marsscene.sweep import expand_grid, sweep_from_dict
 >>> spec = sweep_from_dict({"sweep": {"seed": [1, 2], "lighting.tau": [0.3, 3.0]}})
->>> [c.cell_id for c in expand_grid(spec)]
-['seed=1__lighting.tau=0.3', 'seed=1__lighting.tau=3.0', 'seed=2__lighting.tau=0.3', 'seed=2__lighting.tau=3.0']
+>>> for cell in expand_grid(spec):
+...     print(cell.cell_id)
+seed=1__lighting.tau=0.3
+seed=1__lighting.tau=3.0
+seed=2__lighting.tau=0.3
+seed=2__lighting.tau=3.0
 """
 
 from __future__ import annotations

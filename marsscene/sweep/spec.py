@@ -18,6 +18,7 @@ Every error is a one-line :class:`~marsscene.errors.ConfigError` naming the key 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import tomllib
 import typing
 from dataclasses import dataclass, field
@@ -147,6 +148,26 @@ def _deepcopy(value: Any) -> Any:
     return value
 
 
+def _check_some_cell_valid(base: dict[str, Any], axes: list[tuple[str, tuple[Any, ...]]]) -> None:
+    """Raise the first cell's error unless at least one cell's config is valid.
+
+    A bad base config (unknown key, wrong type) fails every cell and is reported here; a swept
+    value that is out of range fails only its cells, which the sweep records as ``failed``.
+    """
+    first: ConfigError | None = None
+    for combo in itertools.product(*(values for _, values in axes)):
+        config = base
+        for (key, _), value in zip(axes, combo, strict=True):
+            config = set_dotted(config, key, value)
+        try:
+            SceneConfig.from_dict(config)
+            return
+        except ConfigError as err:
+            first = first or err
+    assert first is not None
+    raise first
+
+
 def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
                     source: str = "<dict>") -> SweepSpec:
     """Check a parsed SWEEP.toml mapping and return a :class:`SweepSpec`."""
@@ -155,7 +176,6 @@ def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
     drive_table = data.pop("drive", None)
     if not isinstance(table, dict) or not table:
         raise ConfigError(f"{source}: needs a non-empty [sweep] table of key = [values, ...]")
-    SceneConfig.from_dict(data)  # the base config must be valid on its own
     axes: list[tuple[str, tuple[Any, ...]]] = []
     for key, values in table.items():
         if isinstance(values, dict):  # "[sweep.lighting] tau = [...]" or unquoted dotted keys
@@ -171,6 +191,7 @@ def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
         if len(set(seen)) != len(seen):
             raise ConfigError(f"sweep.{key} = {values!r} repeats a value")
         axes.append((key, tuple(values)))
+    _check_some_cell_valid(data, axes)
     drive = None
     if drive_table is not None:
         if isinstance(drive_table, dict) and isinstance(drive_table.get("route"), str):
