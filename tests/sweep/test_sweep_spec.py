@@ -107,3 +107,12 @@ def test_cli_reports_bad_sweep_files_in_one_line(runner, tmp_path: Path, text: s
     lines = [ln for ln in res.output.splitlines() if ln.startswith("Error")]
     assert len(lines) == 1 and message in lines[0] and "Traceback" not in res.output
     assert not (tmp_path / "out").exists()
+
+
+def test_example_sweep_file_is_valid() -> None:
+    path = Path(__file__).resolve().parents[2] / "examples" / "sweep_tau_sun.toml"
+    spec = load_sweep(path)
+    cells = expand_grid(spec)
+    assert len(cells) == 12 and spec.drive is not None and spec.drive.seconds == 40.0
+    cfg = resolve_config(cells[-1])
+    assert (cfg.seed, cfg.lighting.tau, cfg.lighting.sun_elevation_deg) == (2, 3.0, 45.0)
