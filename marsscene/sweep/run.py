@@ -56,14 +56,14 @@ def _failed_row(cell: Cell, err: BaseException) -> dict[str, Any]:
             "error": f"{type(err).__name__}: {err}"}
 
 
-def _client(workers: int | None, scheduler: str | None) -> tuple[Any, Any]:
+def _client(workers: int | None, scheduler: str | None, timeout_s: float) -> tuple[Any, Any]:
     try:
         from distributed import Client, LocalCluster
     except ImportError:
         raise missing_dependency("distributed", "sweep") from None
     if scheduler is not None:
         try:
-            return Client(scheduler, timeout="10s"), None
+            return Client(scheduler, timeout=f"{timeout_s}s"), None
         except (OSError, TimeoutError) as err:
             raise SweepError(f"cannot reach Dask scheduler {scheduler!r}: {err}") from None
     n = workers if workers is not None else max(1, os.cpu_count() or 1)
@@ -83,14 +83,16 @@ def _check_shared(client: Any, root: Path) -> None:
 
 
 def _run_dask(cells: list[Cell], root: Path, spec: SweepSpec, force: bool,
-              workers: int | None, scheduler: str | None,
-              report: Callable[[dict[str, Any]], None]) -> dict[str, dict[str, Any]]:
+              workers: int | None, scheduler: str | None, timeout_s: float,
+              report: Callable[[dict[str, Any]], None], counts: dict[str, int]
+              ) -> dict[str, dict[str, Any]]:
     from distributed import as_completed
 
-    client, cluster = _client(workers, scheduler)
+    client, cluster = _client(workers, scheduler, timeout_s)
     rows: dict[str, dict[str, Any]] = {}
     try:
         _check_shared(client, root)
+        counts["capacity"] = max(1, sum(client.nthreads().values()))
         futures = {
             client.submit(run_cell, c, str(root), spec.drive, force=force, pure=False,
                           key=f"marsscene-cell-{c.cell_id}-{os.urandom(4).hex()}"): c
@@ -120,6 +122,7 @@ def run_sweep(
     serial: bool = False,
     force: bool = False,
     progress: Callable[[Progress], None] | None = None,
+    connect_timeout_s: float = 10.0,
 ) -> SweepResult:
     """Build (and drive) every cell of ``spec`` into ``out_dir`` and write the results table.
 
@@ -139,6 +142,8 @@ def run_sweep(
         Rebuild cells that are already finished.
     progress : callable, optional
         Called with a :class:`Progress` after every cell.
+    connect_timeout_s : float
+        How long to try reaching ``scheduler`` before giving up (in s).
 
     Returns
     -------
@@ -153,14 +158,13 @@ def run_sweep(
     root = Path(out_dir).resolve()
     root.mkdir(parents=True, exist_ok=True)
     total = len(cells)
-    capacity = 1 if serial else (workers or os.cpu_count() or 1)
-    counts = {"done": 0, "failed": 0}
+    counts = {"done": 0, "failed": 0, "capacity": 1 if serial else (workers or os.cpu_count() or 1)}
 
     def report(row: dict[str, Any]) -> None:
         counts["done"] += 1
         counts["failed"] += row["status"] == "failed"
         if progress is not None:
-            running = min(capacity, total - counts["done"])
+            running = min(counts["capacity"], total - counts["done"])
             progress(Progress(total, counts["done"], running, counts["failed"], row))
 
     if serial:
@@ -169,7 +173,8 @@ def run_sweep(
             rows[c.cell_id] = run_cell(c, root, spec.drive, force=force)
             report(rows[c.cell_id])
     else:
-        rows = _run_dask(cells, root, spec, force, workers, scheduler, report)
+        rows = _run_dask(cells, root, spec, force, workers, scheduler, connect_timeout_s, report,
+                         counts)
     ordered = [rows[c.cell_id] for c in cells]
     files = write_results(ordered, [k for k, _ in spec.axes], root)
     return SweepResult(ordered, files)

@@ -216,4 +216,14 @@ def load_sweep(path: str | Path) -> SweepSpec:
         for key in ("dem_path", "ortho_path"):
             if isinstance(terrain.get(key), str) and not Path(terrain[key]).is_absolute():
                 terrain[key] = str((p.parent / terrain[key]).resolve())
+    table = data.get("sweep")
+    if isinstance(table, dict):  # swept DEM / ortho paths resolve like the base config's
+        for key in ("terrain.dem_path", "terrain.ortho_path"):
+            values = table.get(key)
+            if isinstance(values, list):
+                table[key] = [
+                    str((p.parent / v).resolve()) if isinstance(v, str)
+                    and not Path(v).is_absolute() else v
+                    for v in values
+                ]
     return sweep_from_dict(data, base_dir=p.parent, source=str(p))
