@@ -178,6 +178,7 @@ def run_cell(
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
     if row["status"] == "failed":
+        row["error"] = " ".join(row["error"].split())  # one line in results.csv
         row["t_total_s"] = round(time.perf_counter() - t_start, 4)
         log.warning("cell %s failed: %s", cell.cell_id, row["error"])
         try:  # leave only the failure record (and no stale outputs) in the cell folder

@@ -53,7 +53,7 @@ class SweepResult:
 
 def _failed_row(cell: Cell, err: BaseException) -> dict[str, Any]:
     return {"cell_id": cell.cell_id, "params": dict(cell.params), "status": "failed",
-            "error": f"{type(err).__name__}: {err}"}
+            "error": " ".join(f"{type(err).__name__}: {err}".split())}
 
 
 def _client(workers: int | None, scheduler: str | None, timeout_s: float) -> tuple[Any, Any]:
