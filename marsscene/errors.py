@@ -20,6 +20,7 @@ __all__ = [
     "NoGeoreferenceWarning",
     "NodataFilledWarning",
     "RuntimeSimError",
+    "SweepError",
 ]
 
 
@@ -53,6 +54,10 @@ class MissingDependencyError(MarsSceneError, ImportError):
 
 class RuntimeSimError(MarsSceneError, RuntimeError):
     """The MuJoCo runtime cannot load a scene, a route or a log."""
+
+
+class SweepError(MarsSceneError, RuntimeError):
+    """A sweep cannot run (no scheduler at the address, output folder not shared, ...)."""
 
 
 class MarsSceneWarning(UserWarning):

@@ -67,6 +67,7 @@ def _register() -> None:
     from marsscene.cli.export import export_cmd
     from marsscene.cli.info import info
     from marsscene.cli.sun import sun
+    from marsscene.cli.sweep import sweep
 
     main.add_command(build)
     main.add_command(info)
@@ -75,6 +76,7 @@ def _register() -> None:
     main.add_command(eval_cmd)
     main.add_command(bag)
     main.add_command(export_cmd)
+    main.add_command(sweep)
 
 
 _register()

@@ -1,0 +1,118 @@
+"""SWEEP.toml parsing, the grid and cell ids (pure; no Dask)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from marsscene.cli import main
+from marsscene.errors import ConfigError
+from marsscene.sweep import expand_grid, load_sweep, sweep_from_dict
+from marsscene.sweep.cell import resolve_config, toml_text
+
+
+def test_grid_is_the_cartesian_product_in_axis_order() -> None:
+    spec = sweep_from_dict({
+        "terrain": {"source": "procedural", "size_m": [40.0, 40.0]},
+        "sweep": {"seed": [1, 2], "lighting.tau": [0.3, 3.0], "rocks.k": [0.02, 0.08]},
+    })
+    cells = expand_grid(spec)
+    assert len(cells) == 8
+    assert cells[0].cell_id == "seed=1__lighting.tau=0.3__rocks.k=0.02"
+    assert cells[-1].cell_id == "seed=2__lighting.tau=3.0__rocks.k=0.08"
+    assert [c.params["rocks.k"] for c in cells[:2]] == [0.02, 0.08]  # last axis fastest
+    assert cells[5].config["lighting"]["tau"] == 0.3 and cells[5].config["rocks"]["k"] == 0.08
+    assert cells[5].config["terrain"]["size_m"] == [40.0, 40.0] and cells[5].seed == 2
+    assert spec.base == {"terrain": {"source": "procedural", "size_m": [40.0, 40.0]}}  # unchanged
+    assert len({c.cell_id for c in cells}) == 8
+
+
+def test_cell_ids_are_sanitised_and_stable() -> None:
+    spec = sweep_from_dict({"sweep": {"lighting.utc": ["2021-02-18T20:55:00Z"],
+                                      "terrain.size_m": [[50, 50.5]], "craters.enabled": [False]}})
+    (cell,) = expand_grid(spec)
+    assert cell.cell_id == (
+        "lighting.utc=2021-02-18T20-55-00Z__terrain.size_m=50x50.5__craters.enabled=false"
+    )
+    assert expand_grid(spec)[0].cell_id == cell.cell_id
+
+
+def test_resolved_config_round_trips_through_toml() -> None:
+    import tomllib
+
+    import marsscene as ms
+
+    spec = sweep_from_dict({"seed": 9, "terrain": {"source": "procedural", "size_m": [30, 20]},
+                            "lighting": {"sun_azimuth_deg": 90.0},
+                            "sweep": {"lighting.sun_elevation_deg": [25.0]}})
+    cfg = resolve_config(expand_grid(spec)[0])
+    text = toml_text(cfg)
+    back = ms.SceneConfig.from_dict(tomllib.loads(text))
+    assert back == cfg and back.seed == 9 and back.lighting.sun_elevation_deg == 25.0
+
+
+@pytest.mark.parametrize(
+    ("sweep", "message"),
+    [
+        ({"lighting.tauu": [1.0]}, "unknown sweep key 'lighting.tauu': no 'tauu' in lighting"),
+        ({"light.tau": [1.0]}, "unknown sweep key 'light.tau'"),
+        ({"lighting": {"tau": [1.0]}}, "quote dotted keys"),
+        ({"lighting.tau": []}, "sweep.lighting.tau = []; give at least one value"),
+        ({"lighting.tau": 0.5}, "sweep.lighting.tau = 0.5; must be a list of values"),
+        ({"seed": [1, 1]}, "repeats a value"),
+        ({"terrain": [1]}, "is a whole table"),
+        ({}, "non-empty [sweep] table"),
+    ],
+)
+def test_bad_sweep_tables_give_one_line_errors(sweep: dict, message: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        sweep_from_dict({"sweep": sweep})
+    assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_bad_base_config_and_drive_are_rejected() -> None:
+    with pytest.raises(ConfigError, match=r"unknown key rocks\.kk"):
+        sweep_from_dict({"rocks": {"kk": 1}, "sweep": {"seed": [1]}})
+    with pytest.raises(ConfigError, match="exactly one of waypoints or route"):
+        sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"seconds": 3.0}})
+    with pytest.raises(ConfigError, match=r"drive\.waypoints"):
+        sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0]]}})
+    with pytest.raises(ConfigError, match=r"unknown key drive\.bag"):
+        sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0], [1, 1]],
+                                                          "bag": True}})
+
+
+def test_route_path_resolves_against_the_sweep_file(tmp_path: Path) -> None:
+    (tmp_path / "s.toml").write_text('[sweep]\nseed = [1]\n[drive]\nroute = "r.tum"\n')
+    spec = load_sweep(tmp_path / "s.toml")
+    assert spec.drive is not None and spec.drive.route == str((tmp_path / "r.tum").resolve())
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ('[sweep]\n"rocks.kk" = [1.0]\n', "unknown sweep key 'rocks.kk'"),
+        ('[sweep]\n"rocks.k" = []\n', "give at least one value"),
+        ('[sweep]\n"rocks.k" = 0.05\n', "must be a list of values"),
+        ("[sweep\n", "not valid TOML"),
+    ],
+)
+def test_cli_reports_bad_sweep_files_in_one_line(runner, tmp_path: Path, text: str,
+                                                 message: str) -> None:
+    path = tmp_path / "sweep.toml"
+    path.write_text(text)
+    res = runner.invoke(main, ["sweep", str(path), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 1
+    lines = [ln for ln in res.output.splitlines() if ln.startswith("Error")]
+    assert len(lines) == 1 and message in lines[0] and "Traceback" not in res.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_example_sweep_file_is_valid() -> None:
+    path = Path(__file__).resolve().parents[2] / "examples" / "sweep_tau_sun.toml"
+    spec = load_sweep(path)
+    cells = expand_grid(spec)
+    assert len(cells) == 12 and spec.drive is not None and spec.drive.seconds == 40.0
+    cfg = resolve_config(cells[-1])
+    assert (cfg.seed, cfg.lighting.tau, cfg.lighting.sun_elevation_deg) == (2, 3.0, 45.0)
