@@ -117,7 +117,7 @@ def test_cli_sweep_reports_progress_and_failure(runner, tmp_path: Path) -> None:
 def test_driven_cell_metrics_match_the_logs(tmp_path: Path) -> None:
     from marsscene.runtime import ate, read_tum, rpe
 
-    drive = "[drive]\nwaypoints = [[-5.0, -3.0], [5.0, -3.0]]\nnoise_seed = 4\n"
+    drive = "[drive]\nwaypoints = [[-5.0, 0.0], [5.0, 0.0]]\nnoise_seed = 4\n"
     spec = load_sweep(write_sweep(tmp_path / "s.toml", "seed = [0]\n", drive))
     (row,) = run_sweep(spec, tmp_path / "out", serial=True).rows
     assert row["status"] == "ok", row["error"]
