@@ -92,6 +92,8 @@ class MastCamera:
             sun_direction_enu=lt.sun_direction_enu, direct_share=share,
             rng=stage_rng(seed, "texture"),
         )
+        rows, cols = sim.heightfield.shape
+        self.windowed = self.world.nr < rows or self.world.nc < cols
         spec = sim.build_spec()
         self._edit(spec, sim, lt)
         self.model = spec.compile()
