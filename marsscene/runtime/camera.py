@@ -180,11 +180,13 @@ class MastCamera:
         vis.rgba.fog = [*np.clip(1.2 * sky, 0, 1).tolist(), 1.0]
         if cam.stereo:
             body = spec.body("rover/base_link")
-            nav = spec.camera("rover/navcam")
+            pos = np.asarray(sim.model.cam_pos[sim.camera_id], dtype=np.float64)
+            quat = np.asarray(sim.model.cam_quat[sim.camera_id], dtype=np.float64)
+            fovy = float(sim.model.cam_fovy[sim.camera_id])
             for name, dy in (("cam_left", cam.stereo_baseline_m / 2),
                              ("cam_right", -cam.stereo_baseline_m / 2)):
-                body.add_camera(name=name, pos=[nav.pos[0], nav.pos[1] + dy, nav.pos[2]],
-                                quat=list(nav.quat), fovy=nav.fovy)
+                body.add_camera(name=name, pos=(pos + [0.0, dy, 0.0]).tolist(),
+                                quat=quat.tolist(), fovy=fovy)
 
     def _upload(self) -> None:
         ctx = self.renderer._mjr_context
