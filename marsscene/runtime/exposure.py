@@ -69,9 +69,9 @@ class Exposure:
 
     def _auto_gain(self, lin: NDArray[np.float64]) -> float:
         sample = lin[::2, ::2].reshape(-1, lin.shape[-1]) if lin.ndim == 3 else lin[::2, ::2]
-        lum = sample.mean(axis=-1) if sample.ndim == 2 else sample
-        bright = float(np.quantile(lum, 1.0 - self.max_saturated))
-        hi = 1.0 / max(bright, 1e-6)  # the brightest allowed fraction just reaches 1
+        peak = sample.max(axis=-1) if sample.ndim == 2 else sample
+        bright = float(np.quantile(peak, 1.0 - self.max_saturated))
+        hi = 0.98 / max(bright, 1e-6)  # the brightest allowed fraction stays just below 1
         lo_g, hi_g = 1e-3, 1e4
         for _ in range(40):  # bisection in log gain on the mean sRGB intensity
             mid = math.sqrt(lo_g * hi_g)

@@ -74,7 +74,7 @@ def png_bytes(image: NDArray[Any]) -> bytes:
 
     buf = io.BytesIO()
     if image.dtype == np.uint16:
-        Image.fromarray(image.astype("<u2"), mode="I;16").save(buf, format="PNG")
+        Image.fromarray(np.ascontiguousarray(image, dtype="<u2")).save(buf, format="PNG")
     else:
         Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(buf, format="PNG")
     return buf.getvalue()
