@@ -35,7 +35,7 @@ __all__ = ["MastCamera", "scene_lighting"]
 
 #: Fixed-exposure mode: linear 1.0 is a surface of albedo ALBEDO_SCALE under this irradiance.
 FIXED_REFERENCE_W_M2 = 600.0
-_SHADOW_CLIP_M = 30.0
+_SHADOW_CLIP_M = 20.0
 
 
 def scene_lighting(
@@ -172,7 +172,7 @@ class MastCamera:
         vis.map.znear = 0.05 / extent
         vis.map.zfar = 4.0
         vis.map.shadowclip = _SHADOW_CLIP_M / extent
-        vis.quality.shadowsize = 4096
+        vis.quality.shadowsize = 2048
         vis.quality.offsamples = 0
         vis_m = lt.visibility_m if math.isfinite(lt.visibility_m) else 1e9
         vis.map.fogstart = 0.0
@@ -226,7 +226,7 @@ class MastCamera:
         r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
         r.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = True
         r.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = True
-        return np.asarray(r.render(), dtype=np.float64) / 255.0
+        return r.render().astype(np.float32) * np.float32(1.0 / 255.0)
 
     def _depth(self, camera_id: int) -> NDArray[np.float32]:
         r = self.renderer
