@@ -23,7 +23,7 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "egl")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from _measure import measure  # noqa: E402
+from _measure import measure
 
 SIM_S = float(os.environ.get("MARSSCENE_BENCH_SECONDS", "34"))
 _SCENE = Path(os.environ.get("MARSSCENE_BENCH_SCENE",

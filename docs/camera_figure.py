@@ -41,7 +41,7 @@ def main(scene: str) -> None:
         rows.append(np.concatenate(tiles, axis=1))
     out = Path(__file__).parent / "img" / "camera_tau_sun.png"
     Image.fromarray(np.concatenate(rows, axis=0)).save(out, optimize=True)
-    print(out)
+    sys.stdout.write(f"{out}\n")
 
 
 if __name__ == "__main__":

@@ -185,7 +185,7 @@ class MastCamera:
             fovy = float(sim.model.cam_fovy[sim.camera_id])
             for name, dy in (("cam_left", cam.stereo_baseline_m / 2),
                              ("cam_right", -cam.stereo_baseline_m / 2)):
-                body.add_camera(name=name, pos=(pos + [0.0, dy, 0.0]).tolist(),
+                body.add_camera(name=name, pos=(pos + np.array([0.0, dy, 0.0])).tolist(),
                                 quat=quat.tolist(), fovy=fovy)
 
     def _upload(self) -> None:

@@ -78,7 +78,7 @@ class Exposure:
         self.read_noise_e = float(read_noise_e)
         self.gain: float | None = None
 
-    def _auto_gain(self, lin: NDArray[np.float64]) -> float:
+    def _auto_gain(self, lin: NDArray[np.floating]) -> float:
         sample = lin[::4, ::4].reshape(-1, lin.shape[-1]) if lin.ndim == 3 else lin[::4, ::4]
         peak = sample.max(axis=-1) if sample.ndim == 2 else sample
         bright = float(np.quantile(peak, 1.0 - self.max_saturated))

@@ -71,7 +71,8 @@ def _default_model() -> AppearanceModel:
         encoding="utf-8"
     )
     doc = {k: v for k, v in json.loads(text).items() if not k.startswith("_")}
-    return AppearanceModel(**{k: tuple(v) if isinstance(v, list) else v for k, v in doc.items()})
+    kwargs: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in doc.items()}
+    return AppearanceModel(**kwargs)
 
 
 @dataclass(frozen=True)
@@ -138,7 +139,7 @@ def regolith_tile(
     diam = d_lo * (d_hi / d_lo) ** (u**2)  # log-uniform, skewed towards small ones
     centre = rng.random((count, 2)) * n
     pfac = np.exp(m.pebble_albedo_sigma * rng.standard_normal(count) - 0.1)
-    k = int(math.ceil(d_hi / texel / 2)) + 1
+    k = math.ceil(d_hi / texel / 2) + 1
     off = np.arange(-k, k + 1)
     dr, dc = np.meshgrid(off, off, indexing="ij")
     rr = np.floor(centre[:, 0, None, None]).astype(np.int64) + dr[None]

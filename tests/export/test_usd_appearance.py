@@ -10,11 +10,11 @@ import pytest
 import marsscene as ms
 
 pytest.importorskip("pxr")
-from pxr import Sdf, Usd, UsdShade  # noqa: E402
+from pxr import Sdf, Usd, UsdShade
 
-from marsscene.export.usd.appearance import DETAIL_TILE_M  # noqa: E402
-from marsscene.seeding import stage_rng  # noqa: E402
-from marsscene.terrain.appearance import regolith_tile  # noqa: E402
+from marsscene.export.usd.appearance import DETAIL_TILE_M
+from marsscene.seeding import stage_rng
+from marsscene.terrain.appearance import regolith_tile
 
 _CFG = {
     "terrain": {"source": "procedural", "size_m": [24.0, 16.0], "post_m": 0.25},
