@@ -192,7 +192,7 @@ class MastCamera:
         ctx = self.renderer._mjr_context
         if self.renderer._gl_context:
             self.renderer._gl_context.make_current()
-        for name in ("cam_terrain", "cam_rocks"):
+        for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
             mid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, name)
             mujoco.mjr_uploadMesh(self.model, ctx, mid)
 

@@ -37,6 +37,8 @@ ALBEDO_SCALE = 0.5
 _ATLAS = 8  # rock texture atlas: 8 x 8 colour cells
 _CELL_PX = 32
 _VARIANTS = 8
+#: Rocks smaller than this are drawn with 20 faces instead of 80.
+PEBBLE_MAX_M = 0.15
 
 
 def read_rock_catalog(scene_dir: Path) -> NDArray[np.float64]:
@@ -58,7 +60,7 @@ def read_rock_catalog(scene_dir: Path) -> NDArray[np.float64]:
     ])
 
 
-def _icosphere() -> tuple[NDArray[np.float64], NDArray[np.int32]]:
+def _icosphere(subdivide: bool) -> tuple[NDArray[np.float64], NDArray[np.int32]]:
     t = (1.0 + 5.0**0.5) / 2.0
     v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
                   [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]],
@@ -67,6 +69,8 @@ def _icosphere() -> tuple[NDArray[np.float64], NDArray[np.int32]]:
                   [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2],
                   [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10],
                   [8, 6, 7], [9, 8, 1]])
+    if not subdivide:
+        return v / np.linalg.norm(v, axis=1, keepdims=True), f.astype(np.int32)
     edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
     uniq, inv = np.unique(edges, axis=0, return_inverse=True)
     mid = len(v) + inv.reshape(3, -1).T  # midpoints of edges (01, 12, 20) per face
@@ -75,6 +79,25 @@ def _icosphere() -> tuple[NDArray[np.float64], NDArray[np.int32]]:
     ab, bc, ca = mid.T
     f2 = np.concatenate([np.c_[a, ab, ca], np.c_[b, bc, ab], np.c_[c, ca, bc], np.c_[ab, bc, ca]])
     return v / np.linalg.norm(v, axis=1, keepdims=True), f2.astype(np.int32)
+
+
+class _RockLOD:
+    """One merged rock mesh: a jittered icosphere template (8 variants) and a capacity."""
+
+    def __init__(self, name: str, subdivide: bool, d_lo_m: float, d_hi_m: float,
+                 rng: np.random.Generator) -> None:
+        self.name, self.d_lo_m, self.d_hi_m = name, d_lo_m, d_hi_m
+        base, self.faces = _icosphere(subdivide)
+        self.v = base[None] * np.exp(0.22 * rng.standard_normal((_VARIANTS, len(base), 1)))
+        self.n = np.stack([_normals_of(v, self.faces) for v in self.v])
+        lon = np.arctan2(base[:, 1], base[:, 0])
+        self.uv = np.c_[0.5 + 0.45 * np.cos(lon) * (1 - np.abs(base[:, 2])) ** 0.5,
+                        0.5 + 0.45 * base[:, 2]]
+        self.capacity = 0
+
+    def select(self, rocks: NDArray[np.float64], idx: NDArray[np.int64]) -> NDArray[np.int64]:
+        d = rocks[idx, 4]
+        return idx[(d >= self.d_lo_m) & (d < self.d_hi_m)]
 
 
 class CameraWorld:
@@ -106,15 +129,10 @@ class CameraWorld:
         speckle = np.exp(0.25 * rng.standard_normal((_ATLAS * _CELL_PX,) * 2))
         cell = np.repeat(np.repeat(colours.reshape(_ATLAS, _ATLAS, 3), _CELL_PX, 0), _CELL_PX, 1)
         self.rock_rgb = _to_u8(cell * speckle[..., None] / ALBEDO_SCALE)
-        base_v, self.rock_faces = _icosphere()
-        jitter = np.exp(0.22 * rng.standard_normal((_VARIANTS, len(base_v), 1)))
-        self.rock_v = base_v[None] * jitter
-        self.rock_n = np.stack([_normals_of(v, self.rock_faces) for v in self.rock_v])
-        lon = np.arctan2(base_v[:, 1], base_v[:, 0])
-        self.rock_uv = np.c_[0.5 + 0.45 * np.cos(lon) * (1 - np.abs(base_v[:, 2])) ** 0.5,
-                             0.5 + 0.45 * base_v[:, 2]]
+        # two levels of detail: 80-face rocks, 20-face pebbles (most of them; cheaper to draw)
+        self.lods = [_RockLOD("cam_rocks", True, PEBBLE_MAX_M, np.inf, rng),
+                     _RockLOD("cam_pebbles", False, 0.0, PEBBLE_MAX_M, rng)]
         self.origin: tuple[int, int] | None = None
-        self.capacity = 0
 
     # ---- spec ------------------------------------------------------------------------------
     def add_to_spec(self, spec: Any, xy_m: tuple[float, float]) -> None:
@@ -130,14 +148,17 @@ class CameraWorld:
             mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = name
         _mesh(spec, "cam_terrain", tv, tn, tt, self.terrain_faces)
         idx = self._rocks_in(r0, c0)
-        self.capacity = int(len(idx) * 1.5) + 64
-        rv, rn, rt, rf = self._rock_arrays(idx)
-        _mesh(spec, "cam_rocks", rv, rn, rt, rf)
-        for name in ("cam_terrain", "cam_rocks"):
-            spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
-                                    material=name.replace("cam_terrain", "cam_regolith")
-                                    .replace("cam_rocks", "cam_rock"),
-                                    contype=0, conaffinity=0, group=0)
+        for lod in self.lods:
+            lod.capacity = int(lod.select(self.rocks, idx).size * 1.5) + 64
+            rv, rn, rt, rf = self._rock_arrays(lod, lod.select(self.rocks, idx))
+            _mesh(spec, lod.name, rv, rn, rt, rf)
+        spec.worldbody.add_geom(name="cam_terrain", type=mujoco.mjtGeom.mjGEOM_MESH,
+                                meshname="cam_terrain", material="cam_regolith", contype=0,
+                                conaffinity=0, group=0)
+        for lod in self.lods:
+            spec.worldbody.add_geom(name=lod.name, type=mujoco.mjtGeom.mjGEOM_MESH,
+                                    meshname=lod.name, material="cam_rock", contype=0,
+                                    conaffinity=0, group=0)
 
     # ---- window ----------------------------------------------------------------------------
     def _window_origin(self, xy_m: tuple[float, float]) -> tuple[int, int]:
@@ -173,14 +194,13 @@ class CameraWorld:
         rk = self.rocks
         inside = ((rk[:, 1] >= min(x0, x1)) & (rk[:, 1] <= max(x0, x1))
                   & (rk[:, 2] >= min(y0, y1)) & (rk[:, 2] <= max(y0, y1)))
-        idx = np.flatnonzero(inside)
-        if self.capacity and len(idx) > self.capacity:  # keep the largest (stable order)
-            idx = np.sort(idx[np.argsort(-rk[idx, 4], kind="stable")[: self.capacity]])
-        return idx
+        return np.flatnonzero(inside)
 
-    def _rock_arrays(self, idx: NDArray[np.int64]) -> tuple[Any, Any, Any, Any]:
-        cap, nv = self.capacity, self.rock_v.shape[1]
+    def _rock_arrays(self, lod: _RockLOD, idx: NDArray[np.int64]) -> tuple[Any, Any, Any, Any]:
+        cap, nv = lod.capacity, lod.v.shape[1]
         rk = self.rocks
+        if len(idx) > cap:  # keep the largest (stable order)
+            idx = np.sort(idx[np.argsort(-rk[idx, 4], kind="stable")[:cap]])
         ids = np.zeros(cap, dtype=np.int64)
         centre = np.zeros((cap, 3))
         scale = np.full((cap, 3), 1e-3)
@@ -196,13 +216,13 @@ class CameraWorld:
         var = ids % _VARIANTS
         yaw = (ids * 0.6180339887) % 1.0 * 2 * np.pi
         cy, sy = np.cos(yaw), np.sin(yaw)
-        local = self.rock_v[var] * scale[:, None, :]
+        local = lod.v[var] * scale[:, None, :]
         v = np.empty_like(local)
         v[..., 0] = cy[:, None] * local[..., 0] - sy[:, None] * local[..., 1]
         v[..., 1] = sy[:, None] * local[..., 0] + cy[:, None] * local[..., 1]
         v[..., 2] = local[..., 2]
         v += centre[:, None, :]
-        ln = self.rock_n[var] / scale[:, None, :]
+        ln = lod.n[var] / scale[:, None, :]
         n = np.empty_like(ln)
         n[..., 0] = cy[:, None] * ln[..., 0] - sy[:, None] * ln[..., 1]
         n[..., 1] = sy[:, None] * ln[..., 0] + cy[:, None] * ln[..., 1]
@@ -210,9 +230,9 @@ class CameraWorld:
         n /= np.linalg.norm(n, axis=-1, keepdims=True)
         cell = (ids * 2654435761) % (_ATLAS * _ATLAS)
         cu, cv = (cell % _ATLAS)[:, None], (cell // _ATLAS)[:, None]
-        uv = np.stack([(cu + self.rock_uv[None, :, 0]) / _ATLAS,
-                       (cv + self.rock_uv[None, :, 1]) / _ATLAS], axis=-1)
-        f = (self.rock_faces[None] + (np.arange(cap) * nv)[:, None, None]).reshape(-1, 3)
+        uv = np.stack([(cu + lod.uv[None, :, 0]) / _ATLAS,
+                       (cv + lod.uv[None, :, 1]) / _ATLAS], axis=-1)
+        f = (lod.faces[None] + (np.arange(cap) * nv)[:, None, None]).reshape(-1, 3)
         return v.reshape(-1, 3), n.reshape(-1, 3), uv.reshape(-1, 2), f
 
     def update(self, model: Any, xy_m: tuple[float, float], force: bool = False) -> bool:
@@ -224,8 +244,10 @@ class CameraWorld:
         self.origin = (r0, c0)
         tv, tn, tt = self._terrain_arrays(r0, c0)
         _write_mesh(model, "cam_terrain", tv, tn, tt)
-        rv, rn, rt, _ = self._rock_arrays(self._rocks_in(r0, c0))
-        _write_mesh(model, "cam_rocks", rv, rn, rt)
+        idx = self._rocks_in(r0, c0)
+        for lod in self.lods:
+            rv, rn, rt, _ = self._rock_arrays(lod, lod.select(self.rocks, idx))
+            _write_mesh(model, lod.name, rv, rn, rt)
         return True
 
 

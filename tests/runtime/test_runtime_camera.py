@@ -114,7 +114,7 @@ def test_visual_rocks_render_but_never_collide(rocky_scene) -> None:
     import mujoco
 
     m = cam.model
-    for name in ("cam_terrain", "cam_rocks"):
+    for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
         gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)
         assert m.geom_contype[gid] == 0 and m.geom_conaffinity[gid] == 0
         assert mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_GEOM, name) == -1
