@@ -177,3 +177,19 @@ def test_camera_size_option_errors(rocky_scene, tmp_path) -> None:
                                     "--camera-size", "640by480", "--out", str(tmp_path / "o")])
     assert res.exit_code != 0 and "--camera-size '640by480' must be WIDTHxHEIGHT" in res.output
     assert "Traceback" not in res.output
+
+
+def test_sensor_noise_is_seeded(rocky_scene) -> None:
+    imgs = []
+    for seed in (3, 3, None):
+        run = RunConfig(camera=CameraConfig(**_SMALL, exposure="fixed", sensor_noise=True))
+        sim = RoverSim(rocky_scene, run=run, start_xy_m=(-6.0, 1.0), settle_s=0.2)
+        try:
+            cam = sim.make_renderer(rng=None if seed is None else np.random.default_rng(seed))
+        except RuntimeSimError as err:
+            pytest.skip(f"no headless OpenGL (EGL/OSMesa) here: {err}")
+        imgs.append(sim.render(cam)[0].astype(float))
+        cam.close()
+    np.testing.assert_array_equal(imgs[0], imgs[1])
+    diff = imgs[0] - imgs[2]  # noisy minus noise-free: zero-mean, a few codes of spread
+    assert abs(diff.mean()) < 0.5 and 0.5 < diff.std() < 8.0
