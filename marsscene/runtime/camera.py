@@ -111,7 +111,7 @@ class MastCamera:
         self.vis = mujoco.MjvOption()
         self.exposure = Exposure(cam.exposure, target_mean=cam.target_mean,
                                  fixed_gain=cam.exposure_gain)
-        self.exposure_right = Exposure(cam.exposure, target_mean=cam.target_mean,
+        self.exposure_stereo = Exposure(cam.exposure, target_mean=cam.target_mean,
                                        fixed_gain=cam.exposure_gain)
         try:
             self.renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
@@ -248,9 +248,9 @@ class MastCamera:
         """Rectified stereo pair (left, right) at the current state (call after :meth:`render`)."""
         if self.stereo_ids is None:
             raise RuntimeSimError("the camera was configured without stereo")
-        left = self.exposure_right.apply(self._linear(self.stereo_ids[0]), self.noise_rng)
+        left = self.exposure_stereo.apply(self._linear(self.stereo_ids[0]), self.noise_rng)
         # both views share the left view's gain, as a synchronised stereo head does
-        g = self.exposure_right.gain
+        g = self.exposure_stereo.gain
         right_exp = Exposure("fixed", fixed_gain=g if g is not None else 1.0)
         right = right_exp.apply(self._linear(self.stereo_ids[1]), self.noise_rng)
         return left, right
