@@ -40,7 +40,7 @@ def _drive(kind: str) -> dict[str, float]:
     corridor = np.zeros((1, 2)) if kind in ("corridor", "sphere", "lidar", "camera") else None
     run = RunConfig(
         lidar=LidarConfig() if kind == "lidar" else None,
-        camera=CameraConfig() if kind == "camera" else None,
+        camera=CameraConfig(width_px=320, height_px=240) if kind == "camera" else None,
     )
     t0 = time.perf_counter()
     sim = RoverSim(_SCENE, run=run, rover=rover, contact_corridor_xy_m=corridor,

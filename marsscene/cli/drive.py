@@ -38,6 +38,19 @@ def _read_waypoints(path: Path) -> Any:
     return np.asarray(rows)
 
 
+def _size(text: str) -> tuple[int, int]:
+    from marsscene.errors import ConfigError
+
+    parts = text.lower().split("x")
+    try:
+        w, h = int(parts[0]), int(parts[1])
+        if len(parts) != 2:
+            raise ValueError
+    except (ValueError, IndexError):
+        raise ConfigError(f"--camera-size {text!r} must be WIDTHxHEIGHT, e.g. 640x480") from None
+    return w, h
+
+
 @click.command(short_help="Drive the rover on a built scene and log GT, odometry, IMU, sensors.")
 @click.argument("scene_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--route", "route_path", type=_PATH, help="Route as a TUM file (x, y are used).")
@@ -61,7 +74,23 @@ def _read_waypoints(path: Path) -> Any:
     show_default=True,
     help="Run folder.",
 )
-@click.option("--camera", is_flag=True, help="Log 320x240 RGB-D mast camera images at 10 Hz.")
+@click.option("--camera", is_flag=True, help="Log RGB-D mast camera images (docs/camera.md).")
+@click.option("--camera-size", default="640x480", show_default=True, metavar="WxH",
+              help="Camera image size in pixels.")
+@click.option("--camera-hz", type=float, default=10.0, show_default=True,
+              help="Camera rate (must divide 500 Hz).")
+@click.option("--stereo", is_flag=True,
+              help="Also log a rectified Navcam-like stereo pair (0.424 m baseline).")
+@click.option("--exposure", type=click.Choice(["auto", "fixed"]), default="auto",
+              show_default=True, help="Auto-exposure (mean 0.45) or a fixed exposure.")
+@click.option("--exposure-gain", type=click.FloatRange(min=0, min_open=True), default=1.0,
+              show_default=True, help="Gain of --exposure fixed.")
+@click.option("--camera-noise", is_flag=True, help="Add seeded shot + read noise to images.")
+@click.option("--no-shadows", is_flag=True, help="Turn the sun's shadow map off (faster).")
+@click.option("--tau", type=click.FloatRange(0, 10), default=None,
+              help="Override the scene's dust optical depth for the camera's lighting.")
+@click.option("--sun-elevation", type=click.FloatRange(-10, 90), default=None,
+              help="Override the sun elevation (deg) for the camera's lighting.")
 @click.option("--lidar", is_flag=True, help="Log a 16-channel LiDAR at 10 Hz (PLY).")
 @click.option("--noise-config", type=_PATH, help="TOML/JSON noise config ([noise] table).")
 @click.option(
@@ -112,6 +141,15 @@ def drive(
     max_slope: float,
     write_rover_xml: bool,
     corridor: float,
+    camera_size: str,
+    camera_hz: float,
+    stereo: bool,
+    exposure: str,
+    exposure_gain: float,
+    camera_noise: bool,
+    no_shadows: bool,
+    tau: float | None,
+    sun_elevation: float | None,
     write_bag: bool = False,
     overwrite: bool = False,
     **bag_opts: Any,
@@ -144,10 +182,17 @@ def drive(
 
     with user_errors():
         noise = NoiseConfig.from_file(noise_config) if noise_config else NoiseConfig()
+        cam_cfg = None
+        if camera or stereo:
+            w, h = _size(camera_size)
+            cam_cfg = CameraConfig(width_px=w, height_px=h, rate_hz=camera_hz, stereo=stereo,
+                                   exposure=exposure, exposure_gain=exposure_gain,
+                                   sensor_noise=camera_noise, shadows=not no_shadows, tau=tau,
+                                   sun_elevation_deg=sun_elevation)
         run = RunConfig(
             noise=noise,
             lidar=LidarConfig() if lidar else None,
-            camera=CameraConfig() if camera else None,
+            camera=cam_cfg,
         )
         sim = RoverSim(scene_dir, run=run, settle_s=0.0)
         if route_path is not None:

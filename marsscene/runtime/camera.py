@@ -1,15 +1,26 @@
-"""The mast RGB-D camera: MuJoCo offscreen rendering (``MUJOCO_GL=egl`` or ``osmesa``).
+"""The mast camera (mono RGB-D, optional Navcam-like stereo): MuJoCo offscreen rendering.
 
-A software GL (llvmpipe) spends ~0.5 us per terrain post per frame, so a 1389 x 1345 terrain
-costs ~0.9 s a frame. When the terrain is larger than ``CameraConfig.terrain_window_m``, the
-camera renders a second model whose hfield is a full-resolution window around the rover; the
-window is re-centred (and re-uploaded to GL) when the rover has moved a quarter of it. Rocks
-and every other geom are rendered as in the simulation.
+``MUJOCO_GL=egl`` (or ``osmesa``). The camera renders its own model of the scene
+(:class:`marsscene.runtime.camera_world.CameraWorld`): a smooth, textured full-resolution
+terrain window and every catalogue rock in it as one visual-only mesh, re-centred when the
+rover has moved a quarter window. Lighting comes from the scene's lighting stage (manifest),
+in linear units:
+
+* sun: directional light, colour ``k E_dn sun_rgb``; shadow map centred on the camera;
+* sky: ambient ``k E_diffuse sky_rgb`` and a skybox of radiance ``E_diffuse / pi`` (zenith
+  0.8x, horizon 1.2x); dust fog with the meteorological visibility (``3.912 H / tau``);
+
+where ``k`` scales the brightest sunlit surface to just below 1. The image is then exposed
+(:class:`marsscene.runtime.exposure.Exposure`: auto-exposure, or fixed), optionally with
+seeded shot + read noise, and sRGB-encoded. Depth is metric (m), from the same model.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import os
+from pathlib import Path
 from typing import Any
 
 import mujoco
@@ -17,49 +28,91 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.errors import RuntimeSimError
+from marsscene.runtime.camera_world import ALBEDO_SCALE, CameraWorld
+from marsscene.runtime.exposure import Exposure
 
-__all__ = ["MastCamera"]
+__all__ = ["MastCamera", "scene_lighting"]
+
+#: Fixed-exposure mode: linear 1.0 is a surface of albedo ALBEDO_SCALE under this irradiance.
+FIXED_REFERENCE_W_M2 = 600.0
+_SHADOW_CLIP_M = 20.0
+
+
+def scene_lighting(
+    scene_dir: Path,
+    *,
+    tau: float | None = None,
+    sun_elevation_deg: float | None = None,
+    sun_azimuth_deg: float | None = None,
+) -> Any:
+    """The scene's :class:`~marsscene.lighting.Lighting` from its manifest, with overrides."""
+    from marsscene._validate import dataclass_from_mapping
+    from marsscene.lighting import LightingConfig, compute_lighting
+
+    path = Path(scene_dir) / "manifest.json"
+    doc: dict[str, Any] = {}
+    if path.is_file():
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    cfg = dict((doc.get("config") or {}).get("lighting") or {})
+    summary = doc.get("summary") or {}
+    cfg.pop("enabled", None)
+    az = sun_azimuth_deg if sun_azimuth_deg is not None else summary.get(
+        "lighting_sun_azimuth_deg", 135.0)
+    el = sun_elevation_deg if sun_elevation_deg is not None else summary.get(
+        "lighting_sun_elevation_deg", 35.0)
+    cfg.update(utc=None, ltst_h=None, sun_azimuth_deg=float(az), sun_elevation_deg=float(el))
+    if tau is not None:
+        cfg["tau"] = float(tau)
+    config = dataclass_from_mapping(LightingConfig, cfg, "lighting")
+    return compute_lighting(config, lat_deg=0.0, lon_east_deg=0.0,
+                            grid_convergence_deg=float(summary.get("grid_convergence_deg", 0.0)))
 
 
 class MastCamera:
-    """Offscreen renderer of a :class:`~marsscene.runtime.sim.RoverSim`'s ``navcam``."""
+    """Offscreen renderer of a :class:`~marsscene.runtime.sim.RoverSim`'s mast camera(s)."""
 
-    def __init__(self, sim: Any) -> None:
-        cam = sim.run.camera
-        self.width: int = cam.width_px if cam is not None else 320
-        self.height: int = cam.height_px if cam is not None else 240
-        self.depth = cam.depth if cam is not None else True
-        self.shadows = cam.shadows if cam is not None else False
-        window_m = cam.terrain_window_m if cam is not None else 60.0
-        hf = sim.heightfield
-        self.n = int(window_m / hf.cell_size_m) // 2 * 2 + 1
-        rows, cols = hf.shape
-        self.windowed = self.n < rows or self.n < cols
-        self.model, self.data = sim.model, sim.data
-        if self.windowed:
-            self.nr, self.nc = min(self.n, rows), min(self.n, cols)
-            spec = sim.build_spec()
-            h = spec.hfield("terrain")
-            h.file = ""
-            h.nrow, h.ncol = self.nr, self.nc
-            h.userdata = np.zeros(self.nr * self.nc).tolist()
-            size = list(h.size)
-            h.size = [
-                (self.nc - 1) * hf.cell_size_m / 2,
-                (self.nr - 1) * hf.cell_size_m / 2,
-                size[2],
-                size[3],
-            ]
-            self.model = spec.compile()
-            self.data = mujoco.MjData(self.model)
-            self.terrain_geom = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "terrain")
-            self.hfield_id = int(self.model.geom_dataid[self.terrain_geom])
-            self.z_min = float(hf.z_m.min())
-            self.z_range = float(size[2])
-            self.origin: tuple[int, int] | None = None
-        self.camera_id = sim.camera_id
+    def __init__(self, sim: Any, *, rng: np.random.Generator | None = None) -> None:
+        from marsscene.runtime.config import CameraConfig
+
+        cam = sim.run.camera if sim.run.camera is not None else CameraConfig()
+        self.config = cam
+        self.width, self.height = cam.width_px, cam.height_px
+        self.depth = cam.depth
+        self.noise_rng = rng if cam.sensor_noise else None
+        lt = scene_lighting(sim.scene_dir, tau=cam.tau, sun_elevation_deg=cam.sun_elevation_deg,
+                            sun_azimuth_deg=cam.sun_azimuth_deg)
+        self.lighting = lt
+        share = lt.direct_horizontal_w_m2 / max(lt.global_horizontal_w_m2, 1e-9)
+        from marsscene.seeding import stage_rng
+
+        seed = _scene_seed(sim.scene_dir)
+        self.world = CameraWorld(
+            sim.heightfield, Path(sim.scene_dir), window_m=cam.terrain_window_m,
+            tile_m=cam.texture_tile_m, tile_px=cam.texture_px,
+            sun_direction_enu=lt.sun_direction_enu, direct_share=share,
+            rng=stage_rng(seed, "texture"),
+        )
+        rows, cols = sim.heightfield.shape
+        self.windowed = self.world.nr < rows or self.world.nc < cols
+        spec = sim.build_spec()
+        self._edit(spec, sim, lt)
+        self.model = spec.compile()
+        self.data = mujoco.MjData(self.model)
+        self.world.update(self.model, tuple(sim.pose()[0][:2]), force=True)
+        name = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, n)  # noqa: E731
+        self.camera_id = name("rover/navcam")
+        self.stereo_ids = (name("cam_left"), name("cam_right")) if cam.stereo else None
+        self.sun_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_LIGHT, "sun")
+        m = self.model
+        self.rock_geoms = np.flatnonzero(
+            (m.geom_bodyid == 0) & (m.geom_type == mujoco.mjtGeom.mjGEOM_MESH)
+            & (m.geom_contype != 0))
+        self._show_window_rocks()
         self.vis = mujoco.MjvOption()
-        self.vis.geomgroup[3] = 1  # the terrain lives in group 3 (see RoverSim)
+        self.exposure = Exposure(cam.exposure, target_mean=cam.target_mean,
+                                 fixed_gain=cam.exposure_gain)
+        self.exposure_stereo = Exposure(cam.exposure, target_mean=cam.target_mean,
+                                       fixed_gain=cam.exposure_gain)
         try:
             self.renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
         except Exception as err:
@@ -68,50 +121,148 @@ class MastCamera:
                 f" {err}; install EGL or OSMesa (apt-get install libosmesa6) and set MUJOCO_GL "
                 "before importing mujoco"
             ) from None
+        self._upload()
 
-    def _recentre(self, sim: Any) -> None:
-        hf = sim.heightfield
-        rows, cols = hf.shape
-        x, y = sim.pose()[0][:2]
-        r, c = hf.rowcol_of(x, y)
-        r0 = int(np.clip(round(float(r)) - self.nr // 2, 0, rows - self.nr))
-        c0 = int(np.clip(round(float(c)) - self.nc // 2, 0, cols - self.nc))
-        if self.origin is not None:
-            dr, dc = abs(r0 - self.origin[0]), abs(c0 - self.origin[1])
-            if max(dr, dc) < self.n // 4:
-                return
-        self.origin = (r0, c0)
-        win = hf.z_m[r0 : r0 + self.nr, c0 : c0 + self.nc].astype(np.float64)
-        m = self.model
-        adr = int(m.hfield_adr[self.hfield_id])
-        m.hfield_data[adr : adr + win.size] = ((win - self.z_min) / self.z_range).ravel()
-        cx, cy = hf.xy_of(r0 + (self.nr - 1) / 2, c0 + (self.nc - 1) / 2)
-        m.geom_pos[self.terrain_geom] = (float(cx), float(cy), self.z_min)
+    # ---- model edits ---------------------------------------------------------------------------
+    def _edit(self, spec: Any, sim: Any, lt: Any) -> None:
+        cam = self.config
+        terrain = spec.geom("terrain")
+        terrain.group = 5  # hidden: the window mesh is drawn instead
+        for geom in spec.geoms:  # MJCF collision rocks: literature rock colour
+            if geom.material == "rock":
+                geom.material = "cam_rock_geom"
+        spec.add_material(name="cam_rock_geom", rgba=[0.2 / ALBEDO_SCALE * 0.9,
+                                                       0.145 / ALBEDO_SCALE * 0.9,
+                                                       0.11 / ALBEDO_SCALE * 0.9, 1.0],
+                          specular=0.0, shininess=0.0, reflectance=0.0)
+        self.world.add_to_spec(spec, tuple(sim.pose()[0][:2]))
+        e_dn, e_dif = lt.direct_normal_w_m2, lt.diffuse_horizontal_w_m2
+        if cam.exposure == "fixed":
+            k = 1.0 / FIXED_REFERENCE_W_M2
+        else:  # brightest case: albedo ALBEDO_SCALE facing the sun, plus the sky
+            k = 0.95 / max(e_dn + e_dif, 1e-6)
+        sun_rgb, sky_rgb = np.asarray(lt.sun_color_rgb), np.asarray(lt.sky_color_rgb)
+        for light in spec.lights:
+            light.active = light.name == "sun"
+        sun = spec.light("sun")
+        if sun is None:
+            sun = spec.worldbody.add_light(name="sun")
+        sun.type = mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+        sun.dir = [-c for c in lt.sun_direction_enu]
+        sun.diffuse = (k * e_dn * sun_rgb).tolist()
+        sun.specular = [0.0, 0.0, 0.0]
+        sun.ambient = [0.0, 0.0, 0.0]
+        sun.castshadow = bool(cam.shadows)
+        vis = spec.visual
+        vis.headlight.ambient = (k * e_dif * sky_rgb).tolist()
+        vis.headlight.diffuse = [0.0, 0.0, 0.0]
+        vis.headlight.specular = [0.0, 0.0, 0.0]
+        sky = k * e_dif * sky_rgb / ALBEDO_SCALE  # radiance E_diffuse / pi, in render units
+        skybox = next((t for t in spec.textures
+                       if t.type == mujoco.mjtTexture.mjTEXTURE_SKYBOX), None)
+        if skybox is None:
+            skybox = spec.add_texture(name="cam_sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+                                      width=64, height=64)
+        skybox.builtin = mujoco.mjtBuiltin.mjBUILTIN_GRADIENT
+        skybox.file = ""
+        skybox.rgb1 = np.clip(0.8 * sky, 0, 1).tolist()
+        skybox.rgb2 = np.clip(1.2 * sky, 0, 1).tolist()
+        extent = max(cam.terrain_window_m, 10.0)
+        spec.stat.extent = extent
+        vis.map.znear = 0.05 / extent
+        vis.map.zfar = 4.0
+        vis.map.shadowclip = _SHADOW_CLIP_M / extent
+        vis.quality.shadowsize = 2048
+        vis.quality.offsamples = 0
+        vis_m = lt.visibility_m if math.isfinite(lt.visibility_m) else 1e9
+        vis.map.fogstart = 0.0
+        vis.map.fogend = float(min(vis_m, 1e9) / extent)
+        vis.rgba.fog = [*np.clip(1.2 * sky, 0, 1).tolist(), 1.0]
+        if cam.stereo:
+            body = spec.body("rover/base_link")
+            pos = np.asarray(sim.model.cam_pos[sim.camera_id], dtype=np.float64)
+            quat = np.asarray(sim.model.cam_quat[sim.camera_id], dtype=np.float64)
+            fovy = float(sim.model.cam_fovy[sim.camera_id])
+            for name, dy in (("cam_left", cam.stereo_baseline_m / 2),
+                             ("cam_right", -cam.stereo_baseline_m / 2)):
+                body.add_camera(name=name, pos=(pos + np.array([0.0, dy, 0.0])).tolist(),
+                                quat=quat.tolist(), fovy=fovy)
+
+    def _upload(self) -> None:
         ctx = self.renderer._mjr_context
         if self.renderer._gl_context:
             self.renderer._gl_context.make_current()
-        mujoco.mjr_uploadHField(m, ctx, self.hfield_id)
+        for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
+            mid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, name)
+            mujoco.mjr_uploadMesh(self.model, ctx, mid)
+
+    # ---- rendering -----------------------------------------------------------------------------
+    def _sync(self, sim: Any) -> None:
+        xy = tuple(sim.pose()[0][:2])
+        if self.world.update(self.model, xy):
+            self._upload()
+            self._show_window_rocks()
+        self.data.qpos[: sim.data.qpos.size] = sim.data.qpos
+        mujoco.mj_kinematics(self.model, self.data)
+        # shadow map: a box of +-_SHADOW_CLIP_M around the ground ahead of the camera
+        cam_pos = self.data.cam_xpos[self.camera_id]
+        fwd = -self.data.cam_xmat[self.camera_id].reshape(3, 3)[:, 2]
+        centre = cam_pos + 0.5 * _SHADOW_CLIP_M * np.r_[fwd[:2], 0.0]
+        s = np.asarray(self.lighting.sun_direction_enu)
+        self.model.light_pos[self.sun_id] = centre + 2.0 * _SHADOW_CLIP_M * s
+        mujoco.mj_camlight(self.model, self.data)
+
+    def _show_window_rocks(self) -> None:
+        """MJCF rocks outside the terrain window would float in the sky: hide them."""
+        x0, y0, x1, y1 = self.world.window_bounds_xy_m()
+        p = self.model.geom_pos[self.rock_geoms]
+        inside = (p[:, 0] >= x0) & (p[:, 0] <= x1) & (p[:, 1] >= y0) & (p[:, 1] <= y1)
+        self.model.geom_group[self.rock_geoms] = np.where(inside, 0, 5)
+
+    def _linear(self, camera_id: int) -> NDArray[np.float64]:
+        r = self.renderer
+        r.update_scene(self.data, camera=camera_id, scene_option=self.vis)
+        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.config.shadows
+        r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
+        r.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = True
+        r.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = True
+        return r.render().astype(np.float32) * np.float32(1.0 / 255.0)
+
+    def _depth(self, camera_id: int) -> NDArray[np.float32]:
+        r = self.renderer
+        r.enable_depth_rendering()
+        r.update_scene(self.data, camera=camera_id, scene_option=self.vis)
+        depth = r.render().astype(np.float32)
+        r.disable_depth_rendering()
+        far = self.model.vis.map.zfar * self.model.stat.extent
+        return np.where(depth < 0.999 * far, depth, 0.0).astype(np.float32)  # sky: no return
 
     def render(self, sim: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
-        """RGB (H, W, 3) uint8 and depth (H, W) float32 in m (None if depth is off)."""
-        if self.windowed:
-            self._recentre(sim)
-            self.data.qpos[:] = sim.data.qpos
-            mujoco.mj_kinematics(self.model, self.data)
-            mujoco.mj_camlight(self.model, self.data)
-        r = self.renderer
-        r.disable_depth_rendering()
-        r.update_scene(self.data, camera=self.camera_id, scene_option=self.vis)
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-        rgb = r.render().copy()
-        depth = None
-        if self.depth:
-            r.enable_depth_rendering()
-            r.update_scene(self.data, camera=self.camera_id, scene_option=self.vis)
-            depth = r.render().astype(np.float32)
-            r.disable_depth_rendering()
+        """RGB (H, W, 3) uint8 (exposed, sRGB) and depth (H, W) float32 in m (or None)."""
+        self._sync(sim)
+        rgb = self.exposure.apply(self._linear(self.camera_id), self.noise_rng)
+        depth = self._depth(self.camera_id) if self.depth else None
         return rgb, depth
+
+    def render_stereo(self, sim: Any) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
+        """Rectified stereo pair (left, right) at the current state (call after :meth:`render`)."""
+        if self.stereo_ids is None:
+            raise RuntimeSimError("the camera was configured without stereo")
+        left = self.exposure_stereo.apply(self._linear(self.stereo_ids[0]), self.noise_rng)
+        # both views share the left view's gain, as a synchronised stereo head does
+        g = self.exposure_stereo.gain
+        right_exp = Exposure("fixed", fixed_gain=g if g is not None else 1.0)
+        right = right_exp.apply(self._linear(self.stereo_ids[1]), self.noise_rng)
+        return left, right
 
     def close(self) -> None:
         self.renderer.close()
+
+
+def _scene_seed(scene_dir: Any) -> int:
+    path = Path(scene_dir) / "manifest.json"
+    if path.is_file():
+        seed = json.loads(path.read_text(encoding="utf-8")).get("seed")
+        if isinstance(seed, int) and seed >= 0:
+            return seed
+    return 0

@@ -163,17 +163,38 @@ class LidarConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class CameraConfig:
-    """Mast RGB-D camera rendered offscreen (``MUJOCO_GL=egl`` or ``osmesa``)."""
+    """Mast RGB-D camera rendered offscreen (``MUJOCO_GL=egl`` or ``osmesa``).
 
-    width_px: int = 320
-    height_px: int = 240
+    See docs/camera.md: appearance, lighting, exposure and the stereo pair.
+    """
+
+    width_px: int = 640
+    height_px: int = 480
     fovy_deg: float = 60.0
     rate_hz: float = 10.0
     depth: bool = True
-    shadows: bool = False
-    """Shadow maps cost ~6x render time on a software (llvmpipe) GL; off by default."""
+    shadows: bool = True
+    """Sun shadow map (2048 texels over +-20 m around the camera: 2 cm texels)."""
     terrain_window_m: float = 60.0
     """Render a full-resolution terrain window this wide around the rover (speed)."""
+    texture_tile_m: float = 8.0
+    """Ground size of the seeded regolith detail tile (it repeats with this period)."""
+    texture_px: int = 2048
+    """Texels per side of the detail tile (8 m / 2048 = 3.9 mm texels)."""
+    exposure: str = "auto"
+    """``"auto"`` (mean sRGB intensity -> ``target_mean``) or ``"fixed"`` (``exposure_gain``)."""
+    target_mean: float = 0.45
+    exposure_gain: float = 1.0
+    """Fixed mode: linear 1.0 = albedo 0.5 under 600 W/m^2, times this gain."""
+    sensor_noise: bool = False
+    """Shot + read noise (10 000 e- full well, 10 e- read noise), from the sensor rng."""
+    stereo: bool = False
+    """Also render a rectified Navcam-like stereo pair (camera/left, camera/right)."""
+    stereo_baseline_m: float = 0.424
+    tau: float | None = None
+    """Override the scene's dust optical depth (lighting is recomputed)."""
+    sun_elevation_deg: float | None = None
+    sun_azimuth_deg: float | None = None
 
     def __post_init__(self) -> None:
         if not (16 <= int(self.width_px) <= 4096 and 16 <= int(self.height_px) <= 4096):
@@ -182,6 +203,19 @@ class CameraConfig:
             )
         check_range("camera.fovy_deg", self.fovy_deg, 5.0, 170.0)
         check_range("camera.terrain_window_m", self.terrain_window_m, 5.0, 1e5)
+        check_range("camera.texture_tile_m", self.texture_tile_m, 0.5, 100.0)
+        if not 64 <= int(self.texture_px) <= 8192:
+            raise ConfigError(f"camera.texture_px = {self.texture_px!r}; allowed 64..8192")
+        check_choice("camera.exposure", self.exposure, ("auto", "fixed"))
+        check_range("camera.target_mean", self.target_mean, 0.05, 0.95)
+        check_range("camera.exposure_gain", self.exposure_gain, 0.0, 1e4, lo_open=True)
+        check_range("camera.stereo_baseline_m", self.stereo_baseline_m, 0.01, 5.0)
+        if self.tau is not None:
+            check_range("camera.tau", self.tau, 0.0, 10.0)
+        if self.sun_elevation_deg is not None:
+            check_range("camera.sun_elevation_deg", self.sun_elevation_deg, -10.0, 90.0)
+        if self.sun_azimuth_deg is not None:
+            check_range("camera.sun_azimuth_deg", self.sun_azimuth_deg, -360.0, 360.0)
         _check_rate("camera.rate_hz", self.rate_hz)
 
 

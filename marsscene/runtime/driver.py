@@ -41,6 +41,7 @@ class DriveResult:
         self.gt, self.odom, self.cmd, self.summary = gt, odom, cmd, summary
         self.lidar_scans, self.images = lidar, images
         self.imu: np.ndarray = np.zeros((0, 7))
+        self.stereo_images: list[tuple[np.ndarray, np.ndarray]] = []
 
 
 def _period(sim: Any, rate_hz: float) -> int:
@@ -101,7 +102,8 @@ def drive(
     renderer = None
     if run.camera is not None:
         periods["camera"] = _period(sim, run.camera.rate_hz)
-        renderer = sim.make_renderer()
+        renderer = sim.make_renderer(rng=rng.spawn(1)[0])
+    stereo = renderer is not None and renderer.stereo_ids is not None
     tick = math.gcd(*periods.values())
     out = Path(out_dir) if out_dir is not None else None
     logs: dict[str, CsvLog] = {}
@@ -123,6 +125,12 @@ def drive(
         if renderer is not None:
             logs["camera"] = CsvLog(out / "camera" / "stamps.csv", ["t", "rgb", "depth"])
             write_json(out / "camera" / "intrinsics.json", sim.camera_intrinsics())
+            if stereo:
+                for side in ("left", "right"):
+                    logs[side] = CsvLog(out / "camera" / side / "stamps.csv", ["t", "rgb"])
+                    (out / "camera" / side / "rgb").mkdir(parents=True, exist_ok=True)
+                    write_json(out / "camera" / side / "intrinsics.json",
+                               sim.camera_intrinsics(side))
     pos0, _ = sim.pose()
     odo = WheelOdometry(sim.rover, pos0[0], pos0[1], pos0[2], sim.yaw_rad())
     gt_rows: list[np.ndarray] = []
@@ -131,6 +139,7 @@ def drive(
     imu_rows: list[np.ndarray] = []
     scans: list[dict[str, Any]] = []
     images: list[tuple[np.ndarray, np.ndarray | None]] = []
+    stereo_images: list[tuple[np.ndarray, np.ndarray]] = []
     steps_limit = round(limit / sim.dt_physics_s)
     dt_ctrl = periods["control"] * sim.dt_physics_s
     k = 0
@@ -189,6 +198,14 @@ def drive(
                     (out / "camera" / "depth" / name).write_bytes(png_bytes(mm))
                     dname = "depth/" + name
                 logs["camera"].row(t, ("rgb/" + name, dname))
+            if stereo:
+                pair = renderer.render_stereo(sim)
+                for side, img in zip(("left", "right"), pair, strict=True):
+                    if out is not None:
+                        (out / "camera" / side / "rgb" / name).write_bytes(png_bytes(img))
+                        logs[side].row(t, ("rgb/" + name,))
+                if keep_sensors:
+                    stereo_images.append(pair)
             if keep_sensors:
                 images.append((rgb, depth))
             n_cam += 1
@@ -200,7 +217,10 @@ def drive(
     for log in logs.values():
         log.close()
     if renderer is not None:
+        summary_camera = {"exposure_gain_last": renderer.exposure.gain}
         renderer.close()
+    else:
+        summary_camera = {}
     gt_a, od_a = np.array(gt_rows), np.array(od_rows)
     gt = Trajectory.from_wxyz(gt_a[:, 0], gt_a[:, 1:4], gt_a[:, 4:8])
     odom = Trajectory.from_wxyz(od_a[:, 0], od_a[:, 1:4], od_a[:, 4:8])
@@ -211,6 +231,7 @@ def drive(
         "lidar_scans": n_lidar,
         "camera_frames": n_cam,
         "goal_reached": bool(follower.done) if follower is not None else None,
+        **summary_camera,
     }
     if route is not None:
         ct = cross_track_m(route, gt.xyz_m[:, :2])
@@ -246,6 +267,7 @@ def drive(
             },
         )
     res = DriveResult(gt, odom, np.array(cmd_rows), summary, scans, images)
+    res.stereo_images = stereo_images
     if keep_sensors and imu_rows:
         res.imu = np.array(imu_rows)
     return res

@@ -70,14 +70,15 @@ def ply_bytes(
 
 
 def png_bytes(image: NDArray[Any]) -> bytes:
-    """PNG of an RGB uint8 (H, W, 3) or a uint16 (H, W) image."""
+    """PNG of an RGB uint8 (H, W, 3) or a uint16 (H, W) image (zlib level 1: ~4x faster than 6)."""
     from PIL import Image
 
     buf = io.BytesIO()
     if image.dtype == np.uint16:
-        Image.fromarray(image.astype("<u2")).save(buf, format="PNG")  # mode I;16
+        img = Image.fromarray(np.ascontiguousarray(image, dtype="<u2"))
     else:
-        Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(buf, format="PNG")
+        img = Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8))
+    img.save(buf, format="PNG", compress_level=1)
     return buf.getvalue()
 
 

@@ -258,23 +258,41 @@ class RoverSim:
             raise RuntimeSimError(f"simulation diverged at t = {self.data.time:.3f} s")
 
     # ---- camera ------------------------------------------------------------------------------
-    def make_renderer(self) -> Any:
-        """An offscreen mast-camera renderer (:class:`marsscene.runtime.camera.MastCamera`)."""
+    def make_renderer(self, *, rng: np.random.Generator | None = None) -> Any:
+        """An offscreen mast-camera renderer (:class:`marsscene.runtime.camera.MastCamera`).
+
+        ``rng`` draws sensor noise when ``CameraConfig.sensor_noise`` is on.
+        """
         from marsscene.runtime.camera import MastCamera
 
-        return MastCamera(self)
+        return MastCamera(self, rng=rng)
 
     def render(self, renderer: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
         """RGB (H, W, 3) uint8 and depth (H, W) float32 in m (None if depth is off)."""
         return renderer.render(self)
 
-    def camera_intrinsics(self) -> dict[str, Any]:
-        """Pinhole intrinsics of the mast camera (OpenCV convention, pixels)."""
+    def camera_intrinsics(self, side: str | None = None) -> dict[str, Any]:
+        """Pinhole intrinsics of the mast camera (OpenCV convention, pixels).
+
+        ``side = "left"`` / ``"right"``: one view of the rectified stereo pair (same
+        intrinsics; the right camera sits ``baseline_m`` along the left camera's +x).
+        """
         cam = self.run.camera
-        w, h = (cam.width_px, cam.height_px) if cam is not None else (320, 240)
+        w, h = (cam.width_px, cam.height_px) if cam is not None else (640, 480)
         fovy = math.radians(float(self.model.cam_fovy[self.camera_id]))
         f = 0.5 * h / math.tan(fovy / 2)
+        extra: dict[str, Any] = {}
+        if side is not None:
+            b = cam.stereo_baseline_m if cam is not None else 0.424
+            extra = {
+                "side": side,
+                "baseline_m": b,
+                "rectified": True,
+                "T_left_right_m": [b, 0.0, 0.0],
+                "offset_from_navcam_m": [(-0.5 if side == "left" else 0.5) * b, 0.0, 0.0],
+            }
         return {
+            **extra,
             "width": w,
             "height": h,
             "fx": f,

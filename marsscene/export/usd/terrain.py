@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
+from marsscene.export.usd.appearance import author_regolith_detail
 from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
 from marsscene.terrain.mesh import heightfield_tiles
 
@@ -56,6 +57,7 @@ def _material(stage: Any, scene: Any, assets: dict[str, bytes]) -> UsdShade.Mate
         diffuse.ConnectToSource(tex.ConnectableAPI(), "rgb")
     else:
         diffuse.Set(Gf.Vec3f(*REGOLITH_ALBEDO_RGB))
+    author_regolith_detail(stage, f"{looks}/Regolith", shader, scene, assets)
     mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
     return mat
 
