@@ -35,6 +35,7 @@ from marsscene.terrain.from_dem import (
     GeoFrame,
     prepare_dem,
 )
+from marsscene.terrain.landforms import LANDFORM_CITATIONS, add_landform
 
 __all__ = ["build_scene"]
 
@@ -116,6 +117,11 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                 rms_slope_deg=tcfg.rms_slope_deg,
                 rng=stage_rng(seed, "terrain"),
             )
+            hf = add_landform(hf, tcfg.landform, size_m=tcfg.landform_size_m,
+                              depth_m=tcfg.landform_depth_m)
+            if tcfg.landform in LANDFORM_CITATIONS:
+                models.append(ModelRef("terrain", f"{tcfg.landform} landform",
+                                       LANDFORM_CITATIONS[tcfg.landform]))
             frame = GeoFrame(0.0, None, None, "", 1.0)
             models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
         else:
