@@ -14,6 +14,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from marsscene.assets import clear_rocks, place_assets
+from marsscene.assets.io import load_assets
 from marsscene.config import SceneConfig
 from marsscene.craters import crater_models, sample_craters, stamp_craters
 from marsscene.craters.table import CraterTable
@@ -191,6 +193,14 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
     # --- end of craters stage -------------------------------------------------------------
 
+    placed = None
+    if config.assets.active:
+        with timer.stage("assets"):
+            hf, placed = place_assets(hf, load_assets(config.assets), config.assets)
+            summary["assets"] = [{"name": a.model.name, "xy_m": [round(v, 3) for v in a.xy_m],
+                                  "base_z_m": round(a.base_z_m, 4),
+                                  "pad_radius_m": round(a.pad_radius_m, 3)} for a in placed]
+
     # --- rocks stage (issue: rocks) -------------------------------------------------------
     rocks = None
     rock_prototypes = None
@@ -200,6 +210,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             rock_prototypes = make_prototypes(rcfg, rng=stage_rng(seed, "rock_shapes"))
             crater_table = craters if craters is not None else CraterTable.empty()
             rocks = place_rocks(hf, crater_table, rcfg, rng=stage_rng(seed, "rocks"))
+            rocks = clear_rocks(rocks, placed) if placed else rocks
             models.append(ModelRef("rocks", "Golombek-Rapp rock size-frequency F_k(D) = "
                                    "k exp(-q(k) D), q = 1.79 + 0.152/k", GOLOMBEK_CITATION))
             if rcfg.placement == "ejecta":
@@ -267,4 +278,5 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
         rocks=rocks,
         rock_prototypes=rock_prototypes,
         lighting=lighting,
+        assets=placed,
     )
