@@ -36,7 +36,7 @@ class AssetConfig:
     up_axis: str = "auto"
     """"auto" (Y-up for glTF, as its specification says; Z-up otherwise), "y" or "z"."""
     max_slope_deg: float = 8.0
-    """Largest terrain slope inside a searched site's footprint before levelling (in deg)."""
+    """Largest mean terrain slope (tilt) over a searched site's pad before levelling (in deg)."""
     margin_m: float = 1.0
     """Levelled ground beyond the asset's footprint radius (in m)."""
     blend_m: float = 5.0

@@ -1,10 +1,10 @@
 """Site search and levelling for assets (pure, vectorised over the heightfield).
 
-:func:`find_sites` scores every candidate post by the terrain inside a square window as wide
-as the asset's pad: the window's largest slope must stay below ``max_slope_deg`` and the
-site with the smallest relief (RMS height about the window mean, a roughness measure that also
-penalises tilt) wins. Windows are evaluated with box filters (:func:`scipy.ndimage.uniform_filter`,
-:func:`scipy.ndimage.maximum_filter`) on a grid decimated to about a quarter of the pad width.
+:func:`find_site` scores every candidate post by the terrain inside a square window as wide
+as the asset's pad: the window's mean slope (the tilt of the pad before levelling) must stay
+below ``max_slope_deg``, and the site with the smallest relief (RMS height about the window
+mean, a roughness measure that also penalises tilt) wins. Windows are box filters
+(:func:`scipy.ndimage.uniform_filter`) on a grid decimated to about a quarter of the pad width.
 Candidates keep clear of the footprint edge (pad + blend), of the origin (the rover's start) and
 of assets already placed.
 
@@ -39,16 +39,17 @@ def find_site(
     """
     step = max(1, int(pad_radius_m / 2.0 / hf.cell_size_m))
     z = hf.z_m[::step, ::step].astype(np.float64)
-    slope = hf.slope_deg()[::step, ::step]
+    gy, gx = np.gradient(z, hf.cell_size_m * step)
     win = max(1, round(2.0 * pad_radius_m / (hf.cell_size_m * step))) | 1
     mean = ndimage.uniform_filter(z, win, mode="nearest")
     rough = np.sqrt(np.maximum(ndimage.uniform_filter(z * z, win, mode="nearest") - mean**2, 0))
-    steep = ndimage.maximum_filter(slope, win, mode="nearest")
+    tilt = np.hypot(ndimage.uniform_filter(gx, win, mode="nearest"),
+                    ndimage.uniform_filter(gy, win, mode="nearest"))
     x = hf.origin_xy_m[0] + np.arange(z.shape[1]) * hf.cell_size_m * step
     y = hf.origin_xy_m[1] + np.arange(z.shape[0]) * hf.cell_size_m * step
     x0, y0, x1, y1 = hf.bounds_xy_m
     edge = pad_radius_m + clearance_m
-    ok = steep <= max_slope_deg
+    ok = tilt <= np.tan(np.radians(max_slope_deg))
     ok &= ((x >= x0 + edge) & (x <= x1 - edge))[None, :] & ((y >= y0 + edge) & (y <= y1 - edge))[
         :, None]
     for ax, ay, ar in avoid or []:

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import marsscene as ms
-from marsscene.errors import ConfigError
 from marsscene.craters.morphometry import fresh_depth_to_diameter
+from marsscene.errors import ConfigError
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.landforms import add_landform, crater_height_m
 
@@ -88,5 +88,5 @@ def test_landform_builds_are_deterministic_and_seeded() -> None:
 
 
 def test_unknown_landform_is_a_config_error() -> None:
-    with pytest.raises(ConfigError, match="terrain.landform"):
+    with pytest.raises(ConfigError, match=r"terrain\.landform"):
         ms.SceneConfig.from_dict({"terrain": {"landform": "volcano"}})
