@@ -98,3 +98,22 @@ def test_every_preset_builds_shrunk(name: str, tmp_path: Path, runner) -> None: 
     from marsscene.export.mjcf import validate_mjcf
 
     validate_mjcf(out / "mjcf" / "scene.xml", seconds=0.2)
+
+
+def test_preset_with_habitat_is_byte_reproducible(tmp_path: Path) -> None:
+    cfg = ms.SceneConfig.from_dict({"preset": "mars-base", "terrain": {
+        "size_m": [80.0, 80.0], "post_m": 0.5}, "rocks": {"d_min_m": 0.4}})
+    outs = []
+    for name in ("a", "b"):
+        out = tmp_path / name
+        ms.write_scene(ms.build_scene(cfg, seed=9), out)
+        outs.append(out)
+    files = sorted(p.relative_to(outs[0]) for p in outs[0].rglob("*") if p.is_file()
+                   and p.name != "manifest.json")
+    assert any("asset_habitat" in str(f) for f in files)
+    for rel in files:
+        assert (outs[0] / rel).read_bytes() == (outs[1] / rel).read_bytes(), rel
+    docs = [json.loads((o / "manifest.json").read_text()) for o in outs]
+    for d in docs:
+        d.pop("timings_s")
+    assert docs[0] == docs[1]
