@@ -42,5 +42,5 @@ def habitat_model(name: str = "habitat") -> AssetModel:
     mast = _at(trimesh.creation.cylinder(radius=0.1, height=6.0, sections=12), (-2.5, -3.2, 3.0))
     parts = [main, dome, tunnel, lab, panel, mast]
     # dome and main module are one part (their union is convex enough: hull of both)
-    body = trimesh.util.concatenate([main, dome]).convex_hull
+    body = trimesh.convex.convex_hull(np.concatenate([main.vertices, dome.vertices]))
     return AssetModel(name=name, parts=normalise_parts([body, *parts[2:]]))

@@ -60,9 +60,9 @@ def _usd_asset(path: Path, name: str, cfg: AssetConfig) -> AssetModel:
     if rot:  # (x, y, z) -> (x, -z, y)
         lo, hi = (np.array([lo[0], -hi[2], lo[1]]), np.array([hi[0], -lo[2], hi[1]]))
     box = trimesh.creation.box(bounds=np.stack([lo, hi]))
-    offset = (-(lo[0] + hi[0]) / 2.0, -(lo[1] + hi[1]) / 2.0, -lo[2])
+    offset = (float(-(lo[0] + hi[0]) / 2.0), float(-(lo[1] + hi[1]) / 2.0), float(-lo[2]))
     return AssetModel(name=name, parts=normalise_parts([box]), source_path=str(path),
-                      usd_root=info.root_prim, usd_offset_m=tuple(float(v) for v in offset),
+                      usd_root=info.root_prim, usd_offset_m=offset,
                       usd_rotate_x_deg=rot, usd_scale=scale)
 
 

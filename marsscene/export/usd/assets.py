@@ -55,7 +55,8 @@ def read_usd_asset(path: str | Path) -> UsdAssetInfo:
     box = cache.ComputeWorldBound(prim).ComputeAlignedRange()
     if box.IsEmpty():
         raise ConfigError(f"{path}: the USD asset has no geometry extent")
-    return UsdAssetInfo(tuple(box.GetMin()), tuple(box.GetMax()),  # type: ignore[arg-type]
+    lo, hi = box.GetMin(), box.GetMax()
+    return UsdAssetInfo((lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2]),
                         str(UsdGeom.GetStageUpAxis(stage)),
                         float(UsdGeom.GetStageMetersPerUnit(stage)), str(prim.GetPath()))
 
