@@ -19,13 +19,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks._measure import measure
 
 _NAME = ""
+_SIZE_M: float | None = None
 
 
 def _build() -> dict[str, object]:
     import marsscene as ms
 
-    cfg = ms.SceneConfig.from_dict({"preset": _NAME, "export": {"formats": ["usd", "mjcf"],
-                                                                "usd_format": "usdc"}})
+    mapping: dict[str, object] = {"preset": _NAME, "export": {"formats": ["usd", "mjcf"],
+                                                              "usd_format": "usdc"}}
+    if _SIZE_M is not None:
+        mapping["terrain"] = {"size_m": [_SIZE_M, _SIZE_M]}
+    cfg = ms.SceneConfig.from_dict(mapping)
     t0 = time.perf_counter()
     scene = ms.build_scene(cfg, seed=7)
     t1 = time.perf_counter()
@@ -43,13 +47,23 @@ def _build() -> dict[str, object]:
 
 
 def main(names: list[str] | None = None) -> None:
-    global _NAME
+    global _NAME, _SIZE_M
     from marsscene.presets import PRESET_NAMES
 
     for name in names or list(PRESET_NAMES):
-        _NAME = name
+        _NAME, _SIZE_M = name, None
         wall, peak_mb, extra = measure(_build)
         print(f"{name:>13}: {wall:6.1f} s, peak {peak_mb / 1024:5.2f} GB, {extra}", flush=True)
+    if names:
+        return
+    print("scaling: main-crater (1 m posts, defaults) from 1 km to 3.6 km", flush=True)
+    for size in (1000.0, 2000.0, 3600.0):
+        _NAME, _SIZE_M = "main-crater", size
+        wall, peak_mb, extra = measure(_build)
+        km2 = (size / 1000.0) ** 2
+        print(f"  {size / 1000:.1f} km: {wall:6.1f} s ({wall / km2:5.2f} s/km^2), peak "
+              f"{peak_mb / 1024:5.2f} GB, posts {extra['posts_M']} M, rocks {extra['rocks']}",
+              flush=True)
 
 
 if __name__ == "__main__":

@@ -11,9 +11,9 @@
     A steep-walled, flat-floored canyon running east-west through the centre with a gently
     meandering axis: the cross-section is ``-depth`` on the floor, rising over the wall width
     ``w`` along a half cosine (largest wall gradient ``pi depth / (2 w)``), 0 on the plateau.
-    Defaults (250 m deep, 400 m walls) give wall slopes of ~30-45 deg, the range of Valles
-    Marineris and Cerberus Fossae walls in MOLA/HiRISE data (Lucchitta 1978; Schultz 1989
-    Cerberus Fossae; Peulvast et al. 2001 doi:10.1016/S0169-555X(00)00120-8).
+    Defaults (250 m deep, 400 m walls) give a mean wall slope of 32 deg (about the angle of
+    repose of loose granular material) and a steepest slope of 44 deg mid-wall. This is a
+    geometric design for "steep walls and strong relief", not a fitted model of a real canyon.
 
 Every landform is a pure, deterministic function of the grid: the seeded fBm underneath carries
 the randomness, so the landform never changes another stage's random draws.
@@ -34,8 +34,7 @@ LANDFORMS = ("fbm", "plain", "crater", "canyon")
 LANDFORM_CITATIONS = {
     "crater": "Watters et al. 2015, doi:10.1002/2014JE004630 (cavity); Garvin & Frawley 1998, "
               "doi:10.1029/1998GL900177 (fresh depth)",
-    "canyon": "half-cosine walls, slopes after Peulvast et al. 2001, "
-              "doi:10.1016/S0169-555X(00)00120-8",
+    "canyon": "geometric half-cosine canyon walls (design, no cited model)",
 }
 
 

@@ -117,3 +117,16 @@ def test_preset_with_habitat_is_byte_reproducible(tmp_path: Path) -> None:
     for d in docs:
         d.pop("timings_s")
     assert docs[0] == docs[1]
+
+
+def test_example_config_expands_the_preset_and_builds() -> None:
+    example = Path(__file__).resolve().parents[2] / "docs" / "examples" / "mars_base.toml"
+    cfg = ms.SceneConfig.from_toml(example)
+    assert cfg.preset == "mars-base" and cfg.seed == 7
+    assert cfg.terrain.size_m == (1000.0, 1000.0) and cfg.lighting.tau == 0.8
+    assert cfg.assets.habitat and cfg.assets.max_slope_deg == 6.0
+    import dataclasses
+
+    small = cfg.replace(terrain=dataclasses.replace(cfg.terrain, size_m=(90.0, 90.0)))
+    scene = ms.build_scene(small, seed=7)
+    assert scene.assets is not None and len(scene.assets) == 1
