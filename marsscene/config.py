@@ -3,10 +3,12 @@
 TOML layout::
 
     seed = 7
+    preset = "main-crater"   # optional: a reference scene expanded under the keys below
     [terrain]   source = "default" | "procedural" | "dem", dem_path, size_m, post_m, hurst, ...
     [craters]   enabled = true, ...
     [rocks]     enabled = true, ...
     [lighting]  enabled = true, ...
+    [assets]    files = ["habitat.glb"], xy_m = [[x, y]], habitat = true, ...
     [export]    formats = ["usd", "mjcf"], usd_format = "usda"
 
 Unknown keys and out-of-range values raise :class:`~marsscene.errors.ConfigError` naming the
@@ -25,10 +27,12 @@ from pathlib import Path
 from typing import Any
 
 from marsscene._validate import dataclass_from_mapping
+from marsscene.assets.config import AssetConfig
 from marsscene.craters.config import CraterConfig
 from marsscene.errors import ConfigError
 from marsscene.export.config import ExportConfig
 from marsscene.lighting.config import LightingConfig
+from marsscene.presets import apply_preset
 from marsscene.rocks.config import RockConfig
 from marsscene.terrain.config import TerrainConfig
 
@@ -51,11 +55,14 @@ class SceneConfig:
     to :func:`marsscene.build_scene` but may also be given here as ``seed``)."""
 
     seed: int | None = None
+    preset: str | None = None
+    """Reference-scene preset expanded under the other keys (see :mod:`marsscene.presets`)."""
     terrain: TerrainConfig = field(default_factory=TerrainConfig)
     craters: CraterConfig = field(default_factory=CraterConfig)
     rocks: RockConfig = field(default_factory=RockConfig)
     lighting: LightingConfig = field(default_factory=LightingConfig)
     export: ExportConfig = field(default_factory=ExportConfig)
+    assets: AssetConfig = field(default_factory=AssetConfig)
 
     def __post_init__(self) -> None:
         if self.seed is not None and (
@@ -65,12 +72,14 @@ class SceneConfig:
 
     @classmethod
     def from_dict(cls, mapping: dict[str, Any]) -> SceneConfig:
-        """Build from a nested mapping (as parsed from TOML)."""
-        return dataclass_from_mapping(cls, mapping, "")
+        """Build from a nested mapping (as parsed from TOML); a ``preset`` key is expanded
+        underneath the mapping's own keys."""
+        return dataclass_from_mapping(cls, apply_preset(mapping), "")
 
     @classmethod
-    def from_toml(cls, path: str | os.PathLike[str]) -> SceneConfig:
-        """Read a TOML config file; relative ``dem_path`` values resolve against its folder."""
+    def from_toml(cls, path: str | os.PathLike[str], *, preset: str | None = None) -> SceneConfig:
+        """Read a TOML config file; relative ``dem_path``, ``ortho_path`` and asset paths
+        resolve against its folder. ``preset`` (if given) replaces the file's ``preset``."""
         p = Path(path)
         try:
             data = tomllib.loads(p.read_text(encoding="utf-8"))
@@ -83,6 +92,12 @@ class SceneConfig:
             for key in ("dem_path", "ortho_path"):
                 if isinstance(terrain.get(key), str) and not Path(terrain[key]).is_absolute():
                     terrain[key] = str((p.parent / terrain[key]).resolve())
+        assets = data.get("assets")
+        if isinstance(assets, dict) and isinstance(assets.get("files"), list):
+            assets["files"] = [str((p.parent / f).resolve()) if isinstance(f, str) and not
+                               Path(f).is_absolute() else f for f in assets["files"]]
+        if preset is not None:
+            data["preset"] = preset
         return cls.from_dict(data)
 
     def replace(self, **changes: Any) -> SceneConfig:

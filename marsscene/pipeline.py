@@ -14,6 +14,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from marsscene.assets import clear_rocks, place_assets
+from marsscene.assets.io import load_assets
 from marsscene.config import SceneConfig
 from marsscene.craters import crater_models, sample_craters, stamp_craters
 from marsscene.craters.table import CraterTable
@@ -35,6 +37,7 @@ from marsscene.terrain.from_dem import (
     GeoFrame,
     prepare_dem,
 )
+from marsscene.terrain.landforms import LANDFORM_CITATIONS, add_landform
 
 __all__ = ["build_scene"]
 
@@ -116,6 +119,11 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                 rms_slope_deg=tcfg.rms_slope_deg,
                 rng=stage_rng(seed, "terrain"),
             )
+            hf = add_landform(hf, tcfg.landform, size_m=tcfg.landform_size_m,
+                              depth_m=tcfg.landform_depth_m)
+            if tcfg.landform in LANDFORM_CITATIONS:
+                models.append(ModelRef("terrain", f"{tcfg.landform} landform",
+                                       LANDFORM_CITATIONS[tcfg.landform]))
             frame = GeoFrame(0.0, None, None, "", 1.0)
             models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
         else:
@@ -185,6 +193,14 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
     # --- end of craters stage -------------------------------------------------------------
 
+    placed = None
+    if config.assets.active:
+        with timer.stage("assets"):
+            hf, placed = place_assets(hf, load_assets(config.assets), config.assets)
+            summary["assets"] = [{"name": a.model.name, "xy_m": [round(v, 3) for v in a.xy_m],
+                                  "base_z_m": round(a.base_z_m, 4),
+                                  "pad_radius_m": round(a.pad_radius_m, 3)} for a in placed]
+
     # --- rocks stage (issue: rocks) -------------------------------------------------------
     rocks = None
     rock_prototypes = None
@@ -194,6 +210,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             rock_prototypes = make_prototypes(rcfg, rng=stage_rng(seed, "rock_shapes"))
             crater_table = craters if craters is not None else CraterTable.empty()
             rocks = place_rocks(hf, crater_table, rcfg, rng=stage_rng(seed, "rocks"))
+            rocks = clear_rocks(rocks, placed) if placed else rocks
             models.append(ModelRef("rocks", "Golombek-Rapp rock size-frequency F_k(D) = "
                                    "k exp(-q(k) D), q = 1.79 + 0.152/k", GOLOMBEK_CITATION))
             if rcfg.placement == "ejecta":
@@ -261,4 +278,5 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
         rocks=rocks,
         rock_prototypes=rock_prototypes,
         lighting=lighting,
+        assets=placed,
     )

@@ -58,6 +58,8 @@ class Scene:
         Rock prototypes (``marsscene.rocks.RockPrototype``: visual mesh, convex collision parts)
         referenced by ``rocks.prototype``.
     lighting : Lighting, optional
+    assets : tuple of marsscene.assets.PlacedAsset, optional
+        Habitats / landers on levelled pads (``None`` when none are configured).
     config : SceneConfig
     seed : int
     provenance : Provenance
@@ -72,3 +74,4 @@ class Scene:
     rocks: RockTable | None = None
     rock_prototypes: tuple[Any, ...] | None = None
     lighting: Lighting | None = None
+    assets: tuple[Any, ...] | None = None

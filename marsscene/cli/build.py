@@ -9,7 +9,7 @@ from typing import Any
 
 import click
 
-from marsscene.cli import options_dem, options_lighting
+from marsscene.cli import options_assets, options_dem, options_lighting
 from marsscene.cli._common import user_errors
 
 log = logging.getLogger("marsscene")
@@ -49,6 +49,7 @@ def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[
 @click.option("--format", "formats", type=click.Choice(_FORMATS), multiple=True,
               help="Output(s); repeatable. Default: usda and mjcf.")
 @click.option("--procedural", is_flag=True, help="Synthesise terrain instead of reading a DEM.")
+@options_assets.options
 @options_dem.options
 @options_lighting.options
 def build(
@@ -67,16 +68,21 @@ def build(
       marsscene build --seed 7 --out scenes/demo
       marsscene build --dem jezero.img --seed 7
       marsscene build --procedural --format usdc --format mjcf
+      marsscene build --preset main-crater --seed 7 --out scenes/crater
+      marsscene build --preset mars-base --asset habitat.glb --asset-xy 120 -40
     """
     from marsscene import SceneConfig, build_scene, write_scene
     from marsscene.export import check_output_dir
 
     with user_errors():
         check_output_dir(out_dir)
-        cfg = SceneConfig.from_toml(config_path) if config_path else SceneConfig()
+        preset = stage_options.pop("preset")
+        cfg = (SceneConfig.from_toml(config_path, preset=preset) if config_path
+               else SceneConfig.from_dict({"preset": preset}))
         cfg = _apply_core(cfg, dem=dem, procedural=procedural, formats=formats)
         cfg = options_dem.apply(cfg, stage_options)
         cfg = options_lighting.apply(cfg, stage_options)
+        cfg = options_assets.apply(cfg, stage_options)
         use_seed = seed if seed is not None else (cfg.seed if cfg.seed is not None else 0)
         scene = build_scene(cfg, seed=use_seed)
         log.info("[export] writing %s", ", ".join(cfg.export.formats))

@@ -34,6 +34,13 @@ class TerrainConfig:
     """RMS height of procedural terrain (in m)."""
     rms_slope_deg: float | None = None
     """If set, scale procedural terrain to this RMS slope instead of ``rms_height_m`` (in deg)."""
+    landform: str = "fbm"
+    """Procedural landform: "fbm" (none), "plain", "crater" or "canyon"
+    (:mod:`marsscene.terrain.landforms`); ignored with a DEM."""
+    landform_size_m: float | None = None
+    """Crater rim diameter or canyon floor width (in m); default scales with the footprint."""
+    landform_depth_m: float | None = None
+    """Canyon depth (in m; default 250); a crater's depth follows the fresh d/D law."""
     detail: bool = True
     """Add seeded fractal detail below the DEM's resolution when upsampling."""
     detail_rms_m: float | None = None
@@ -76,6 +83,10 @@ class TerrainConfig:
         if self.post_m is not None:
             check_range("terrain.post_m", self.post_m, 0.0, 1000.0, lo_open=True)
         check_range("terrain.hurst", self.hurst, 0.0, 1.0, lo_open=True)
+        check_choice("terrain.landform", self.landform, ("fbm", "plain", "crater", "canyon"))
+        for key in ("landform_size_m", "landform_depth_m"):
+            if getattr(self, key) is not None:
+                check_range(f"terrain.{key}", getattr(self, key), 0.0, 100_000.0, lo_open=True)
         check_range("terrain.rms_height_m", self.rms_height_m, 0.0, 10_000.0)
         if self.rms_slope_deg is not None:
             check_range("terrain.rms_slope_deg", self.rms_slope_deg, 0.0, 60.0, lo_open=True)

@@ -7,6 +7,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from marsscene._version import __version__
+from marsscene.export.mjcf.assets import add_assets
 from marsscene.export.mjcf.hfield import hfield_spec
 from marsscene.export.mjcf.lighting import add_lighting
 from marsscene.export.mjcf.rocks import add_rocks
@@ -81,6 +82,6 @@ def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
         pos=fmt(spec.pos, 9), material="regolith", friction=fmt(REGOLITH_FRICTION),
         condim="3", contype="1", conaffinity="1",
     )
-    for add in (add_rocks, add_lighting):
+    for add in (add_rocks, add_assets, add_lighting):
         add(root, assets, scene)
     return root, assets

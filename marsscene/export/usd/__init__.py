@@ -7,7 +7,7 @@
       /PhysicsScene             UsdPhysics.Scene, gravity 3.72 m/s^2
       /Looks/Regolith           UsdPreviewSurface (+ UsdUVTexture of the orthoimage)
       /Terrain/tile_i_j         UsdGeom.Mesh tiles with normals, st, CollisionAPI
-      /Craters, /Rocks, /Lights (when those stages are enabled)
+      /Craters, /Rocks, /Lights, /Assets (when those stages are enabled)
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
         Files the stage references, by path relative to the stage file.
     """
     _pxr()
+    from marsscene.export.usd.assets import author_assets
     from marsscene.export.usd.craters import author_craters
     from marsscene.export.usd.lighting import author_lighting
     from marsscene.export.usd.rocks import author_rocks
@@ -45,7 +46,7 @@ def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
 
     stage = create_stage(scene)
     assets: dict[str, bytes] = {}
-    for author in (author_terrain, author_craters, author_rocks, author_lighting):
+    for author in (author_terrain, author_craters, author_rocks, author_lighting, author_assets):
         author(stage, scene, assets)
     return stage, assets
 

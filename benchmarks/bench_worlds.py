@@ -1,0 +1,70 @@
+"""Reference-scene presets at full size: build + write (usdc + MJCF + manifest) per preset.
+
+Each preset is built in a fresh process (``_measure.measure``): wall time, peak RSS, terrain
+posts, rocks and craters, and the stage timings. These are the interim resolutions of
+``marsscene/data/presets.toml`` (1 m posts for the 3-3.6 km scenes) until tiled LOD terrain
+exists. Run: ``python benchmarks/run.py worlds`` (about 3-4 min on the 2-core machine), or
+``python benchmarks/bench_worlds.py jezero-plain`` for one preset.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks._measure import measure
+
+_NAME = ""
+_SIZE_M: float | None = None
+
+
+def _build() -> dict[str, object]:
+    import marsscene as ms
+
+    mapping: dict[str, object] = {"preset": _NAME, "export": {"formats": ["usd", "mjcf"],
+                                                              "usd_format": "usdc"}}
+    if _SIZE_M is not None:
+        mapping["terrain"] = {"size_m": [_SIZE_M, _SIZE_M]}
+    cfg = ms.SceneConfig.from_dict(mapping)
+    t0 = time.perf_counter()
+    scene = ms.build_scene(cfg, seed=7)
+    t1 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        ms.write_scene(scene, Path(tmp) / "out")
+        size_mb = sum(p.stat().st_size for p in (Path(tmp) / "out").rglob("*")
+                      if p.is_file()) / 1e6
+    t2 = time.perf_counter()
+    rows, cols = scene.heightfield.shape
+    return {"build_s": round(t1 - t0, 1), "write_s": round(t2 - t1, 1),
+            "posts_M": round(rows * cols / 1e6, 2),
+            "rocks": len(scene.rocks) if scene.rocks is not None else 0,
+            "craters": len(scene.craters) if scene.craters is not None else 0,
+            "output_MB": round(size_mb, 1), "stages_s": scene.provenance.timings_s}
+
+
+def main(names: list[str] | None = None) -> None:
+    global _NAME, _SIZE_M
+    from marsscene.presets import PRESET_NAMES
+
+    for name in names or list(PRESET_NAMES):
+        _NAME, _SIZE_M = name, None
+        wall, peak_mb, extra = measure(_build)
+        print(f"{name:>13}: {wall:6.1f} s, peak {peak_mb / 1024:5.2f} GB, {extra}", flush=True)
+    if names:
+        return
+    print("scaling: main-crater (1 m posts, defaults) from 1 km to 3.6 km", flush=True)
+    for size in (1000.0, 2000.0, 3600.0):
+        _NAME, _SIZE_M = "main-crater", size
+        wall, peak_mb, extra = measure(_build)
+        km2 = (size / 1000.0) ** 2
+        print(f"  {size / 1000:.1f} km: {wall:6.1f} s ({wall / km2:5.2f} s/km^2), peak "
+              f"{peak_mb / 1024:5.2f} GB, posts {extra['posts_M']} M, rocks {extra['rocks']}",
+              flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:] or None)

@@ -1,0 +1,131 @@
+"""Assets in USD: ``/World/Assets/<name>`` (habitats, landers), and reading a USD asset's
+extent for placement (this module owns ``pxr`` for the asset stage).
+
+Each placed asset is an Xform at its base centre ``(x, y, base_z)``:
+
+* mesh assets (procedural habitat, .obj/.glb files): one ``UsdGeom.Mesh`` per part with
+  normals, a grey material and ``UsdPhysics.CollisionAPI`` with a ``convexHull``
+  approximation (as in MJCF);
+* USD files: copied beside the stage (``assets/<name>.<ext>``) and referenced under
+  ``<name>/Model`` with the translation, Y-up rotation and unit scale that put the asset's base
+  centre on the pad; a ``Collision`` box (guide purpose) carries the collision.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics, UsdShade, Vt
+
+from marsscene.errors import ConfigError
+
+__all__ = ["UsdAssetInfo", "author_assets", "read_usd_asset"]
+
+#: Painted-metal grey (linear sRGB).
+ASSET_ALBEDO_RGB = (0.7, 0.7, 0.68)
+
+
+@dataclass(frozen=True)
+class UsdAssetInfo:
+    """What placement needs from a USD asset file."""
+
+    extent_min: tuple[float, float, float]
+    extent_max: tuple[float, float, float]
+    up_axis: str
+    meters_per_unit: float
+    root_prim: str
+
+
+def read_usd_asset(path: str | Path) -> UsdAssetInfo:
+    """Open a USD file and return its root prim's world bounding box, up axis and units."""
+    stage = Usd.Stage.Open(str(path))
+    if stage is None:
+        raise ConfigError(f"{path}: not a readable USD file")
+    prim = stage.GetDefaultPrim()
+    if not prim or not prim.IsValid():
+        roots = list(stage.GetPseudoRoot().GetChildren())
+        if not roots:
+            raise ConfigError(f"{path}: the USD file has no root prim")
+        prim = roots[0]
+    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
+                                                       UsdGeom.Tokens.render])
+    box = cache.ComputeWorldBound(prim).ComputeAlignedRange()
+    if box.IsEmpty():
+        raise ConfigError(f"{path}: the USD asset has no geometry extent")
+    lo, hi = box.GetMin(), box.GetMax()
+    return UsdAssetInfo((lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2]),
+                        str(UsdGeom.GetStageUpAxis(stage)),
+                        float(UsdGeom.GetStageMetersPerUnit(stage)), str(prim.GetPath()))
+
+
+def _material(stage: Any, root: Sdf.Path) -> UsdShade.Material:
+    UsdGeom.Scope.Define(stage, root.AppendChild("Looks"))
+    mat = UsdShade.Material.Define(stage, root.AppendChild("Looks").AppendChild("Painted"))
+    shader = UsdShade.Shader.Define(stage, mat.GetPath().AppendChild("PreviewSurface"))
+    shader.CreateIdAttr("UsdPreviewSurface")
+    shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(
+        Gf.Vec3f(*ASSET_ALBEDO_RGB))
+    shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.5)
+    mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    return mat
+
+
+def _mesh(stage: Any, path: Sdf.Path, mesh: Any) -> UsdGeom.Mesh:
+    geom = UsdGeom.Mesh.Define(stage, path)
+    v = np.asarray(mesh.vertices, dtype=np.float32)
+    f = np.asarray(mesh.faces, dtype=np.int32)
+    geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(v))
+    geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(f), 3, np.int32)))
+    geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(f.ravel()))
+    geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(
+        np.asarray(mesh.vertex_normals, dtype=np.float32)))
+    geom.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+    geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    geom.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*v.min(axis=0).tolist()),
+                                         Gf.Vec3f(*v.max(axis=0).tolist())]))
+    UsdPhysics.CollisionAPI.Apply(geom.GetPrim())
+    UsdPhysics.MeshCollisionAPI.Apply(geom.GetPrim()).CreateApproximationAttr(
+        UsdPhysics.Tokens.convexHull)
+    return geom
+
+
+def _reference(stage: Any, path: Sdf.Path, placed: Any, assets: dict[str, bytes]) -> None:
+    model = placed.model
+    rel = f"assets/{model.name}{Path(model.source_path).suffix.lower()}"
+    assets[rel] = Path(model.source_path).read_bytes()
+    xf = UsdGeom.Xform.Define(stage, path.AppendChild("Model"))
+    xf.AddTranslateOp().Set(Gf.Vec3d(*model.usd_offset_m))
+    xf.AddRotateXOp().Set(float(model.usd_rotate_x_deg))
+    xf.AddScaleOp().Set(Gf.Vec3f(float(model.usd_scale)))
+    xf.GetPrim().GetReferences().AddReference(f"./{rel}", Sdf.Path(model.usd_root))
+    box = _mesh(stage, path.AppendChild("Collision"), model.parts[0])
+    box.CreatePurposeAttr(UsdGeom.Tokens.guide)
+
+
+def author_assets(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+    """Author ``/World/Assets`` (nothing when the scene has no assets)."""
+    placed_assets = getattr(scene, "assets", None)
+    if not placed_assets:
+        return
+    root = Sdf.Path("/World/Assets")
+    UsdGeom.Scope.Define(stage, root)
+    material = _material(stage, root)
+    for placed in placed_assets:
+        path = root.AppendChild(placed.model.name)
+        xf = UsdGeom.Xform.Define(stage, path)
+        xf.AddTranslateOp().Set(Gf.Vec3d(placed.xy_m[0], placed.xy_m[1], placed.base_z_m))
+        prim = xf.GetPrim()
+        prim.CreateAttribute("marsscene:padRadius_m", Sdf.ValueTypeNames.Double).Set(
+            float(placed.pad_radius_m))
+        if placed.model.source_path:
+            prim.CreateAttribute("marsscene:source", Sdf.ValueTypeNames.String).Set(
+                Path(placed.model.source_path).name)
+        if placed.model.usd_root is not None:
+            _reference(stage, path, placed, assets)
+            continue
+        for i, part in enumerate(placed.model.parts):
+            geom = _mesh(stage, path.AppendChild(f"part_{i}"), part)
+            UsdShade.MaterialBindingAPI.Apply(geom.GetPrim()).Bind(material)
