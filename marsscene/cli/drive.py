@@ -172,12 +172,11 @@ def drive(
         PursuitConfig,
         Route,
         RunConfig,
-        author_route,
         read_tum,
         write_tum,
     )
     from marsscene.runtime.driver import drive as run_drive
-    from marsscene.runtime.sim import RoverSim, scene_obstacles
+    from marsscene.runtime.mission import prepare_drive
     from marsscene.seeding import stage_rng
 
     with user_errors():
@@ -194,40 +193,15 @@ def drive(
             lidar=LidarConfig() if lidar else None,
             camera=cam_cfg,
         )
-        sim = RoverSim(scene_dir, run=run, settle_s=0.0)
-        if route_path is not None:
-            route = Route.from_trajectory(read_tum(route_path))
-            hf = sim.heightfield
-            inside = hf.contains(route.xy_m[:, 0], route.xy_m[:, 1])
-            if not inside.all():
-                i = int((~inside).argmax())
-                x0, y0, x1, y1 = hf.bounds_xy_m
-                from marsscene.errors import RuntimeSimError
-
-                raise RuntimeSimError(
-                    f"route point {i} ({route.xy_m[i, 0]:.2f}, {route.xy_m[i, 1]:.2f}) m is "
-                    f"outside the terrain x [{x0:.2f}, {x1:.2f}], y [{y0:.2f}, {y1:.2f}] m"
-                )
-        else:
-            assert waypoints_path is not None
-            route = author_route(
-                _read_waypoints(waypoints_path),
-                sim.heightfield,
-                max_slope_deg=max_slope,
-                obstacles=scene_obstacles(sim),
-            )
-        if sim.rocks_kept[1]:  # simulate only the rocks the rover can meet or sense
-            if run.lidar is not None:
-                corridor = max(corridor, run.lidar.range_m[1])
-            if run.camera is not None:
-                corridor = max(corridor, run.camera.terrain_window_m / 2.0)
-            sim = RoverSim(scene_dir, run=run, settle_s=0.0, contact_corridor_xy_m=route.xy_m,
-                           contact_corridor_m=corridor)
+        sim, route = prepare_drive(
+            scene_dir, run,
+            route=Route.from_trajectory(read_tum(route_path)) if route_path else None,
+            waypoints_xy_m=_read_waypoints(waypoints_path) if waypoints_path else None,
+            max_slope_deg=max_slope, corridor_m=corridor,
+        )
+        if sim.rocks_kept[1]:
             click.echo(f"   rocks: {sim.rocks_kept[0]} of {sim.rocks_kept[1]} MJCF rocks lie "
-                       f"within {corridor:g} m of the route and are simulated", err=True)
-        a, b = route.xy_m[0], route.xy_m[min(5, len(route.xy_m) - 1)]
-        sim.settle_s = 3.0
-        sim.reset(xy_m=(float(a[0]), float(a[1])), yaw_rad=math.atan2(b[1] - a[1], b[0] - a[0]))
+                       "near the route and are simulated", err=True)
         out_dir.mkdir(parents=True, exist_ok=True)
         write_tum(
             out_dir / "route.tum",

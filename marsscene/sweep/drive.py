@@ -7,12 +7,9 @@ settling, pure pursuit) and then :func:`~marsscene.runtime.ate` / :func:`~marssc
 
 from __future__ import annotations
 
-import math
 import time
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from marsscene.sweep.spec import DriveSpec
 
@@ -27,7 +24,8 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
     dict
         ``distance_m``, ``sim_time_s``, ``goal_reached``, ``cross_track_rms_m``,
         ``ate_rmse_m`` (SE(3)-aligned), ``rpe_trans_rmse_m`` / ``rpe_rot_rmse_deg`` (1 frame at
-        the 50 Hz control rate), ``sim_wall_ratio`` (simulated / wall-clock seconds).
+        the 50 Hz control rate), ``sim_wall_ratio`` (simulated / wall-clock seconds),
+        ``bag_s`` (seconds to write ``out_dir/bag`` with ``bag = true``, else NaN).
     """
     from marsscene.runtime import (
         CameraConfig,
@@ -36,39 +34,23 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         Route,
         RunConfig,
         ate,
-        author_route,
         read_tum,
         rpe,
     )
     from marsscene.runtime.driver import drive
-    from marsscene.runtime.sim import RoverSim, scene_obstacles
+    from marsscene.runtime.mission import prepare_drive
     from marsscene.seeding import stage_rng
 
     run = RunConfig(
         lidar=LidarConfig() if spec.lidar else None,
         camera=CameraConfig() if spec.camera else None,
     )
-    sim = RoverSim(scene_dir, run=run, settle_s=0.0)
-    if spec.route is not None:
-        route = Route.from_trajectory(read_tum(spec.route))
-    else:
-        route = author_route(
-            np.asarray(spec.waypoints, dtype=np.float64),
-            sim.heightfield,
-            max_slope_deg=spec.max_slope_deg,
-            obstacles=scene_obstacles(sim),
-        )
-    if sim.rocks_kept[1]:  # simulate only the rocks the rover can meet or sense
-        corridor = spec.corridor_m
-        if run.lidar is not None:
-            corridor = max(corridor, run.lidar.range_m[1])
-        if run.camera is not None:
-            corridor = max(corridor, run.camera.terrain_window_m / 2.0)
-        sim = RoverSim(scene_dir, run=run, settle_s=0.0, contact_corridor_xy_m=route.xy_m,
-                       contact_corridor_m=corridor)
-    a, b = route.xy_m[0], route.xy_m[min(5, len(route.xy_m) - 1)]
-    sim.settle_s = 3.0
-    sim.reset(xy_m=(float(a[0]), float(a[1])), yaw_rad=math.atan2(b[1] - a[1], b[0] - a[0]))
+    sim, route = prepare_drive(
+        scene_dir, run,
+        route=Route.from_trajectory(read_tum(spec.route)) if spec.route is not None else None,
+        waypoints_xy_m=spec.waypoints if spec.route is None else None,
+        max_slope_deg=spec.max_slope_deg, corridor_m=spec.corridor_m,
+    )
     t0 = time.perf_counter()
     res = drive(
         sim,
@@ -79,6 +61,13 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         pursuit=PursuitConfig(lookahead_m=spec.lookahead_m),
     )
     wall_s = time.perf_counter() - t0
+    bag_s = float("nan")
+    if spec.bag:
+        from marsscene.runtime.bag import write_bag
+
+        t1 = time.perf_counter()
+        write_bag(out_dir)
+        bag_s = time.perf_counter() - t1
     s = res.summary
     a_err = ate(res.odom, res.gt, align="se3")
     r_err = rpe(res.odom, res.gt, delta_frames=1)
@@ -91,4 +80,5 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         "rpe_trans_rmse_m": round(r_err.translation.rmse, 9),
         "rpe_rot_rmse_deg": round(r_err.rotation_deg.rmse, 9),
         "sim_wall_ratio": round(s["sim_time_s"] / max(wall_s, 1e-9), 3),
+        "bag_s": round(bag_s, 3),
     }

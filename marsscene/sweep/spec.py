@@ -54,6 +54,8 @@ class DriveSpec:
     """Route authoring: steepest slope allowed."""
     corridor_m: float = 15.0
     """Only MJCF rocks within this distance of the route are simulated."""
+    bag: bool = False
+    """Also write the drive as a ROS 2 bag (``drive/bag``, MCAP; see ``marsscene bag``)."""
 
     def __post_init__(self) -> None:
         if (self.waypoints is None) == (self.route is None):
@@ -78,7 +80,7 @@ class DriveSpec:
         check_range("drive.lookahead_m", self.lookahead_m, 0.05, 100.0)
         check_range("drive.max_slope_deg", self.max_slope_deg, 0.0, 90.0, lo_open=True)
         check_range("drive.corridor_m", self.corridor_m, 1.0, 1e4)
-        for key in ("camera", "lidar"):
+        for key in ("camera", "lidar", "bag"):
             if not isinstance(getattr(self, key), bool):
                 raise ConfigError(f"drive.{key} = {getattr(self, key)!r}; must be true or false")
 

@@ -18,7 +18,7 @@ COLUMNS = (
     "tau", "sun_azimuth_deg", "sun_elevation_deg", "direct_normal_w_m2",
     "diffuse_horizontal_w_m2", "visibility_m",
     "distance_m", "sim_time_s", "goal_reached", "cross_track_rms_m",
-    "ate_rmse_m", "rpe_trans_rmse_m", "rpe_rot_rmse_deg", "sim_wall_ratio",
+    "ate_rmse_m", "rpe_trans_rmse_m", "rpe_rot_rmse_deg", "sim_wall_ratio", "bag_s",
     "config_hash",
 )
 

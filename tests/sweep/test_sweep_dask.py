@@ -117,7 +117,7 @@ def test_cli_sweep_reports_progress_and_failure(runner, tmp_path: Path) -> None:
 def test_driven_cell_metrics_match_the_logs(tmp_path: Path) -> None:
     from marsscene.runtime import ate, read_tum, rpe
 
-    drive = "[drive]\nwaypoints = [[-5.0, 0.0], [5.0, 0.0]]\nnoise_seed = 4\n"
+    drive = "[drive]\nwaypoints = [[-5.0, 0.0], [5.0, 0.0]]\nnoise_seed = 4\nbag = true\n"
     spec = load_sweep(write_sweep(tmp_path / "s.toml", "seed = [0]\n", drive))
     (row,) = run_sweep(spec, tmp_path / "out", serial=True).rows
     assert row["status"] == "ok", row["error"]
@@ -127,5 +127,10 @@ def test_driven_cell_metrics_match_the_logs(tmp_path: Path) -> None:
     assert row["ate_rmse_m"] == pytest.approx(ate(odom, gt).stats.rmse, abs=1e-6)
     assert row["rpe_trans_rmse_m"] == pytest.approx(rpe(odom, gt).translation.rmse, abs=1e-6)
     assert 0 < row["ate_rmse_m"] < 0.5 and row["sim_wall_ratio"] > 0
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([run / "bag"]) as reader:  # bag = true: the drive as a ROS 2 bag
+        counts = {c.topic: c.msgcount for c in reader.connections}
+    assert counts["/rover/odom"] == len(odom.timestamps_s) and row["bag_s"] > 0
     table = _csv(tmp_path / "out" / "results.csv")
     assert float(table[0]["ate_rmse_m"]) == pytest.approx(row["ate_rmse_m"])

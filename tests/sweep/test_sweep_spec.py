@@ -78,9 +78,9 @@ def test_bad_base_config_and_drive_are_rejected() -> None:
         sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"seconds": 3.0}})
     with pytest.raises(ConfigError, match=r"drive\.waypoints"):
         sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0]]}})
-    with pytest.raises(ConfigError, match=r"unknown key drive\.bag"):
+    with pytest.raises(ConfigError, match=r"drive\.bag = 'yes'; must be true or false"):
         sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0], [1, 1]],
-                                                          "bag": True}})
+                                                          "bag": "yes"}})
 
 
 def test_route_path_resolves_against_the_sweep_file(tmp_path: Path) -> None:
