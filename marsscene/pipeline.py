@@ -7,6 +7,7 @@ one stage's parameters never changes another stage's random draws.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 import warnings
@@ -18,6 +19,8 @@ from marsscene.assets import clear_rocks, place_assets
 from marsscene.assets.io import load_assets
 from marsscene.config import SceneConfig
 from marsscene.craters import crater_models, sample_craters, stamp_craters
+from marsscene.craters.config import CraterConfig
+from marsscene.craters.population import PopulationStats
 from marsscene.craters.table import CraterTable
 from marsscene.dem.model import DEM
 from marsscene.errors import MarsSceneWarning, NoGeoreferenceWarning
@@ -27,17 +30,32 @@ from marsscene.lighting.config import DEFAULT_SITE_LAT_LON_EAST_DEG
 from marsscene.lighting.irradiance import AF_CITATION, DELTA_EDDINGTON_CITATION
 from marsscene.lighting.mars24 import MARS24_CITATION
 from marsscene.rocks import make_prototypes, place_rocks
+from marsscene.rocks.config import RockConfig
 from marsscene.rocks.report import EJECTA_CITATION, rock_notes, rock_summary
 from marsscene.rocks.sfd import GOLOMBEK_CITATION
+from marsscene.rocks.table import RockTable
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
 from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
+from marsscene.terrain.config import TerrainConfig
 from marsscene.terrain.default import DEFAULT_DEM_CITATION
 from marsscene.terrain.from_dem import (
     GeoFrame,
     prepare_dem,
 )
-from marsscene.terrain.landforms import LANDFORM_CITATIONS, add_landform
+from marsscene.terrain.heightfield import Heightfield
+from marsscene.terrain.landforms import LANDFORM_CITATIONS, add_landform, default_size_m
+from marsscene.terrain.lod import (
+    FocusPlan,
+    OuterTerrain,
+    concat_tables,
+    lod_summary,
+    merge_craters,
+    plan_focus,
+    stitch,
+    synthesize_focus,
+    taper_detail,
+)
 
 __all__ = ["build_scene"]
 
@@ -76,6 +94,52 @@ def _warn_no_georeference(dem: DEM, config: SceneConfig) -> None:
                   NoGeoreferenceWarning, stacklevel=3)
 
 
+def _lod_terrain(tcfg: TerrainConfig, seed: int) -> tuple[Heightfield, Heightfield, FocusPlan]:
+    """Level-of-detail terrain: (focus heightfield, coarse footprint, focus plan)."""
+    size = tcfg.effective_size_m
+    lf_size = tcfg.landform_size_m if tcfg.landform_size_m is not None else \
+        default_size_m(tcfg.landform, min(size))
+    coarse = synthesize(size, tcfg.post_m if tcfg.post_m is not None else 1.0, hurst=tcfg.hurst,
+                        rms_height_m=tcfg.rms_height_m, rms_slope_deg=tcfg.rms_slope_deg,
+                        rng=stage_rng(seed, "terrain"))
+    plan = plan_focus(coarse, center_xy_m=tcfg.focus_xy_m, size_m=tcfg.focus_size_m,
+                      fine_post_m=tcfg.focus_post_m)
+    fine = synthesize_focus(plan, hurst=tcfg.hurst, rms_height_m=tcfg.rms_height_m,
+                            rms_slope_deg=tcfg.rms_slope_deg, rng=stage_rng(seed, "terrain_focus"))
+    coarse, fine = (add_landform(h, tcfg.landform, size_m=lf_size, depth_m=tcfg.landform_depth_m)
+                    for h in (coarse, fine))
+    return fine, coarse, plan
+
+
+def _lod_craters(hf: Heightfield, coarse: Heightfield, plan: FocusPlan, ccfg: CraterConfig,
+                 seed: int) -> tuple[Heightfield, Heightfield, CraterTable, PopulationStats]:
+    """Craters of a level-of-detail scene: the focus square samples its own craters."""
+    focus, _ = sample_craters(plan.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters_focus"),
+                              heightfield=hf)
+    outer, stats = sample_craters(coarse.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters"),
+                                  heightfield=coarse)
+    table = merge_craters(focus, outer, plan.bounds_xy_m, ejecta_reach=ccfg.ejecta_reach,
+                          axis_ratio_min=ccfg.axis_ratio_min)
+    kwargs = ccfg.profile_kwargs()
+    return (stamp_craters(hf, focus, profile_kwargs=kwargs),
+            stamp_craters(coarse, table, profile_kwargs=kwargs), table, stats)
+
+
+def _outer_rocks(rocks: RockTable, outer: OuterTerrain, craters: CraterTable, rcfg: RockConfig,
+                 seed: int) -> RockTable:
+    """Add rocks of at least ``rocks.outer_d_min_m`` outside the focus square."""
+    d_min = max(rcfg.d_min_m, rcfg.outer_d_min_m)
+    if d_min >= rcfg.d_max_m:
+        return rocks
+    cfg = dataclasses.replace(rcfg, d_min_m=d_min)
+    far = place_rocks(outer.heightfield, craters, cfg, rng=stage_rng(seed, "rocks_outer"))
+    x0, y0, x1, y1 = outer.focus_bounds_xy_m
+    x, y = far.position_xyz_m[:, 0], far.position_xyz_m[:, 1]
+    result: RockTable = concat_tables(rocks, far.take(~((x >= x0) & (x <= x1) & (y >= y0)
+                                                        & (y <= y1))))
+    return result
+
+
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
     """Build a Mars scene.
 
@@ -108,9 +172,18 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     summary: dict[str, object] = {}  # stage summary values: counts, tau, ... (manifest)
 
     texture_rgb = None
+    plan: FocusPlan | None = None
+    coarse = None
     with timer.stage("terrain"):
         dem, inputs = load_inputs(config, dem)
-        if dem is None:
+        if dem is None and tcfg.lod:
+            hf, coarse, plan = _lod_terrain(tcfg, seed)
+            frame = GeoFrame(0.0, None, None, "", 1.0)
+            models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
+            if tcfg.landform in LANDFORM_CITATIONS:
+                models.append(ModelRef("terrain", f"{tcfg.landform} landform",
+                                       LANDFORM_CITATIONS[tcfg.landform]))
+        elif dem is None:
             hf = synthesize(
                 tcfg.effective_size_m,
                 tcfg.post_m if tcfg.post_m is not None else 0.25,
@@ -168,12 +241,15 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     if ccfg.enabled:
         with timer.stage("craters"), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", MarsSceneWarning)
-            craters, cstats = sample_craters(
-                hf.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters"), heightfield=hf,
-                origin_lonlat_deg=frame.origin_lonlat_deg,
-                grid_convergence_deg=frame.grid_convergence_deg,
-            )
-            hf = stamp_craters(hf, craters, profile_kwargs=ccfg.profile_kwargs())
+            if plan is not None:
+                hf, coarse, craters, cstats = _lod_craters(hf, coarse, plan, ccfg, seed)
+            else:
+                craters, cstats = sample_craters(
+                    hf.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters"), heightfield=hf,
+                    origin_lonlat_deg=frame.origin_lonlat_deg,
+                    grid_convergence_deg=frame.grid_convergence_deg,
+                )
+                hf = stamp_craters(hf, craters, profile_kwargs=ccfg.profile_kwargs())
         for w in caught:  # re-emit once each, and record in the manifest
             msg = f"craters: {w.message}"
             if msg not in notes:
@@ -192,6 +268,8 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
         }
 
     # --- end of craters stage -------------------------------------------------------------
+    if plan is not None:
+        hf = taper_detail(hf, plan)  # the focus border now lies on the coarse surface
 
     placed = None
     if config.assets.active:
@@ -200,6 +278,12 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             summary["assets"] = [{"name": a.model.name, "xy_m": [round(v, 3) for v in a.xy_m],
                                   "base_z_m": round(a.base_z_m, 4),
                                   "pad_radius_m": round(a.pad_radius_m, 3)} for a in placed]
+    outer = None
+    if plan is not None:
+        with timer.stage("stitch"):
+            outer = OuterTerrain(stitch(coarse, hf, plan, blend_m=tcfg.lod_blend_m),
+                                 plan.bounds_xy_m)
+            summary["lod"] = lod_summary(hf, outer, tcfg)
 
     # --- rocks stage (issue: rocks) -------------------------------------------------------
     rocks = None
@@ -211,6 +295,8 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             crater_table = craters if craters is not None else CraterTable.empty()
             rocks = place_rocks(hf, crater_table, rcfg, rng=stage_rng(seed, "rocks"))
             rocks = clear_rocks(rocks, placed) if placed else rocks
+            if outer is not None:
+                rocks = _outer_rocks(rocks, outer, crater_table, rcfg, seed)
             models.append(ModelRef("rocks", "Golombek-Rapp rock size-frequency F_k(D) = "
                                    "k exp(-q(k) D), q = 1.79 + 0.152/k", GOLOMBEK_CITATION))
             if rcfg.placement == "ejecta":
@@ -279,4 +365,5 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
         rock_prototypes=rock_prototypes,
         lighting=lighting,
         assets=placed,
+        outer=outer,
     )

@@ -14,6 +14,7 @@ from marsscene.lighting.model import Lighting
 from marsscene.rocks.table import RockTable
 from marsscene.terrain.from_dem import GeoFrame
 from marsscene.terrain.heightfield import Heightfield
+from marsscene.terrain.lod import OuterTerrain
 
 __all__ = ["ModelRef", "Provenance", "Scene"]
 
@@ -60,6 +61,9 @@ class Scene:
     lighting : Lighting, optional
     assets : tuple of marsscene.assets.PlacedAsset, optional
         Habitats / landers on levelled pads (``None`` when none are configured).
+    outer : OuterTerrain, optional
+        Level-of-detail scenes only: the coarse terrain over the whole footprint; then
+        ``heightfield`` is the full-resolution focus square (:mod:`marsscene.terrain.lod`).
     config : SceneConfig
     seed : int
     provenance : Provenance
@@ -75,3 +79,4 @@ class Scene:
     rock_prototypes: tuple[Any, ...] | None = None
     lighting: Lighting | None = None
     assets: tuple[Any, ...] | None = None
+    outer: OuterTerrain | None = None

@@ -26,6 +26,9 @@ STAGE_IDS: dict[str, int] = {
     "rock_shapes": 6,
     "texture": 7,
     "sensors": 8,
+    "terrain_focus": 9,
+    "craters_focus": 10,
+    "rocks_outer": 11,
 }
 
 

@@ -48,6 +48,9 @@ class RockConfig:
     """Smallest sampled rock diameter (in m); N(>D) diverges as D -> 0, so it is mandatory."""
     d_max_m: float = 3.0
     """Largest sampled rock diameter (in m)."""
+    outer_d_min_m: float = 1.0
+    """Smallest rock outside the focus square of a level-of-detail terrain (in m; the focus
+    square gets the full size-frequency distribution from ``d_min_m``)."""
     height_ratio: float | tuple[float, float] = (0.35, 0.65)
     """Exposed height / diameter: number or [low, high] (default mean 0.5; convention, [U])."""
     burial_fraction: float | tuple[float, float] = (0.0, 0.5)
@@ -107,6 +110,7 @@ class RockConfig:
             raise ConfigError(f"rocks.enabled must be true or false; got {self.enabled!r}")
         check_range("rocks.k", self.k, 0.0, 0.9, lo_open=True)
         check_range("rocks.d_min_m", self.d_min_m, 0.0, 100.0, lo_open=True)
+        check_range("rocks.outer_d_min_m", self.outer_d_min_m, 0.0, 100.0, lo_open=True)
         check_range("rocks.d_max_m", self.d_max_m, 0.0, 100.0, lo_open=True)
         if not self.d_min_m < self.d_max_m:
             raise ConfigError(

@@ -23,14 +23,18 @@ EJECTA_CITATION = (
 )
 
 
-def mjcf_rock_selection(rocks: RockTable, cfg: RockConfig) -> NDArray[np.int64]:
+def mjcf_rock_selection(rocks: RockTable, cfg: RockConfig,
+                        within: Heightfield | None = None) -> NDArray[np.int64]:
     """Indices of the rocks exported as MJCF collision geoms, largest first.
 
-    Rule: diameter >= ``mjcf_min_diameter_m``; within ``mjcf_region_radius_m`` of
+    Rule: diameter >= ``mjcf_min_diameter_m``; on ``within``'s footprint if given (the focus
+    square of a level-of-detail scene); within ``mjcf_region_radius_m`` of
     ``mjcf_region_xy_m`` if a region is set; then at most ``mjcf_max_rocks``, keeping the
     largest (ties broken by table order).
     """
     keep = rocks.diameter_m >= cfg.mjcf_min_diameter_m
+    if within is not None:
+        keep &= within.contains(rocks.position_xyz_m[:, 0], rocks.position_xyz_m[:, 1])
     if cfg.mjcf_region_xy_m is not None and cfg.mjcf_region_radius_m is not None:
         cx, cy = cfg.mjcf_region_xy_m
         dist = np.hypot(rocks.position_xyz_m[:, 0] - cx, rocks.position_xyz_m[:, 1] - cy)

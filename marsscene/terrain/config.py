@@ -70,6 +70,17 @@ class TerrainConfig:
     """Refuse a DEM build whose estimated memory exceeds this (in GB)."""
     texture_max_px: int = 4096
     """Largest side of the draped orthoimage texture (in pixels)."""
+    lod: bool = False
+    """Two-level terrain (:mod:`marsscene.terrain.lod`): ``focus_post_m`` posts over the focus
+    square, ``post_m`` posts over the whole footprint outside it (procedural terrain only)."""
+    focus_xy_m: tuple[float, float] | None = None
+    """Centre of the full-resolution focus square (in m, scene frame); default the origin."""
+    focus_size_m: float = 1000.0
+    """Side of the focus square (in m)."""
+    focus_post_m: float = 0.25
+    """Post spacing inside the focus square (in m); ``post_m`` must be a whole multiple."""
+    lod_blend_m: float = 100.0
+    """Width of the outer band over which the coarse terrain is bent onto the focus border."""
 
     def __post_init__(self) -> None:
         check_choice("terrain.source", self.source, TERRAIN_SOURCES)
@@ -98,6 +109,19 @@ class TerrainConfig:
                 raise ConfigError(f"terrain.{key} must be true or false; "
                                   f"got {getattr(self, key)!r}")
         self._check_dem_keys()
+        self._check_lod_keys()
+
+    def _check_lod_keys(self) -> None:
+        if not isinstance(self.lod, bool):
+            raise ConfigError(f"terrain.lod must be true or false; got {self.lod!r}")
+        if self.focus_xy_m is not None and len(self.focus_xy_m) != 2:
+            raise ConfigError(f"terrain.focus_xy_m must be [x, y]; got {self.focus_xy_m!r}")
+        check_range("terrain.focus_size_m", self.focus_size_m, 0.0, 20_000.0, lo_open=True)
+        check_range("terrain.focus_post_m", self.focus_post_m, 0.0, 100.0, lo_open=True)
+        check_range("terrain.lod_blend_m", self.lod_blend_m, 0.0, 10_000.0)
+        if self.lod and self.source != "procedural":
+            raise ConfigError('terrain.lod needs terrain.source = "procedural" (level-of-detail '
+                              "DEM terrain is not implemented yet)")
 
     def _check_dem_keys(self) -> None:
         crops = [k for k in ("crop_px", "crop_bounds_m", "crop_lonlat") if getattr(self, k)]

@@ -28,7 +28,8 @@ from marsscene.craters.morphology import crater_profile
 from marsscene.craters.morphometry import fresh_depth_to_diameter
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["LANDFORMS", "LANDFORM_CITATIONS", "add_landform", "canyon_height_m", "crater_height_m"]
+__all__ = ["LANDFORMS", "LANDFORM_CITATIONS", "add_landform", "canyon_height_m", "crater_height_m",
+           "default_size_m"]
 
 LANDFORMS = ("fbm", "plain", "crater", "canyon")
 LANDFORM_CITATIONS = {
@@ -66,6 +67,12 @@ def canyon_height_m(
     return np.asarray(-depth_m * 0.5 * (1.0 + np.cos(np.pi * t)), dtype=np.float64)
 
 
+def default_size_m(landform: str, short_side_m: float) -> float:
+    """Default crater rim diameter (40 % of the footprint's shorter side) or canyon floor width
+    (10 %) (in m)."""
+    return (0.4 if landform == "crater" else 0.1) * short_side_m
+
+
 def add_landform(
     hf: Heightfield, landform: str, *, size_m: float | None = None,
     depth_m: float | None = None,
@@ -95,11 +102,11 @@ def add_landform(
     short = min(hf.size_m)
     xv, yv = hf.grid_xy()
     x, y = xv[None, :], yv[:, None]
+    size = size_m if size_m is not None else default_size_m(landform, short)
     if landform == "crater":
-        d = size_m if size_m is not None else 0.4 * short
-        h = crater_height_m(x, y, diameter_m=d)
+        h = crater_height_m(x, y, diameter_m=size)
     elif landform == "canyon":
-        w = size_m if size_m is not None else 0.1 * short
+        w = size
         h = canyon_height_m(x, y, floor_width_m=w, depth_m=250.0 if depth_m is None else depth_m,
                             wall_width_m=400.0)
     else:
