@@ -11,6 +11,7 @@ from marsscene.export.mjcf.assets import add_assets
 from marsscene.export.mjcf.hfield import hfield_spec
 from marsscene.export.mjcf.lighting import add_lighting
 from marsscene.export.mjcf.rocks import add_rocks
+from marsscene.export.mjcf.terrain_lod import add_outer_terrain
 from marsscene.units import MARS_GRAVITY_M_S2
 
 __all__ = ["build_mjcf", "fmt"]
@@ -82,6 +83,6 @@ def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
         pos=fmt(spec.pos, 9), material="regolith", friction=fmt(REGOLITH_FRICTION),
         condim="3", contype="1", conaffinity="1",
     )
-    for add in (add_rocks, add_assets, add_lighting):
+    for add in (add_outer_terrain, add_rocks, add_assets, add_lighting):
         add(root, assets, scene)
     return root, assets

@@ -7,6 +7,7 @@
       /PhysicsScene             UsdPhysics.Scene, gravity 3.72 m/s^2
       /Looks/Regolith           UsdPreviewSurface (+ UsdUVTexture of the orthoimage)
       /Terrain/tile_i_j         UsdGeom.Mesh tiles with normals, st, CollisionAPI
+      /TerrainLod1/tile_i_j     level-of-detail scenes: outer tile payloads (terrain_lod.py)
       /Craters, /Rocks, /Lights, /Assets (when those stages are enabled)
 """
 
@@ -43,10 +44,12 @@ def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
     from marsscene.export.usd.rocks import author_rocks
     from marsscene.export.usd.stage import create_stage
     from marsscene.export.usd.terrain import author_terrain
+    from marsscene.export.usd.terrain_lod import author_outer_terrain
 
     stage = create_stage(scene)
     assets: dict[str, bytes] = {}
-    for author in (author_terrain, author_craters, author_rocks, author_lighting, author_assets):
+    for author in (author_terrain, author_outer_terrain, author_craters, author_rocks,
+                   author_lighting, author_assets):
         author(stage, scene, assets)
     return stage, assets
 
