@@ -1,0 +1,134 @@
+"""Two-level terrain (terrain.lod): focus independence, seams, stitching, craters, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import marsscene as ms
+from marsscene.errors import ConfigError
+from marsscene.terrain.heightfield import Heightfield
+from marsscene.terrain.lod import TAPER_POSTS, plan_focus, reaches_box, stitch, taper_detail
+
+
+def _cfg(size_m: float, **terrain: object) -> ms.SceneConfig:
+    t = {"source": "procedural", "size_m": [size_m, size_m], "post_m": 1.0, "lod": True,
+         "focus_size_m": 60.0, "focus_xy_m": [10.0, -6.0], "lod_blend_m": 30.0,
+         "rms_height_m": 1.5, **terrain}
+    return ms.SceneConfig.from_dict({
+        "terrain": t, "craters": {"d_min_m": 2.0, "d_max_m": 40.0},
+        "rocks": {"d_min_m": 0.3, "outer_d_min_m": 1.0}, "lighting": {"enabled": False}})
+
+
+@pytest.fixture(scope="module")
+def lod_pair() -> tuple[ms.Scene, ms.Scene]:
+    return ms.build_scene(_cfg(200.0), seed=5), ms.build_scene(_cfg(320.0), seed=5)
+
+
+def test_focus_does_not_depend_on_the_outer_extent(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
+    small, large = lod_pair
+    assert small.outer is not None and large.outer is not None
+    assert small.outer.heightfield.shape == (201, 201)
+    assert large.outer.heightfield.shape == (321, 321)
+    assert small.heightfield.bounds_xy_m == large.heightfield.bounds_xy_m == (-20, -36, 40, 24)
+    assert small.heightfield.shape == (241, 241)  # 60 m at 0.25 m
+    np.testing.assert_array_equal(small.heightfield.z_m, large.heightfield.z_m)
+    assert float(small.heightfield.z_m.std()) > 0.1  # real relief, not a flat focus
+
+    def focus_rows(scene: ms.Scene) -> np.ndarray:
+        assert scene.rocks is not None and scene.craters is not None
+        r = scene.rocks
+        inside = scene.heightfield.contains(r.position_xyz_m[:, 0], r.position_xyz_m[:, 1])
+        return np.column_stack([r.position_xyz_m[inside], r.diameter_m[inside]])
+
+    a, b = focus_rows(small), focus_rows(large)
+    assert len(a) > 200 and a.shape == b.shape
+    np.testing.assert_array_equal(a, b)
+    # the focus rocks have the full size-frequency distribution, the outer ones only >= 1 m
+    r = small.rocks
+    assert r is not None
+    outside = ~small.heightfield.contains(r.position_xyz_m[:, 0], r.position_xyz_m[:, 1])
+    assert r.diameter_m[~outside].min() < 0.35
+    assert outside.sum() > 5 and r.diameter_m[outside].min() >= 1.0
+
+
+def test_seam_has_no_height_jump(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
+    for scene in lod_pair:
+        fine, outer = scene.heightfield, scene.outer
+        assert outer is not None
+        coarse = outer.heightfield
+        # every coarse post on or inside the focus square is a fine post
+        xs, ys = coarse.grid_xy()
+        x0, y0, x1, y1 = fine.bounds_xy_m
+        cols = np.flatnonzero((xs >= x0) & (xs <= x1))
+        rows = np.flatnonzero((ys >= y0) & (ys <= y1))
+        np.testing.assert_array_equal(coarse.z_m[np.ix_(rows, cols)], fine.z_m[::4, ::4])
+        # along the whole border (every 5 cm) both surfaces agree within 1 mm
+        t = np.linspace(0.0, 1.0, 1201)
+        bx = np.concatenate([x0 + t * (x1 - x0), np.full_like(t, x1), x1 - t * (x1 - x0),
+                             np.full_like(t, x0)])
+        by = np.concatenate([np.full_like(t, y0), y0 + t * (y1 - y0), np.full_like(t, y1),
+                             y1 - t * (y1 - y0)])
+        jump = np.abs(fine.sample(bx, by) - coarse.sample(bx, by))
+        assert float(jump.max()) < 1e-3
+        # and the fine surface keeps its sub-metre detail away from the border
+        resid = fine.z_m - coarse.sample(*np.meshgrid(*fine.grid_xy()))
+        band = 4 * TAPER_POSTS
+        assert float(np.abs(resid[band:-band, band:-band]).max()) > 0.01
+        assert float(np.abs(resid[:, 0]).max()) < 1e-3
+
+
+def test_taper_keeps_coarse_posts_and_straightens_the_border() -> None:
+    rng = np.random.default_rng(0)
+    coarse = Heightfield.centered(np.zeros((41, 41), np.float32), 1.0)
+    plan = plan_focus(coarse, center_xy_m=(0.0, 0.0), size_m=20.0, fine_post_m=0.5)
+    fine = Heightfield(rng.normal(size=(41, 41)).astype(np.float32), 0.5, plan.bounds_xy_m[:2])
+    out = taper_detail(fine, plan)
+    np.testing.assert_array_equal(out.z_m[::2, ::2], fine.z_m[::2, ::2])
+    mid = (fine.z_m[0, :-2:2] + fine.z_m[0, 2::2]) / 2  # border: midpoints on the segments
+    np.testing.assert_allclose(out.z_m[0, 1::2], mid, atol=1e-6)
+    np.testing.assert_array_equal(out.z_m[20, 20], fine.z_m[20, 20])  # centre untouched
+
+
+def test_stitch_blends_the_mismatch_out_over_blend_m() -> None:
+    coarse = Heightfield.centered(np.zeros((101, 101), np.float32), 1.0)
+    plan = plan_focus(coarse, center_xy_m=(0.0, 0.0), size_m=20.0, fine_post_m=0.5)
+    fine = Heightfield(np.ones((41, 41), np.float32), 0.5, plan.bounds_xy_m[:2])
+    z = stitch(coarse, fine, plan, blend_m=20.0).z_m
+    row = z[50]  # the x axis: focus is x in [-10, 10] -> cols 40..60
+    assert np.all(row[40:61] == 1.0)
+    assert np.all(row[:20] == 0.0) and np.all(row[81:] == 0.0)  # >= 20 m away: untouched
+    assert np.all(np.diff(row[20:41]) >= 0) and row[30] == pytest.approx(0.5)
+
+
+def test_craters_reaching_the_focus_come_from_the_focus_sample(
+        lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
+    small, large = lod_pair
+    cfg = small.config.craters
+
+    def reaching(scene: ms.Scene) -> np.ndarray:
+        c = scene.craters
+        assert c is not None
+        reach = cfg.ejecta_reach * c.diameter_m / 2 / np.sqrt(cfg.axis_ratio_min)
+        m = reaches_box(c.center_xy_m, reach, scene.heightfield.bounds_xy_m)
+        return np.column_stack([c.center_xy_m[m], c.diameter_m[m], c.age_ga[m]])
+
+    a, b = reaching(small), reaching(large)
+    assert len(a) > 20
+    np.testing.assert_array_equal(a, b)
+    assert small.craters is not None and np.all(np.diff(small.craters.age_ga) <= 0)
+    assert len(large.craters or ()) > len(small.craters or ())
+
+
+@pytest.mark.parametrize(("terrain", "match"), [
+    ({"focus_xy_m": [90.0, 0.0]}, "must lie inside the footprint"),
+    ({"focus_post_m": 0.3}, "whole multiple"),
+])
+def test_impossible_plans_are_one_line_errors(terrain: dict[str, object], match: str) -> None:
+    with pytest.raises(ConfigError, match=match):
+        ms.build_scene(_cfg(200.0, **terrain), seed=1)
+
+
+def test_lod_needs_procedural_terrain() -> None:
+    with pytest.raises(ConfigError, match="procedural"):
+        ms.SceneConfig.from_dict({"terrain": {"lod": True}})
