@@ -68,6 +68,10 @@ _FBM_CITATION = (
 )
 
 
+_LOD_DEM_NOTE = ("terrain: terrain.lod is ignored with a DEM (level-of-detail DEM terrain is not "
+                 "implemented yet): one heightfield at post_m")
+
+
 class _Timer:
     def __init__(self) -> None:
         self.timings_s: dict[str, float] = {}
@@ -201,6 +205,9 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
         else:
             default_post = 0.25 if tcfg.source == "default" else None
+            if tcfg.lod:
+                notes.append(_LOD_DEM_NOTE)
+                log.warning(_LOD_DEM_NOTE)
             dem, post_m, dem_notes, dem_summary = prepare_dem(
                 dem, tcfg, default_post_m=default_post
             )

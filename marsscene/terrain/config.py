@@ -72,7 +72,8 @@ class TerrainConfig:
     """Largest side of the draped orthoimage texture (in pixels)."""
     lod: bool = False
     """Two-level terrain (:mod:`marsscene.terrain.lod`): ``focus_post_m`` posts over the focus
-    square, ``post_m`` posts over the whole footprint outside it (procedural terrain only)."""
+    square, ``post_m`` posts over the whole footprint outside it. Procedural terrain only: with
+    a DEM it is ignored (one heightfield at ``post_m``; noted in the manifest)."""
     focus_xy_m: tuple[float, float] | None = None
     """Centre of the full-resolution focus square (in m, scene frame); default the origin."""
     focus_size_m: float = 1000.0
@@ -119,9 +120,6 @@ class TerrainConfig:
         check_range("terrain.focus_size_m", self.focus_size_m, 0.0, 20_000.0, lo_open=True)
         check_range("terrain.focus_post_m", self.focus_post_m, 0.0, 100.0, lo_open=True)
         check_range("terrain.lod_blend_m", self.lod_blend_m, 0.0, 10_000.0)
-        if self.lod and self.source != "procedural":
-            raise ConfigError('terrain.lod needs terrain.source = "procedural" (level-of-detail '
-                              "DEM terrain is not implemented yet)")
 
     def _check_dem_keys(self) -> None:
         crops = [k for k in ("crop_px", "crop_bounds_m", "crop_lonlat") if getattr(self, k)]

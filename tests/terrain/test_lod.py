@@ -129,6 +129,10 @@ def test_impossible_plans_are_one_line_errors(terrain: dict[str, object], match:
         ms.build_scene(_cfg(200.0, **terrain), seed=1)
 
 
-def test_lod_needs_procedural_terrain() -> None:
-    with pytest.raises(ConfigError, match="procedural"):
-        ms.SceneConfig.from_dict({"terrain": {"lod": True}})
+def test_lod_is_ignored_with_a_dem_and_noted(synthetic_dem_path) -> None:  # type: ignore[no-untyped-def]
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path), "lod": True},
+        "craters": {"enabled": False}, "rocks": {"enabled": False}})
+    scene = ms.build_scene(cfg, seed=1)
+    assert scene.outer is None
+    assert any("terrain.lod is ignored with a DEM" in n for n in scene.provenance.notes)

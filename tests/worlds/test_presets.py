@@ -1,5 +1,5 @@
-"""Reference-scene presets: the paper's sizes, override order, the interim memory plan, and a
-(shrunken) build of every preset through the CLI."""
+"""Reference-scene presets: the paper's sizes, override order, the memory plan (one grid, or
+two levels of detail), and a (shrunken) build of every preset through the CLI."""
 
 from __future__ import annotations
 
@@ -35,18 +35,30 @@ def test_presets_have_the_papers_sizes_and_shapes() -> None:
 
 
 @pytest.mark.parametrize("name", sorted(PAPER_SIZES_KM))
-def test_full_size_presets_fit_the_interim_memory_plan(name: str) -> None:
-    """Posts within terrain.synth.MAX_POSTS (with headroom for the 2-core/24 GB machine) and
-    the expected rock count, even at the full ejecta boost, within rocks.max_rocks."""
+def test_full_size_presets_fit_the_memory_plan(name: str) -> None:
+    """Each grid within terrain.synth.MAX_POSTS (with headroom for the 2-core/24 GB machine),
+    the expected rock count of each placement, even at the full ejecta boost, within
+    rocks.max_rocks; the 3-3.6 km scenes at 0.25 m over their 1 km focus square."""
     cfg = ms.SceneConfig.from_dict({"preset": name})
     t, r = cfg.terrain, cfg.rocks
     assert t.size_m is not None and t.post_m is not None
     posts = (t.size_m[0] / t.post_m + 1) * (t.size_m[1] / t.post_m + 1)
     assert posts <= 0.15 * MAX_POSTS
-    n_per_m2 = -float(cumulative_number_density_per_m2([r.d_max_m, r.d_min_m], k=r.k)[0]
-                      - cumulative_number_density_per_m2([r.d_max_m, r.d_min_m], k=r.k)[1])
-    expected = n_per_m2 * t.size_m[0] * t.size_m[1] * r.ejecta_boost
-    assert expected <= r.max_rocks
+
+    def expected_rocks(d_min: float, area_m2: float) -> float:
+        n = cumulative_number_density_per_m2([r.d_max_m, d_min], k=r.k)
+        return float(n[1] - n[0]) * area_m2 * r.ejecta_boost
+
+    area = t.size_m[0] * t.size_m[1]
+    assert t.lod == (PAPER_SIZES_KM[name] >= 3.0)
+    if t.lod:
+        assert (t.focus_post_m, t.focus_size_m, t.post_m) == (0.25, 1000.0, 1.0)
+        assert (t.focus_size_m / t.focus_post_m + 1) ** 2 <= 0.15 * MAX_POSTS
+        assert expected_rocks(r.d_min_m, t.focus_size_m**2) <= r.max_rocks
+        assert expected_rocks(r.outer_d_min_m, area) <= r.max_rocks
+        assert r.d_min_m <= 0.2
+    else:
+        assert expected_rocks(r.d_min_m, area) <= r.max_rocks
 
 
 def test_user_values_override_the_preset(tmp_path: Path) -> None:
@@ -80,9 +92,10 @@ def test_preset_with_a_dem_uses_the_dtm(synthetic_dem_path: Path) -> None:
 def test_every_preset_builds_shrunk(name: str, tmp_path: Path, runner) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / name
     size = "60" if name != "mars-base" else "80"
+    lod = ["--focus-size-m", "20"] if PAPER_SIZES_KM[name] >= 3.0 else []  # LOD presets
     res = runner.invoke(main, ["build", "--preset", name, "--size-m", size, size,
                                "--post-m", "0.5", "--out", str(out), "--seed", "2",
-                               "--format", "usdc", "--format", "mjcf"])
+                               "--format", "usdc", "--format", "mjcf", *lod])
     assert res.exit_code == 0, res.output
     man = json.loads((out / "manifest.json").read_text())
     assert man["config"]["preset"] == name
@@ -90,10 +103,14 @@ def test_every_preset_builds_shrunk(name: str, tmp_path: Path, runner) -> None: 
     assert man["config"]["terrain"]["landform"] == LANDFORMS[name]
     assert man["config"]["lighting"]["tau"] == preset_info(name)["config"]["lighting"]["tau"]
     assert ("assets" in man["summary"]) == (name == "mars-base")
+    if lod:  # 20 m at 0.25 m inside 60 m at 0.5 m
+        assert man["summary"]["lod"]["focus_posts"] == 81 * 81
+        assert man["summary"]["lod"]["outer_posts"] == 121 * 121
     from pxr import Usd
 
     stage = Usd.Stage.Open(str(out / "scene.usdc"))
     assert stage.GetPrimAtPath("/World/Terrain").IsValid()
+    assert stage.GetPrimAtPath("/World/TerrainLod1").IsValid() == bool(lod)
     assert stage.GetPrimAtPath("/World/Assets/habitat").IsValid() == (name == "mars-base")
     from marsscene.export.mjcf import validate_mjcf
 
