@@ -1,10 +1,11 @@
 """Reference-scene presets at full size: build + write (usdc + MJCF + manifest) per preset.
 
 Each preset is built in a fresh process (``_measure.measure``): wall time, peak RSS, terrain
-posts, rocks and craters, and the stage timings. These are the interim resolutions of
-``marsscene/data/presets.toml`` (1 m posts for the 3-3.6 km scenes) until tiled LOD terrain
-exists. Run: ``python benchmarks/run.py worlds`` (about 3-4 min on the 2-core machine), or
-``python benchmarks/bench_worlds.py jezero-plain`` for one preset.
+posts, rocks and craters, and the stage timings. The 3-3.6 km scenes use the two-level terrain
+(0.25 m over the central 1 km, 1 m outside): ``posts_M`` is focus + outer posts and
+``lod1_tiles`` the number of outer USD tile payloads. The scaling run keeps the 1 km focus and
+grows the footprint from 1.2 km to 3.6 km. Run: ``python benchmarks/run.py worlds`` (about
+5 min on the 2-core machine), or ``python benchmarks/bench_worlds.py main-crater``.
 """
 
 from __future__ import annotations
@@ -38,9 +39,17 @@ def _build() -> dict[str, object]:
         size_mb = sum(p.stat().st_size for p in (Path(tmp) / "out").rglob("*")
                       if p.is_file()) / 1e6
     t2 = time.perf_counter()
-    rows, cols = scene.heightfield.shape
+    posts = scene.heightfield.z_m.size
+    tiles = 0
+    if scene.outer is not None:
+        from marsscene.terrain.mesh import tile_ranges
+
+        posts += scene.outer.heightfield.z_m.size
+        rows, cols = scene.outer.heightfield.shape
+        tiles = len(tile_ranges(rows, cfg.export.max_tile_posts)) * len(
+            tile_ranges(cols, cfg.export.max_tile_posts))
     return {"build_s": round(t1 - t0, 1), "write_s": round(t2 - t1, 1),
-            "posts_M": round(rows * cols / 1e6, 2),
+            "posts_M": round(posts / 1e6, 2), "lod1_tiles": tiles,
             "rocks": len(scene.rocks) if scene.rocks is not None else 0,
             "craters": len(scene.craters) if scene.craters is not None else 0,
             "output_MB": round(size_mb, 1), "stages_s": scene.provenance.timings_s}
@@ -56,8 +65,9 @@ def main(names: list[str] | None = None) -> None:
         print(f"{name:>13}: {wall:6.1f} s, peak {peak_mb / 1024:5.2f} GB, {extra}", flush=True)
     if names:
         return
-    print("scaling: main-crater (1 m posts, defaults) from 1 km to 3.6 km", flush=True)
-    for size in (1000.0, 2000.0, 3600.0):
+    print("scaling: main-crater (1 km focus at 0.25 m, 1 m outside) from 1.2 km to 3.6 km",
+          flush=True)
+    for size in (1200.0, 2000.0, 2800.0, 3600.0):
         _NAME, _SIZE_M = "main-crater", size
         wall, peak_mb, extra = measure(_build)
         km2 = (size / 1000.0) ** 2

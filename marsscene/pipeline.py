@@ -177,7 +177,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
 
     texture_rgb = None
     plan: FocusPlan | None = None
-    coarse = None
+    coarse: Heightfield | None = None  # the outer grid of a level-of-detail terrain
     with timer.stage("terrain"):
         dem, inputs = load_inputs(config, dem)
         if dem is None and tcfg.lod:
@@ -248,7 +248,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     if ccfg.enabled:
         with timer.stage("craters"), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", MarsSceneWarning)
-            if plan is not None:
+            if plan is not None and coarse is not None:
                 hf, coarse, craters, cstats = _lod_craters(hf, coarse, plan, ccfg, seed)
             else:
                 craters, cstats = sample_craters(
@@ -286,7 +286,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                                   "base_z_m": round(a.base_z_m, 4),
                                   "pad_radius_m": round(a.pad_radius_m, 3)} for a in placed]
     outer = None
-    if plan is not None:
+    if plan is not None and coarse is not None:
         with timer.stage("stitch"):
             outer = OuterTerrain(stitch(coarse, hf, plan, blend_m=tcfg.lod_blend_m),
                                  plan.bounds_xy_m)

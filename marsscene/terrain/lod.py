@@ -178,7 +178,7 @@ def reaches_box(centers_xy_m: NDArray[np.float64], reach_m: NDArray[np.float64],
 def concat_tables(a: Any, b: Any) -> Any:
     """Row-concatenate two column tables of the same dataclass type (``None`` columns stay
     ``None`` only when both are)."""
-    out = {}
+    out: dict[str, Any] = {}
     for f in dataclasses.fields(a):
         va, vb = getattr(a, f.name), getattr(b, f.name)
         if va is None and vb is None:

@@ -147,3 +147,24 @@ def test_example_config_expands_the_preset_and_builds() -> None:
     small = cfg.replace(terrain=dataclasses.replace(cfg.terrain, size_m=(90.0, 90.0)))
     scene = ms.build_scene(small, seed=7)
     assert scene.assets is not None and len(scene.assets) == 1
+
+
+def test_lod_example_config_puts_the_focus_on_the_rim() -> None:
+    example = Path(__file__).resolve().parents[2] / "docs" / "examples" / "crater_rim_lod.toml"
+    cfg = ms.SceneConfig.from_toml(example)
+    t = cfg.terrain
+    assert cfg.preset == "main-crater" and t.lod and t.focus_xy_m == (700.0, 0.0)
+    assert (t.size_m, t.post_m, t.focus_post_m) == ((3600.0, 3600.0), 1.0, 0.25)
+    assert (cfg.rocks.d_min_m, cfg.rocks.outer_d_min_m) == (0.15, 1.5)
+    import dataclasses
+
+    # the same keys on a 2.4 km footprint at coarser posts: the focus sits on the rim
+    small = cfg.replace(
+        terrain=dataclasses.replace(t, size_m=(2400.0, 2400.0), post_m=4.0, focus_post_m=2.0),
+        craters=dataclasses.replace(cfg.craters, d_min_m=30.0),
+        rocks=dataclasses.replace(cfg.rocks, d_min_m=1.0, outer_d_min_m=2.5))
+    scene = ms.build_scene(small, seed=7)
+    assert scene.outer is not None
+    assert scene.heightfield.bounds_xy_m == (300.0, -400.0, 1100.0, 400.0)
+    z = scene.heightfield.z_m
+    assert float(z.max() - z.min()) > 50.0  # rim crest above the wall and the plain
