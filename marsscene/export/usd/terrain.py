@@ -8,7 +8,12 @@ from typing import Any
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
-from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
+from marsscene.export.usd.physics import (
+    REGOLITH_PHYSICS,
+    author_physics_material,
+    bind_physics_material,
+)
+from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage, set_kind
 from marsscene.terrain.mesh import heightfield_tiles
 
 __all__ = ["REGOLITH_ALBEDO_RGB", "author_terrain"]
@@ -61,8 +66,9 @@ def _material(stage: Any, scene: Any, assets: dict[str, bytes]) -> UsdShade.Mate
 
 
 def author_terrain(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
-    """Author ``/World/Terrain``: a payload of ``assets/terrain.usdc`` holding the
-    ``tile_i_j`` meshes, the regolith material and static triangle-mesh collision.
+    """Author ``/World/Terrain`` (a ``component``): a payload of ``assets/terrain.usdc`` holding
+    the ``tile_i_j`` meshes, the regolith material, static triangle-mesh collision
+    (approximation ``none``) and the regolith physics material (``physics`` purpose).
 
     The heavy geometry lives in a binary crate layer so that ``scene.usda`` stays small and
     readable; a ``.usdz`` package carries both.
@@ -71,6 +77,7 @@ def author_terrain(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
     _author_tiles(asset_stage, scene, assets)
     assets[TERRAIN_ASSET] = crate_bytes(asset_stage)
     prim = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Terrain")).GetPrim()
+    set_kind(prim, "component")
     prim.GetPayloads().AddPayload(f"./{TERRAIN_ASSET}")
 
 
@@ -78,6 +85,7 @@ def _author_tiles(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
     cfg = scene.config.export
     terrain = UsdGeom.Xform.Get(stage, Sdf.Path("/Terrain"))
     material = _material(stage, scene, assets)
+    physics = author_physics_material(stage, Sdf.Path("/Terrain/Looks"), REGOLITH_PHYSICS)
     for tile in heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts):
         mesh = UsdGeom.Mesh.Define(stage, terrain.GetPath().AppendChild(tile.name))
         faces = tile.face_vertex_indices
@@ -101,3 +109,4 @@ def _author_tiles(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
         UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(
             UsdPhysics.Tokens.none
         )
+        bind_physics_material(mesh.GetPrim(), physics)
