@@ -4,9 +4,10 @@
   come from :class:`marsscene.runtime.config.CameraConfig` and its mount (position and axes on
   the rover body) from the rover MJCF text (:func:`marsscene.runtime.rover.rover_mjcf`, pure,
   no MuJoCo), read by :func:`navcam_model`. It is placed at the nominal spawn pose: terrain
-  centre, yaw 0 (facing east), body z along the terrain normal, ``ride_height_m`` above ground
-  (the runtime then settles the rover by a few centimetres). MuJoCo and USD cameras both look
-  along their local -Z with +Y up, so the MJCF ``xyaxes`` are the USD camera axes.
+  centre, yaw 0 (facing east), body z along the mean terrain normal under the footprint,
+  ``ride_height_m`` above ground (the runtime then settles the rover by a few centimetres).
+  MuJoCo and USD cameras both look along their local -Z with +Y up, so the MJCF ``xyaxes``
+  are the USD camera axes.
 * ``Overview``: looks at the terrain centre from the south-south-west, 35 deg above the
   horizon, far enough to see the whole footprint.
 
@@ -142,7 +143,12 @@ def author_cameras(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
 
     rover = RoverConfig()
     nav = navcam_model(rover)
-    normal = np.asarray(hf.normal(centre[0], centre[1]), dtype=np.float64).reshape(3)
+    # body z: the mean terrain normal under the rover footprint (the runtime fits a plane)
+    half = max(rover.wheelbase_front_m, rover.wheelbase_rear_m) + 0.6
+    g = np.linspace(-half, half, 9)
+    gx, gy = np.meshgrid(centre[0] + g, centre[1] + g)
+    normal = np.asarray(hf.normal(gx, gy), dtype=np.float64).reshape(-1, 3).mean(axis=0)
+    normal /= np.linalg.norm(normal)
     body = quat_to_matrix(quat_from_yaw_normal(0.0, normal))
     ground = np.array([centre[0], centre[1], float(hf.sample(centre[0], centre[1]))])
     base = ground + normal * rover.ride_height_m
@@ -152,7 +158,7 @@ def author_cameras(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
 
     z_c = float(hf.sample(centre[0], centre[1]))
     az, el = math.radians(200.0), math.radians(35.0)  # from the south-south-west
-    dist = 0.9 * diag
+    dist = 0.5 * diag / math.sin(math.radians(45.0) / 2)  # the footprint's circle fits in view
     eye = np.array([centre[0] + dist * math.cos(el) * math.sin(az),
                     centre[1] + dist * math.cos(el) * math.cos(az),
                     z_c + dist * math.sin(el)])

@@ -7,8 +7,9 @@ One point per crater at its centre on the stamped terrain (``points``), ``widths
 diameter, and per-point primvars in the ``marsscene:crater`` namespace (``diameter_m``,
 ``depth_m``, ``rimHeight_m``, ``age_ga``, ``axisRatio``, ``azimuth_deg``, ``profile``,
 ``inScene``); float primvars are indexed (``values`` = the sorted distinct values,
-``indices`` per crater; read them with ``ComputeFlattened()``). The prim has ``purpose = guide`` so renderers do not draw it. Prim-level
-attributes record the count, the chronology system and the surface age.
+``indices`` per crater; read them with ``ComputeFlattened()``). The prim has
+``purpose = guide`` so renderers do not draw it. Prim-level attributes record the count, the
+chronology system and the surface age.
 """
 
 from __future__ import annotations
