@@ -101,3 +101,16 @@ def test_kind_hierarchy_and_extents(written: Path) -> None:
     pts = np.asarray(craters.GetPointsAttr().Get())
     ext = np.asarray(craters.GetExtentAttr().Get())
     assert np.all(pts >= ext[0]) and np.all(pts <= ext[1])
+
+
+def test_every_usd_file_is_byte_reproducible(scene: ms.Scene, tmp_path: Path) -> None:
+    export = dataclasses.replace(scene.config.export, usd_format="usdc")
+    variant = dataclasses.replace(scene, config=scene.config.replace(export=export))
+    for sub in ("a", "b"):
+        ms.write_scene(variant, tmp_path / sub, formats=("usd",))
+    files = sorted(p.relative_to(tmp_path / "a") for p in (tmp_path / "a").rglob("*")
+                   if p.is_file() and p.name != "manifest.json")
+    assert {f.as_posix() for f in files} >= {"scene.usdc", "assets/terrain.usdc",
+                                             "assets/rocks.usdc", "assets/craters.usdc"}
+    for f in files:
+        assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f

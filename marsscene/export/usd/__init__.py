@@ -35,14 +35,16 @@ def _pxr() -> None:
         raise missing_dependency("usd-core", "usd") from err
 
 
-def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
+def to_stage(scene: Any) -> tuple[Any, dict[str, Any]]:
     """Build the scene's USD stage in memory.
 
     Returns
     -------
     stage : pxr.Usd.Stage
-    assets : dict of str to bytes
-        Files the stage references, by path relative to the stage file.
+    assets : dict of str to bytes or pxr.Usd.Stage
+        Files the stage references, by path relative to the stage file: file contents, or
+        in-memory asset stages whose crate root layers (terrain, rocks, craters) that :func:`write_usd` exports
+        directly to their files (no serialise-read-write round trip).
     """
     _pxr()
     from marsscene.export.usd.cameras import author_cameras
@@ -53,7 +55,7 @@ def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
     from marsscene.export.usd.terrain import author_terrain
 
     stage = create_stage(scene)
-    assets: dict[str, bytes] = {}
+    assets: dict[str, Any] = {}
     for author in (author_terrain, author_craters, author_rocks, author_lighting,
                    author_cameras):
         author(stage, scene, assets)
@@ -78,7 +80,10 @@ def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda") -> l
     for rel, blob in sorted(assets.items()):
         p = out / rel
         p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_bytes(blob)
+        if isinstance(blob, bytes):
+            p.write_bytes(blob)
+        elif not blob.GetRootLayer().Export(str(p)):
+            raise OSError(f"could not write {p}")
         written.append(p)
     layer = stage.GetRootLayer()
     if usd_format == "usdz":

@@ -124,7 +124,7 @@ def _look_at(eye: NDArray[np.float64], target: NDArray[np.float64]) -> NDArray[n
     return np.column_stack([x, np.cross(x, f), -f])
 
 
-def author_cameras(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def author_cameras(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author ``/World/Cameras/Navcam`` and ``/World/Cameras/Overview``."""
     from marsscene.runtime.config import RoverConfig
     from marsscene.runtime.transforms import quat_from_yaw_normal, quat_to_matrix

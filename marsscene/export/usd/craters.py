@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, Vt
 
-from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
+from marsscene.export.usd.stage import WORLD, create_asset_stage
 
 __all__ = ["CRATERS_ASSET", "CRATERS_PATH", "author_craters"]
 
@@ -44,13 +44,13 @@ def _indexed(geom: UsdGeom.Points, name: str, values: np.ndarray) -> None:
     pv.SetIndices(Vt.IntArray.FromNumpy(inverse.astype(np.int32).ravel()))
 
 
-def author_craters(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def author_craters(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author the scene's craters (nothing when the stage is disabled)."""
     if scene.craters is None:
         return
     asset = create_asset_stage("Craters", kind=None)
     _author_points(asset, Sdf.Path("/Craters"), scene)
-    assets[CRATERS_ASSET] = crate_bytes(asset)
+    assets[CRATERS_ASSET] = asset  # a stage: its root layer is exported straight to its file
     stage.DefinePrim(Sdf.Path(CRATERS_PATH)).GetPayloads().AddPayload(f"./{CRATERS_ASSET}")
 
 

@@ -121,7 +121,7 @@ def _atmosphere_attributes(prim: Any, lt: Any) -> None:
         _attr(prim, "sun:utc", s, lt.utc)
 
 
-def author_lighting(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def author_lighting(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author ``/World/Lights`` (nothing when the lighting stage is disabled)."""
     lt = scene.lighting
     if lt is None:

@@ -31,7 +31,7 @@ from marsscene.export.usd.physics import (
     author_physics_material,
     bind_physics_material,
 )
-from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage, set_kind
+from marsscene.export.usd.stage import WORLD, create_asset_stage, set_kind
 
 __all__ = ["ROCKS_ASSET", "ROCK_ALBEDO_RGB", "author_rocks"]
 
@@ -124,13 +124,13 @@ def author_instancer(stage: Any, root: Sdf.Path, rocks: Any, prototypes: tuple[A
         ]))
 
 
-def author_rocks(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def author_rocks(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author ``/World/Rocks`` (a payload of ``assets/rocks.usdc``); nothing when disabled."""
     if scene.rocks is None:
         return
     asset = create_asset_stage("Rocks")
     author_instancer(asset, Sdf.Path("/Rocks"), scene.rocks, tuple(scene.rock_prototypes or ()))
-    assets[ROCKS_ASSET] = crate_bytes(asset)
+    assets[ROCKS_ASSET] = asset  # a stage: its root layer is exported straight to its file
     prim = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Rocks")).GetPrim()
     set_kind(prim, "component")
     prim.GetPayloads().AddPayload(f"./{ROCKS_ASSET}")
