@@ -2,11 +2,12 @@
 ~1e6 rocks (k = 0.05, D >= 0.1 m), written as ``.usdc`` + MJCF + catalogues + manifest.
 
 Compared, in the same run, with the *floor*: a plain-numpy script doing the irreducible work
-(a heightfield of the same shape, the terrain mesh arrays -- points, normals, st, triangle
-indices -- the rock arrays, and writing as many bytes as the build wrote, once). Runs are
-interleaved (floor, build, floor, build, ...) with ``os.sync()`` between them, each in a fresh
-process (``_measure.measure``); the figures are medians. Targets: build <= 1.5 x floor, peak
-RSS < 4 GB. Run: ``python benchmarks/run.py build`` (``BENCH_ROUNDS`` rounds, default 3).
+(a spectral-synthesis heightfield of the same shape, the terrain mesh arrays -- points,
+normals, st, triangle indices -- the rock arrays, and writing as many bytes as the build
+wrote, once). Runs are interleaved (floor, build, floor, build, ...) with ``os.sync()``
+between them, each in a fresh process (``_measure.measure``); the figures are medians.
+Targets: build <= 1.5 x floor, peak RSS < 4 GB.
+Run: ``python benchmarks/run.py build`` (``BENCH_ROUNDS`` rounds, default 3).
 """
 
 from __future__ import annotations
@@ -51,20 +52,31 @@ def _floor() -> dict[str, Any]:
     """The irreducible work in plain numpy (no USD, no MJCF, no Python per element)."""
     n = int(SIZE_M / POST_M) + 1
     rng = np.random.default_rng(7)
-    z = rng.standard_normal((n, n), dtype=np.float32)
+    # procedural heightfield: spectral synthesis (red-noise spectrum), as plain numpy FFTs
+    from scipy import fft
+
+    m = fft.next_fast_len(n, real=True)  # 4001 is prime: synthesise on a fast size, crop
+    spec = fft.rfft2(rng.standard_normal((m, m), dtype=np.float32), workers=1)
+    k = np.hypot(fft.fftfreq(m)[:, None], fft.rfftfreq(m)[None, :]).astype(np.float32)
+    spec /= np.maximum(k, 1.0 / m) ** 1.5
+    z = np.ascontiguousarray(fft.irfft2(spec, s=(m, m), workers=1)[:n, :n], dtype=np.float32)
     gy, gx = np.gradient(z, POST_M)
-    normals = np.stack([-gx, -gy, np.ones_like(z)], axis=-1)
-    normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
+    inv = 1.0 / np.sqrt(gx * gx + gy * gy + 1.0)
+    normals = np.empty((n, n, 3), np.float32)
+    normals[..., 0], normals[..., 1], normals[..., 2] = -gx * inv, -gy * inv, inv
     xs = np.arange(n, dtype=np.float32) * POST_M
     points = np.empty((n, n, 3), np.float32)
     points[..., 0], points[..., 1], points[..., 2] = xs[None, :], xs[:, None], z
     st = points[..., :2] / SIZE_M
     idx = np.arange(n * n, dtype=np.int32).reshape(n, n)
-    a, b, c, d = idx[:-1, :-1], idx[:-1, 1:], idx[1:, :-1], idx[1:, 1:]
-    faces = np.stack([a, b, d, a, d, c], axis=-1)
-    m = 1_000_000
-    rocks = [rng.random((m, 3), np.float32), rng.random((m, 4)).astype(np.float16),
-             rng.random((m, 3), np.float32), rng.integers(0, 8, m, dtype=np.int32)]
+    faces = np.empty((n - 1, n - 1, 6), np.int32)
+    faces[..., 0] = faces[..., 3] = idx[:-1, :-1]
+    faces[..., 1] = idx[:-1, 1:]
+    faces[..., 2] = faces[..., 4] = idx[1:, 1:]
+    faces[..., 5] = idx[1:, :-1]
+    r = 1_000_000
+    rocks = [rng.random((r, 3), np.float32), rng.random((r, 4)).astype(np.float16),
+             rng.random((r, 3), np.float32), rng.integers(0, 8, r, dtype=np.int32)]
     blobs = [z, normals, points, st, faces, *rocks]
     target = int(os.environ.get("BENCH_FLOOR_BYTES", "0"))
     out = _OUT / "floor"

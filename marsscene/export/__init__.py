@@ -11,6 +11,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,13 @@ def _write_catalogs(scene: Any, out: Path) -> list[Path]:
     from marsscene.export.catalog_rocks import write_rock_catalog
 
     return write_crater_catalog(scene, out) + write_rock_catalog(scene, out)
+
+
+def _timed(fn: Callable[[Any, Path], list[Path]], scene: Any,
+           out: Path) -> tuple[list[Path], float]:
+    t0 = time.perf_counter()
+    paths = fn(scene, out)
+    return paths, round(time.perf_counter() - t0, 4)
 
 
 #: Format name -> writer(scene, out_dir) -> written paths. Extend to add a format.
@@ -78,11 +86,15 @@ def write_scene(
     try:
         written: dict[str, list[Path]] = {}
         timings = dict(scene.provenance.timings_s)
-        for fmt in fmts:
-            t0 = time.perf_counter()
-            written[fmt] = WRITERS[fmt](scene, tmp)
-            timings[f"export_{fmt}"] = round(time.perf_counter() - t0, 4)
-        written["catalogs"] = _write_catalogs(scene, tmp)
+        jobs = [(fmt, WRITERS[fmt]) for fmt in fmts] + [("catalogs", _write_catalogs)]
+        # Writers touch disjoint files; USD's layer export and the numpy formatting release
+        # the GIL, so two threads overlap them. Results are collected in a fixed order.
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            futures = [(name, pool.submit(_timed, fn, scene, tmp)) for name, fn in jobs]
+            for name, future in futures:
+                written[name], secs = future.result()
+                if name != "catalogs":
+                    timings[f"export_{name}"] = secs
         rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
         (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
         written["manifest"] = [tmp / "manifest.json"]

@@ -157,7 +157,7 @@ class Heightfield:
         """Unit normals at every post, shape ``(rows, cols, 3)``."""
         gx, gy = self.grid_gradient()
         inv = 1.0 / np.sqrt(gx * gx + gy * gy + 1.0)  # no (rows, cols, 3) float64 temporaries
-        n = np.empty((*gx.shape, 3), dtype=np.float32)
+        n = np.zeros((*gx.shape, 3), dtype=np.float32)
         np.multiply(gx, -inv, out=n[..., 0], casting="same_kind")
         np.multiply(gy, -inv, out=n[..., 1], casting="same_kind")
         n[..., 2] = inv

@@ -43,8 +43,8 @@ def to_stage(scene: Any) -> tuple[Any, dict[str, Any]]:
     stage : pxr.Usd.Stage
     assets : dict of str to bytes or pxr.Usd.Stage
         Files the stage references, by path relative to the stage file: file contents, or
-        in-memory asset stages whose crate root layers (terrain, rocks, craters) that :func:`write_usd` exports
-        directly to their files (no serialise-read-write round trip).
+        in-memory asset stages (terrain, rocks, craters) whose root layers :func:`write_usd`
+        exports directly to their ``.usdc`` files (no serialise-read-write round trip).
     """
     _pxr()
     from marsscene.export.usd.cameras import author_cameras
