@@ -11,7 +11,6 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable, Iterable
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -86,15 +85,11 @@ def write_scene(
     try:
         written: dict[str, list[Path]] = {}
         timings = dict(scene.provenance.timings_s)
-        jobs = [(fmt, WRITERS[fmt]) for fmt in fmts] + [("catalogs", _write_catalogs)]
-        # Writers touch disjoint files; USD's layer export and the numpy formatting release
-        # the GIL, so two threads overlap them. Results are collected in a fixed order.
-        with ThreadPoolExecutor(max_workers=2) as pool:
-            futures = [(name, pool.submit(_timed, fn, scene, tmp)) for name, fn in jobs]
-            for name, future in futures:
-                written[name], secs = future.result()
-                if name != "catalogs":
-                    timings[f"export_{name}"] = secs
+        # Sequential on purpose: running the USD writer beside another thread deadlocked
+        # (usd-core 26.11: pxr's internal locks and the GIL), see docs/usd.md.
+        for fmt in fmts:
+            written[fmt], timings[f"export_{fmt}"] = _timed(WRITERS[fmt], scene, tmp)
+        written["catalogs"], _ = _timed(_write_catalogs, scene, tmp)
         rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
         (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
         written["manifest"] = [tmp / "manifest.json"]
