@@ -38,6 +38,13 @@ def _write_catalogs(scene: Any, out: Path) -> list[Path]:
     return write_crater_catalog(scene, out) + write_rock_catalog(scene, out)
 
 
+def _timed(fn: Callable[[Any, Path], list[Path]], scene: Any,
+           out: Path) -> tuple[list[Path], float]:
+    t0 = time.perf_counter()
+    paths = fn(scene, out)
+    return paths, round(time.perf_counter() - t0, 4)
+
+
 #: Format name -> writer(scene, out_dir) -> written paths. Extend to add a format.
 WRITERS: dict[str, Callable[[Any, Path], list[Path]]] = {"usd": _write_usd, "mjcf": _write_mjcf}
 
@@ -99,11 +106,11 @@ def write_scene(
     try:
         written: dict[str, list[Path]] = {}
         timings = dict(scene.provenance.timings_s)
+        # Sequential on purpose: running the USD writer beside another thread deadlocked
+        # (usd-core 26.11: pxr's internal locks and the GIL), see docs/usd.md.
         for fmt in fmts:
-            t0 = time.perf_counter()
-            written[fmt] = WRITERS[fmt](scene, tmp)
-            timings[f"export_{fmt}"] = round(time.perf_counter() - t0, 4)
-        written["catalogs"] = _write_catalogs(scene, tmp)
+            written[fmt], timings[f"export_{fmt}"] = _timed(WRITERS[fmt], scene, tmp)
+        written["catalogs"], _ = _timed(_write_catalogs, scene, tmp)
         rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
         (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
         written["manifest"] = [tmp / "manifest.json"]

@@ -157,9 +157,12 @@ class Heightfield:
     def grid_normals(self) -> NDArray[np.float32]:
         """Unit normals at every post, shape ``(rows, cols, 3)``."""
         gx, gy = self.grid_gradient()
-        n = np.stack([-gx, -gy, np.ones_like(gx)], axis=-1)
-        n /= np.linalg.norm(n, axis=-1, keepdims=True)
-        return n.astype(np.float32)
+        inv = 1.0 / np.sqrt(gx * gx + gy * gy + 1.0)  # no (rows, cols, 3) float64 temporaries
+        n = np.zeros((*gx.shape, 3), dtype=np.float32)
+        np.multiply(gx, -inv, out=n[..., 0], casting="same_kind")
+        np.multiply(gy, -inv, out=n[..., 1], casting="same_kind")
+        n[..., 2] = inv
+        return n
 
     def with_z(self, z_m: ArrayLike) -> Heightfield:
         """A new heightfield on the same grid with other elevations."""

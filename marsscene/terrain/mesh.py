@@ -67,9 +67,13 @@ def heightfield_tiles(hf: Heightfield, *, max_tile_posts: int = 513) -> list[Ter
     s_all = ((xs - xs[0]) / (xs[-1] - xs[0])).astype(np.float32)
     t_all = ((ys - ys[0]) / (ys[-1] - ys[0])).astype(np.float32)
     tiles = []
+    faces: dict[tuple[int, int], NDArray[np.int32]] = {}  # most tiles share one shape
     for ti, (r0, r1) in enumerate(tile_ranges(rows, max_tile_posts)):
         for tj, (c0, c1) in enumerate(tile_ranges(cols, max_tile_posts)):
             nr, nc = r1 - r0, c1 - c0
+            if (nr, nc) not in faces:
+                faces[nr, nc] = grid_faces(nr, nc)
+                faces[nr, nc].flags.writeable = False
             gx, gy = np.meshgrid(xs[c0:c1], ys[r0:r1])
             pts = np.stack([gx, gy, hf.z_m[r0:r1, c0:c1]], axis=-1).reshape(-1, 3)
             ss, tt = np.meshgrid(s_all[c0:c1], t_all[r0:r1])
@@ -79,7 +83,7 @@ def heightfield_tiles(hf: Heightfield, *, max_tile_posts: int = 513) -> list[Ter
                     points_m=pts.astype(np.float32),
                     normals=normals[r0:r1, c0:c1].reshape(-1, 3),
                     st=np.stack([ss, tt], axis=-1).reshape(-1, 2),
-                    face_vertex_indices=grid_faces(nr, nc),
+                    face_vertex_indices=faces[nr, nc],
                 )
             )
     return tiles

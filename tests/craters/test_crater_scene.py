@@ -82,7 +82,9 @@ def test_usd_points_prim_round_trip(tmp_path: Path) -> None:
     np.testing.assert_allclose(np.array(pts.GetWidthsAttr().Get()), t.diameter_m, rtol=1e-6)
     api = UsdGeom.PrimvarsAPI(prim)
     for name, col in (("depth_m", t.depth_m), ("age_ga", t.age_ga), ("axisRatio", t.axis_ratio)):
-        got = np.array(api.GetPrimvar(f"marsscene:crater:{name}").Get())
+        pv = api.GetPrimvar(f"marsscene:crater:{name}")
+        assert pv.IsIndexed()
+        got = np.array(pv.ComputeFlattened())
         np.testing.assert_allclose(got, col, rtol=1e-6, atol=1e-7)
     assert prim.GetAttribute("marsscene:crater:count").Get() == len(t)
     assert prim.GetAttribute("marsscene:crater:system").Get() == "hartmann-daubar-2016"

@@ -73,6 +73,27 @@ def test_usd_holds_the_whole_footprint_as_lod_payloads(big: tuple[ms.Scene, Path
     assert man["summary"]["lod"]["outer_posts"] == 451 * 451
 
 
+@pytest.mark.parametrize("usd_format", ["usda", "usdz"])
+def test_lod_stage_passes_the_omniverse_asset_validator(big: tuple[ms.Scene, Path],
+                                                        tmp_path: Path, usd_format: str) -> None:
+    import dataclasses
+
+    validator = pytest.importorskip("omni.asset_validator")
+    from pxr import Kind, Usd
+
+    scene = big[0]
+    export = dataclasses.replace(scene.config.export, usd_format=usd_format)
+    variant = dataclasses.replace(scene, config=scene.config.replace(export=export))
+    ms.write_scene(variant, tmp_path / "s", formats=("usd",))
+    target = tmp_path / "s" / f"scene.{usd_format}"
+    results = validator.ValidationEngine().validate(str(target))
+    assert [str(issue) for issue in results.issues()] == []
+    stage = Usd.Stage.Open(str(target))
+    lod1 = stage.GetPrimAtPath("/World/TerrainLod1")
+    assert Usd.ModelAPI(lod1).GetKind() == Kind.Tokens.group
+    assert all(Usd.ModelAPI(t).GetKind() == Kind.Tokens.component for t in lod1.GetChildren())
+
+
 def test_mjcf_compiles_with_two_hfields(big: tuple[ms.Scene, Path]) -> None:
     from marsscene.export.mjcf import validate_mjcf
 

@@ -3,12 +3,22 @@
 :func:`to_stage` builds an in-memory stage plus its assets; :func:`write_usd` writes
 ``scene.usda|usdc|usdz`` and the assets (textures) beside it. Layout::
 
-    /World                      default prim (Xform), Z-up, metres, kilograms
+    /World                      default prim (Xform, kind assembly), Z-up, metres, kilograms
       /PhysicsScene             UsdPhysics.Scene, gravity 3.72 m/s^2
-      /Looks/Regolith           UsdPreviewSurface (+ UsdUVTexture of the orthoimage)
-      /Terrain/tile_i_j         UsdGeom.Mesh tiles with normals, st, CollisionAPI
-      /TerrainLod1/tile_i_j     level-of-detail scenes: outer tile payloads (terrain_lod.py)
-      /Craters, /Rocks, /Lights, /Assets (when those stages are enabled)
+      /Terrain                  component; payload assets/terrain.usdc:
+        /Looks/Regolith         UsdPreviewSurface (+ UsdUVTexture of the orthoimage)
+        /Looks/RegolithPhysics  UsdPhysics.MaterialAPI (physics-purpose binding)
+        /tile_i_j               UsdGeom.Mesh tiles with normals, st, CollisionAPI
+      /TerrainLod1              level-of-detail scenes only (group; terrain_lod.py):
+        /tile_i_j               component; payload assets/terrain_lod1/tile_i_j.usdc
+      /Craters                  payload assets/craters.usdc (guide Points)
+      /Rocks                    component; payload assets/rocks.usdc (PointInstancer)
+      /Lights                   group: Sun (DistantLight), Sky (textured DomeLight)
+      /Cameras                  group: Navcam (runtime mast camera), Overview
+      /Assets                   placed assets (habitat, user files), when [assets] is set
+
+Every default-rule check of NVIDIA's Omniverse Asset Validator passes on ``.usda``, ``.usdc``
+and ``.usdz`` outputs (tested).
 """
 
 from __future__ import annotations
@@ -28,17 +38,20 @@ def _pxr() -> None:
         raise missing_dependency("usd-core", "usd") from err
 
 
-def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
+def to_stage(scene: Any) -> tuple[Any, dict[str, Any]]:
     """Build the scene's USD stage in memory.
 
     Returns
     -------
     stage : pxr.Usd.Stage
-    assets : dict of str to bytes
-        Files the stage references, by path relative to the stage file.
+    assets : dict of str to bytes or pxr.Usd.Stage
+        Files the stage references, by path relative to the stage file: file contents, or
+        in-memory asset stages (terrain, rocks, craters) whose root layers :func:`write_usd`
+        exports directly to their ``.usdc`` files (no serialise-read-write round trip).
     """
     _pxr()
     from marsscene.export.usd.assets import author_assets
+    from marsscene.export.usd.cameras import author_cameras
     from marsscene.export.usd.craters import author_craters
     from marsscene.export.usd.lighting import author_lighting
     from marsscene.export.usd.rocks import author_rocks
@@ -47,9 +60,9 @@ def to_stage(scene: Any) -> tuple[Any, dict[str, bytes]]:
     from marsscene.export.usd.terrain_lod import author_outer_terrain
 
     stage = create_stage(scene)
-    assets: dict[str, bytes] = {}
+    assets: dict[str, Any] = {}
     for author in (author_terrain, author_outer_terrain, author_craters, author_rocks,
-                   author_lighting, author_assets):
+                   author_lighting, author_cameras, author_assets):
         author(stage, scene, assets)
     return stage, assets
 
@@ -72,7 +85,10 @@ def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda") -> l
     for rel, blob in sorted(assets.items()):
         p = out / rel
         p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_bytes(blob)
+        if isinstance(blob, bytes):
+            p.write_bytes(blob)
+        elif not blob.GetRootLayer().Export(str(p)):
+            raise OSError(f"could not write {p}")
         written.append(p)
     layer = stage.GetRootLayer()
     if usd_format == "usdz":

@@ -84,10 +84,11 @@ def author_regolith_detail(
     normal = _texture(stage, f"{material_path}/DetailNormal", NORMAL_TEXTURE, st, "raw")
     normal.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(2, 2, 2, 1))
     normal.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(-1, -1, -1, 0))
+    # UsdUVTexture's outputs are float3 (the validator checks the declared type)
     surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(
-        normal.ConnectableAPI(), "rgb")
+        normal.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
     if scene.texture_rgb is None:
         assets[ALBEDO_TEXTURE] = _png(_srgb_u8(tile.albedo_rgb[::-1]))
         albedo = _texture(stage, f"{material_path}/DetailAlbedo", ALBEDO_TEXTURE, st, "sRGB")
         surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
-            albedo.ConnectableAPI(), "rgb")
+            albedo.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))

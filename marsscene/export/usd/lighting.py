@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdLux
 
-from marsscene.export.usd.stage import WORLD
+from marsscene.export.usd.stage import WORLD, set_kind
 from marsscene.lighting.usd_units import usd_light_intensity
 
 __all__ = ["SKY_TEXTURE", "author_lighting", "sky_texture", "sun_orientation_quat"]
@@ -121,12 +121,13 @@ def _atmosphere_attributes(prim: Any, lt: Any) -> None:
         _attr(prim, "sun:utc", s, lt.utc)
 
 
-def author_lighting(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def author_lighting(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author ``/World/Lights`` (nothing when the lighting stage is disabled)."""
     lt = scene.lighting
     if lt is None:
         return
     lights = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Lights"))
+    set_kind(lights.GetPrim(), "group")
     _atmosphere_attributes(lights.GetPrim(), lt)
     units = {"units": lt.usd_units, "luminous_efficacy_lm_per_w": lt.luminous_efficacy_lm_per_w}
 

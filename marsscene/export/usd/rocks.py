@@ -8,9 +8,12 @@ Layout (the instancer lives in the binary crate layer ``assets/rocks.usdc``, pay
       Instancer                           PointInstancer: positions, orientations, scales,
                                           protoIndices (one row per rock of Scene.rocks)
         Prototypes/rock_NN                Xform (unit frame: x, y in [-0.5, 0.5], z in [0, 1])
-          Visual                          Mesh (render), material bound
+          Visual                          Mesh (render), flat face-varying normals, material
           Collision/part_M                Mesh, purpose guide, CollisionAPI,
-                                          MeshCollisionAPI approximation "convexHull"
+                                          MeshCollisionAPI approximation "convexHull",
+                                          physics material Looks/RockPhysics
+
+``/World/Rocks`` is a ``component`` model (``kind``).
 
 Orientations are authored as ``quath`` (``orientations``, read by every USD version); the
 half-precision error is < 0.1 deg.
@@ -23,7 +26,12 @@ from typing import Any
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
-from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
+from marsscene.export.usd.physics import (
+    ROCK_PHYSICS,
+    author_physics_material,
+    bind_physics_material,
+)
+from marsscene.export.usd.stage import WORLD, create_asset_stage, set_kind
 
 __all__ = ["ROCKS_ASSET", "ROCK_ALBEDO_RGB", "author_rocks"]
 
@@ -46,6 +54,10 @@ def _mesh(stage: Any, path: Sdf.Path, mesh: Any) -> UsdGeom.Mesh:
     geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(v))
     geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(f), 3, np.int32)))
     geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(f.ravel()))
+    # faceted rocks: one flat normal per face corner
+    normals = np.repeat(np.asarray(mesh.face_normals, dtype=np.float32), 3, axis=0)
+    geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(normals)))
+    geom.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
     geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
     geom.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
     geom.CreateExtentAttr(_vec3f_extent(v))
@@ -66,7 +78,7 @@ def _material(stage: Any, root: Sdf.Path) -> UsdShade.Material:
 
 
 def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
-                material: UsdShade.Material) -> list[Sdf.Path]:
+                material: UsdShade.Material, physics: UsdShade.Material) -> list[Sdf.Path]:
     scope = instancer.AppendChild("Prototypes")
     UsdGeom.Scope.Define(stage, scope)
     paths = []
@@ -84,6 +96,7 @@ def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
             UsdPhysics.MeshCollisionAPI.Apply(geom.GetPrim()).CreateApproximationAttr(
                 UsdPhysics.Tokens.convexHull
             )
+            bind_physics_material(geom.GetPrim(), physics)
         paths.append(path)
     return paths
 
@@ -91,9 +104,10 @@ def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
 def author_instancer(stage: Any, root: Sdf.Path, rocks: Any, prototypes: tuple[Any, ...]) -> None:
     """Author the material, prototypes and the PointInstancer of ``rocks`` under ``root``."""
     material = _material(stage, root)
+    physics = author_physics_material(stage, root.AppendChild("Looks"), ROCK_PHYSICS)
     inst = UsdGeom.PointInstancer.Define(stage, root.AppendChild("Instancer"))
     inst.CreatePrototypesRel().SetTargets(_prototypes(stage, inst.GetPath(), prototypes,
-                                                      material))
+                                                      material, physics))
     pos = np.asarray(rocks.position_xyz_m, dtype=np.float32)
     q = np.asarray(rocks.orientation_wxyz, dtype=np.float64)
     scale = np.asarray(rocks.scale_xyz_m, dtype=np.float32)
@@ -110,14 +124,15 @@ def author_instancer(stage: Any, root: Sdf.Path, rocks: Any, prototypes: tuple[A
         ]))
 
 
-def author_rocks(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def author_rocks(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author ``/World/Rocks`` (a payload of ``assets/rocks.usdc``); nothing when disabled."""
     if scene.rocks is None:
         return
     asset = create_asset_stage("Rocks")
     author_instancer(asset, Sdf.Path("/Rocks"), scene.rocks, tuple(scene.rock_prototypes or ()))
-    assets[ROCKS_ASSET] = crate_bytes(asset)
+    assets[ROCKS_ASSET] = asset  # a stage: its root layer is exported straight to its file
     prim = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Rocks")).GetPrim()
+    set_kind(prim, "component")
     prim.GetPayloads().AddPayload(f"./{ROCKS_ASSET}")
     prim.CreateAttribute("marsscene:rockCount", Sdf.ValueTypeNames.Int).Set(len(scene.rocks))
     prim.CreateAttribute("marsscene:rockPrototypes", Sdf.ValueTypeNames.Int).Set(

@@ -6,14 +6,28 @@ from __future__ import annotations
 
 from typing import Any
 
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics, Vt
+from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdPhysics, Vt
 
 from marsscene._version import __version__
 from marsscene.units import MARS_GRAVITY_M_S2
 
-__all__ = ["WORLD", "crate_bytes", "create_asset_stage", "create_stage", "provenance_layer_data"]
+__all__ = [
+    "WORLD",
+    "crate_bytes",
+    "create_asset_stage",
+    "create_stage",
+    "provenance_layer_data",
+    "set_kind",
+]
 
 WORLD = "/World"
+
+
+def set_kind(prim: Usd.Prim, kind: str) -> None:
+    """Author the model ``kind`` (``assembly``, ``group``, ``component``) so tools can select
+    whole parts of the scene (``/World`` assembly; lights and cameras groups; terrain, rocks
+    components)."""
+    Usd.ModelAPI(prim).SetKind(getattr(Kind.Tokens, kind))
 
 
 def provenance_layer_data(scene: Any) -> dict[str, Any]:
@@ -47,6 +61,7 @@ def create_stage(scene: Any) -> Usd.Stage:
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)
     UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
     world = UsdGeom.Xform.Define(stage, Sdf.Path(WORLD))
+    set_kind(world.GetPrim(), "assembly")
     stage.SetDefaultPrim(world.GetPrim())
     layer = stage.GetRootLayer()
     layer.customLayerData = provenance_layer_data(scene)
@@ -57,14 +72,16 @@ def create_stage(scene: Any) -> Usd.Stage:
     return stage
 
 
-def create_asset_stage(default_prim: str) -> Usd.Stage:
-    """An in-memory stage for a heavy asset layer (written as ``.usdc`` and referenced from the
-    root layer), with the same metrics as the root stage."""
+def create_asset_stage(default_prim: str, kind: str | None = "component") -> Usd.Stage:
+    """An in-memory stage for a heavy asset layer (written as ``.usdc`` and payloaded from the
+    root layer), with the same metrics as the root stage and its root prim of model ``kind``."""
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)
     UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
     root = UsdGeom.Xform.Define(stage, Sdf.Path(f"/{default_prim}"))
+    if kind is not None:
+        set_kind(root.GetPrim(), kind)
     stage.SetDefaultPrim(root.GetPrim())
     stage.GetRootLayer().customLayerData = {"creator": f"marsscene {__version__}"}
     return stage

@@ -9,7 +9,12 @@ import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
 from marsscene.export.usd.appearance import author_regolith_detail
-from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
+from marsscene.export.usd.physics import (
+    REGOLITH_PHYSICS,
+    author_physics_material,
+    bind_physics_material,
+)
+from marsscene.export.usd.stage import WORLD, create_asset_stage, set_kind
 from marsscene.terrain.mesh import heightfield_tiles
 
 __all__ = ["REGOLITH_ALBEDO_RGB", "author_terrain"]
@@ -62,24 +67,27 @@ def _material(stage: Any, scene: Any, assets: dict[str, bytes]) -> UsdShade.Mate
     return mat
 
 
-def author_terrain(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
-    """Author ``/World/Terrain``: a payload of ``assets/terrain.usdc`` holding the
-    ``tile_i_j`` meshes, the regolith material and static triangle-mesh collision.
+def author_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
+    """Author ``/World/Terrain`` (a ``component``): a payload of ``assets/terrain.usdc`` holding
+    the ``tile_i_j`` meshes, the regolith material, static triangle-mesh collision
+    (approximation ``none``) and the regolith physics material (``physics`` purpose).
 
     The heavy geometry lives in a binary crate layer so that ``scene.usda`` stays small and
     readable; a ``.usdz`` package carries both.
     """
     asset_stage = create_asset_stage("Terrain")
     _author_tiles(asset_stage, scene, assets)
-    assets[TERRAIN_ASSET] = crate_bytes(asset_stage)
+    assets[TERRAIN_ASSET] = asset_stage  # a stage: its root layer is exported straight to its file
     prim = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Terrain")).GetPrim()
+    set_kind(prim, "component")
     prim.GetPayloads().AddPayload(f"./{TERRAIN_ASSET}")
 
 
-def _author_tiles(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def _author_tiles(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     cfg = scene.config.export
     terrain = UsdGeom.Xform.Get(stage, Sdf.Path("/Terrain"))
     material = _material(stage, scene, assets)
+    physics = author_physics_material(stage, Sdf.Path("/Terrain/Looks"), REGOLITH_PHYSICS)
     for tile in heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts):
         mesh = UsdGeom.Mesh.Define(stage, terrain.GetPath().AppendChild(tile.name))
         faces = tile.face_vertex_indices
@@ -91,9 +99,12 @@ def _author_tiles(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
         mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
         mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
         mesh.CreateDoubleSidedAttr(False)
-        lo = tile.points_m.min(axis=0)
-        hi = tile.points_m.max(axis=0)
-        mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))
+        pts = tile.points_m  # a regular grid: x, y bounds are its first and last posts
+        z = pts[:, 2]
+        lo = (min(pts[0, 0], pts[-1, 0]), min(pts[0, 1], pts[-1, 1]), z.min())
+        hi = (max(pts[0, 0], pts[-1, 0]), max(pts[0, 1], pts[-1, 1]), z.max())
+        mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)),
+                                             Gf.Vec3f(*map(float, hi))]))
         st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
             "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex
         )
@@ -103,3 +114,4 @@ def _author_tiles(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
         UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(
             UsdPhysics.Tokens.none
         )
+        bind_physics_material(mesh.GetPrim(), physics)

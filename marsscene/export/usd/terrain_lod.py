@@ -8,8 +8,9 @@ Layout (only for scenes with :attr:`Scene.outer <marsscene.Scene.outer>`)::
 
 Each outer tile is a ``UsdGeom.Mesh`` of the coarse posts without the cells inside the focus
 square (the hole the focus terrain fills: the coarse and fine meshes share the border, see
-:mod:`marsscene.terrain.lod`), with normals, ``st`` over the whole footprint, the plain regolith
-colour and static triangle-mesh collision. Scenes without level of detail are unchanged.
+:mod:`marsscene.terrain.lod`), with normals, ``st`` over the whole footprint, the plain
+regolith colour and static triangle-mesh collision with the regolith physics material.
+Scenes without level of detail are unchanged.
 """
 
 from __future__ import annotations
@@ -19,7 +20,12 @@ from typing import Any
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
-from marsscene.export.usd.stage import WORLD, crate_bytes, create_asset_stage
+from marsscene.export.usd.physics import (
+    REGOLITH_PHYSICS,
+    author_physics_material,
+    bind_physics_material,
+)
+from marsscene.export.usd.stage import WORLD, create_asset_stage, set_kind
 from marsscene.terrain.mesh import grid_faces, tile_ranges
 
 __all__ = ["LOD_ATTR", "author_outer_terrain"]
@@ -32,7 +38,7 @@ def _lod_attr(prim: Any, level: int) -> None:
     prim.CreateAttribute(LOD_ATTR, Sdf.ValueTypeNames.Int, custom=True).Set(level)
 
 
-def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, bytes]) -> None:
+def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author ``/World/TerrainLod1`` tile payloads (nothing for scenes without an outer level)."""
     outer = scene.outer
     if outer is None:
@@ -41,6 +47,7 @@ def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, bytes]) -> No
 
     _lod_attr(stage.GetPrimAtPath(f"{WORLD}/Terrain"), 0)
     root = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/TerrainLod{outer.level}"))
+    set_kind(root.GetPrim(), "group")
     _lod_attr(root.GetPrim(), outer.level)
     hf = outer.heightfield
     rows, cols = hf.shape
@@ -72,8 +79,9 @@ def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, bytes]) -> No
             layer = create_asset_stage("Tile")
             _mesh(layer, pts.astype(np.float32), normals[r0:r1, c0:c1].reshape(-1, 3)[used],
                   st, remap[faces].astype(np.int32), REGOLITH_ALBEDO_RGB)
-            assets[rel] = crate_bytes(layer)
+            assets[rel] = layer  # a stage: its root layer is exported straight to its file
             prim = UsdGeom.Xform.Define(stage, root.GetPath().AppendChild(name)).GetPrim()
+            set_kind(prim, "component")
             prim.GetPayloads().AddPayload(f"./{rel}")
             _lod_attr(prim, outer.level)
 
@@ -88,6 +96,7 @@ def _mesh(stage: Any, pts: np.ndarray, normals: np.ndarray, st: np.ndarray, face
     shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*rgb))
     mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
     mesh = UsdGeom.Mesh.Define(stage, Sdf.Path("/Tile/Mesh"))
+    physics = author_physics_material(stage, Sdf.Path("/Tile/Looks"), REGOLITH_PHYSICS)
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.ravel()))
@@ -105,3 +114,4 @@ def _mesh(stage: Any, pts: np.ndarray, normals: np.ndarray, st: np.ndarray, face
     UsdPhysics.CollisionAPI.Apply(mesh.GetPrim())
     UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(
         UsdPhysics.Tokens.none)
+    bind_physics_material(mesh.GetPrim(), physics)
