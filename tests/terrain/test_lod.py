@@ -136,3 +136,23 @@ def test_lod_is_ignored_with_a_dem_and_noted(synthetic_dem_path) -> None:  # typ
     scene = ms.build_scene(cfg, seed=1)
     assert scene.outer is None
     assert any("terrain.lod is ignored with a DEM" in n for n in scene.provenance.notes)
+
+
+def test_cli_focus_options(runner, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from marsscene.cli import main
+
+    base = ["build", "--procedural", "--size-m", "200", "200", "--post-m", "1", "--format",
+            "mjcf", "--seed", "1"]
+    res = runner.invoke(main, [*base, "--focus-xy", "95", "0", "--focus-size-m", "40",
+                               "--out", str(tmp_path / "bad")])
+    assert res.exit_code != 0
+    assert "must lie inside the footprint" in res.output and "Traceback" not in res.output
+    assert not (tmp_path / "bad" / "manifest.json").exists()
+    res = runner.invoke(main, [*base, "--focus-xy", "30", "-20", "--focus-size-m", "40",
+                               "--out", str(tmp_path / "ok")])
+    assert res.exit_code == 0, res.output
+    import json
+
+    lod = json.loads((tmp_path / "ok" / "manifest.json").read_text())["summary"]["lod"]
+    assert lod["focus_bounds_xy_m"] == [10.0, -40.0, 50.0, 0.0]
+    assert (lod["focus_post_m"], lod["outer_post_m"]) == (0.25, 1.0)
