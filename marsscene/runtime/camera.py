@@ -128,6 +128,9 @@ class MastCamera:
         cam = self.config
         terrain = spec.geom("terrain")
         terrain.group = 5  # hidden: the window mesh is drawn instead
+        outer = spec.geom("terrain_outer")  # level-of-detail scenes: its focus posts are lowered
+        if outer is not None:
+            outer.group = 5
         for geom in spec.geoms:  # MJCF collision rocks: literature rock colour
             if geom.material == "rock":
                 geom.material = "cam_rock_geom"

@@ -129,10 +129,13 @@ class RoverSim:
         self.spec = spec
         self.data = mujoco.MjData(self.model)
         self.heightfield: Heightfield = scene_heightfield(self.model)
-        # The LiDAR ray-marches the terrain itself (fast); keep MuJoCo rays off the hfield by
-        # moving it to geom group 3 (the camera renders group 3 too). scene.xml is untouched.
-        terrain = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "terrain")
-        self.model.geom_group[terrain] = 3
+        # The LiDAR ray-marches the terrain itself (fast); keep MuJoCo rays off the hfields by
+        # moving them to geom group 3 (the camera renders group 3 too). scene.xml is untouched.
+        # A level-of-detail scene's coarse "terrain_outer" goes there too (LiDAR: focus only).
+        for name in ("terrain", "terrain_outer"):
+            gid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, name)
+            if gid >= 0:
+                self.model.geom_group[gid] = 3
         self._vis = mujoco.MjvOption()
         self._vis.geomgroup[3] = 1
         self.dt_physics_s = float(self.model.opt.timestep)

@@ -159,6 +159,26 @@ def test_rover_drives_in_the_focus(runner, gentle: tuple[ms.Scene, Path],  # typ
     assert np.all(scene.heightfield.contains(xyz[:, 0], xyz[:, 1]))
 
 
+def test_camera_hides_the_lowered_outer_hfield(gentle: tuple[ms.Scene, Path]) -> None:
+    from marsscene.runtime import CameraConfig, RunConfig
+    from marsscene.runtime.sim import RoverSim
+
+    sim = RoverSim(gentle[1], run=RunConfig(camera=CameraConfig(width_px=80, height_px=60)),
+                   start_xy_m=(4.0, 0.0), settle_s=0.2)
+    outer = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_GEOM, "terrain_outer")
+    assert sim.model.geom_group[outer] == 3  # off the LiDAR's MuJoCo rays, like "terrain"
+    cam = sim.make_renderer()
+    try:
+        m = cam.model
+        for name in ("terrain", "terrain_outer"):  # the window mesh stands in for both
+            gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)
+            assert gid >= 0 and m.geom_group[gid] == 5
+        rgb, _ = sim.render(cam)
+        assert rgb.shape == (60, 80, 3) and float(rgb.std()) > 1.0
+    finally:
+        cam.close()
+
+
 def test_lod_outputs_are_byte_reproducible(tmp_path: Path) -> None:
     cfg = ms.SceneConfig.from_dict({**_GENTLE, "rocks": {"d_min_m": 0.3},
                                     "craters": {"d_min_m": 2.0, "d_max_m": 20.0}})
