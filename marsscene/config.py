@@ -36,7 +36,7 @@ from marsscene.presets import apply_preset
 from marsscene.rocks.config import RockConfig
 from marsscene.terrain.config import TerrainConfig
 
-__all__ = ["SceneConfig"]
+__all__ = ["SceneConfig", "read_config_toml"]
 
 
 def _jsonable(value: Any) -> Any:
@@ -47,6 +47,28 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, dict):
         return {k: _jsonable(v) for k, v in value.items()}
     return value
+
+
+def read_config_toml(path: str | os.PathLike[str], *, what: str = "config file") -> dict[str, Any]:
+    """A TOML config as a mapping, with relative ``terrain.dem_path``, ``terrain.ortho_path``
+    and ``assets.files`` resolved against the file's folder (one-line errors)."""
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(f"{what} not found: {p}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise ConfigError(f"{p}: not valid TOML ({err})") from None
+    terrain = data.get("terrain")
+    if isinstance(terrain, dict):
+        for key in ("dem_path", "ortho_path"):
+            if isinstance(terrain.get(key), str) and not Path(terrain[key]).is_absolute():
+                terrain[key] = str((p.parent / terrain[key]).resolve())
+    assets = data.get("assets")
+    if isinstance(assets, dict) and isinstance(assets.get("files"), list):
+        assets["files"] = [str((p.parent / f).resolve()) if isinstance(f, str) and not
+                           Path(f).is_absolute() else f for f in assets["files"]]
+    return data
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -80,22 +102,7 @@ class SceneConfig:
     def from_toml(cls, path: str | os.PathLike[str], *, preset: str | None = None) -> SceneConfig:
         """Read a TOML config file; relative ``dem_path``, ``ortho_path`` and asset paths
         resolve against its folder. ``preset`` (if given) replaces the file's ``preset``."""
-        p = Path(path)
-        try:
-            data = tomllib.loads(p.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise ConfigError(f"config file not found: {p}") from None
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-            raise ConfigError(f"{p}: not valid TOML ({err})") from None
-        terrain = data.get("terrain")
-        if isinstance(terrain, dict):
-            for key in ("dem_path", "ortho_path"):
-                if isinstance(terrain.get(key), str) and not Path(terrain[key]).is_absolute():
-                    terrain[key] = str((p.parent / terrain[key]).resolve())
-        assets = data.get("assets")
-        if isinstance(assets, dict) and isinstance(assets.get("files"), list):
-            assets["files"] = [str((p.parent / f).resolve()) if isinstance(f, str) and not
-                               Path(f).is_absolute() else f for f in assets["files"]]
+        data = read_config_toml(path)
         if preset is not None:
             data["preset"] = preset
         return cls.from_dict(data)

@@ -7,13 +7,12 @@ it renamed into place, so a failed build never leaves a half-written scene.
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
+from marsscene._atomic import probe_writable, replacing_dir
 from marsscene.errors import ExportError, MarsSceneError
 
 __all__ = ["WRITERS", "check_output_dir", "write_scene"]
@@ -49,25 +48,13 @@ def _timed(fn: Callable[[Any, Path], list[Path]], scene: Any,
 WRITERS: dict[str, Callable[[Any, Path], list[Path]]] = {"usd": _write_usd, "mjcf": _write_mjcf}
 
 
-def _make_temp_dir(final: Path) -> Path:
-    """A fresh temporary folder beside ``final`` (same filesystem: the final rename is atomic)."""
-    try:
-        final.parent.mkdir(parents=True, exist_ok=True)
-        return Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
-    except OSError as err:
-        reason = err.strerror or type(err).__name__
-        raise ExportError(f"cannot write the output folder {final}: {reason}") from None
-
-
 def check_output_dir(out_dir: str | os.PathLike[str]) -> Path:
     """Fail early (before a long build) if ``out_dir`` cannot be written; returns its full path.
 
     Creates the parent folder if needed and probes it with a temporary folder, removed again.
     """
     final = Path(out_dir).resolve()
-    if final.exists() and not final.is_dir():
-        raise ExportError(f"the output {final} exists and is not a folder")
-    shutil.rmtree(_make_temp_dir(final), ignore_errors=True)
+    probe_writable(final)
     return final
 
 
@@ -100,31 +87,20 @@ def write_scene(
     if unknown:
         raise ExportError(f"unknown export format(s) {unknown}; known: {sorted(WRITERS)}")
     final = Path(out_dir).resolve()
-    if final.exists() and not overwrite:
-        raise ExportError(f"{final} exists; pass overwrite=True to replace it")
-    tmp = _make_temp_dir(final)
+    written: dict[str, list[Path]] = {}
     try:
-        written: dict[str, list[Path]] = {}
-        timings = dict(scene.provenance.timings_s)
-        # Sequential on purpose: running the USD writer beside another thread deadlocked
-        # (usd-core 26.11: pxr's internal locks and the GIL), see docs/usd.md.
-        for fmt in fmts:
-            written[fmt], timings[f"export_{fmt}"] = _timed(WRITERS[fmt], scene, tmp)
-        written["catalogs"], _ = _timed(_write_catalogs, scene, tmp)
-        rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
-        (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
-        written["manifest"] = [tmp / "manifest.json"]
-        if final.exists():
-            old = final.with_name(f".{final.name}.old-{os.getpid()}")
-            final.rename(old)
-            tmp.rename(final)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            tmp.rename(final)
+        with replacing_dir(final, overwrite=overwrite) as tmp:
+            timings = dict(scene.provenance.timings_s)
+            # Sequential on purpose: running the USD writer beside another thread deadlocked
+            # (usd-core 26.11: pxr's internal locks and the GIL), see docs/usd.md.
+            for fmt in fmts:
+                written[fmt], timings[f"export_{fmt}"] = _timed(WRITERS[fmt], scene, tmp)
+            written["catalogs"], _ = _timed(_write_catalogs, scene, tmp)
+            rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
+            (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
+            written["manifest"] = [tmp / "manifest.json"]
     except MarsSceneError:
-        shutil.rmtree(tmp, ignore_errors=True)
         raise
     except Exception as err:
-        shutil.rmtree(tmp, ignore_errors=True)
         raise ExportError(f"writing {final} failed: {err}") from err
     return {k: [final / p.relative_to(tmp) for p in v] for k, v in written.items()}

@@ -15,9 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from marsscene._atomic import replacing_dir
 from marsscene.errors import ExportError, RuntimeSimError, missing_dependency
 from marsscene.runtime import bag_topics as bt
-from marsscene.runtime.runlog import CameraStream, RunLog, replace_dir
+from marsscene.runtime.runlog import CameraStream, RunLog
 
 __all__ = ["BagSummary", "MessageBuilder", "write_bag"]
 
@@ -236,7 +237,7 @@ def write_bag(
             bt.add_stereo(bag, cam)
     if "lidar" in wanted and lidar is not None:
         bt.add_lidar(bag, run, *lidar)
-    with replace_dir(final, overwrite=overwrite) as tmp:
+    with replacing_dir(final, overwrite=overwrite, create=False) as tmp:
         counts = bag.write(tmp, storage, progress)
     size = sum(p.stat().st_size for p in final.rglob("*") if p.is_file())
     return BagSummary(final, counts, size)

@@ -23,10 +23,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from marsscene._atomic import replacing_dir
 from marsscene.errors import ExportError, RuntimeSimError
 from marsscene.runtime.frames import camera_frame, frame_in_base, static_transforms
 from marsscene.runtime.logs import png_bytes
-from marsscene.runtime.runlog import CameraStream, RunLog, read_image, replace_dir
+from marsscene.runtime.runlog import CameraStream, RunLog, read_image
 
 __all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset"]
 
@@ -71,7 +72,7 @@ def export_dataset(
         if progress is not None:
             progress(next(done), total)
 
-    with replace_dir(final, overwrite=overwrite) as tmp:
+    with replacing_dir(final, overwrite=overwrite, create=False) as tmp:
         if fmt == "tum-rgbd":
             _tum_rgbd(run, cams[0], statics, tmp, tick)
         else:

@@ -11,10 +11,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
-import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,11 +18,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.errors import ExportError, RuntimeSimError
+from marsscene.errors import RuntimeSimError
 from marsscene.runtime.config import RoverConfig
 from marsscene.runtime.tum import Trajectory, read_tum
 
-__all__ = ["CameraStream", "RunLog", "read_image", "read_ply", "replace_dir"]
+__all__ = ["CameraStream", "RunLog", "read_image", "read_ply"]
 
 _REQUIRED = ("run.json", "gt.tum", "odom.tum", "cmd.csv", "wheels.csv", "imu.csv")
 
@@ -178,22 +174,3 @@ class RunLog:
         return [main, *extra]
 
 
-@contextmanager
-def replace_dir(final: Path, *, overwrite: bool) -> Iterator[Path]:
-    """Yield a temporary folder beside ``final`` that is renamed to ``final`` on success.
-
-    An existing ``final`` is refused unless ``overwrite``; on any error nothing is left behind.
-    """
-    if final.exists() and not overwrite:
-        raise ExportError(f"{final} exists; pass --overwrite (overwrite=True) to replace it")
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
-    try:
-        out = tmp / "new" / final.name  # same name: rosbags names its storage file after it
-        out.parent.mkdir()
-        yield out
-        if final.exists():
-            final.rename(tmp / "old")
-        out.rename(final)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)

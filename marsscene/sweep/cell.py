@@ -20,12 +20,12 @@ import json
 import logging
 import os
 import shutil
-import tempfile
 import time
 import traceback
 from pathlib import Path
 from typing import Any
 
+from marsscene._atomic import replacing_dir
 from marsscene.errors import ConfigError, MarsSceneError, missing_dependency
 from marsscene.sweep.grid import Cell
 from marsscene.sweep.spec import DriveSpec
@@ -108,16 +108,6 @@ def _write_json(path: Path, doc: dict[str, Any]) -> None:
                     encoding="utf-8")
 
 
-def _replace_dir(tmp: Path, final: Path) -> None:
-    if final.exists():
-        old = final.with_name(f".{final.name}.old-{os.getpid()}")
-        final.rename(old)
-        tmp.rename(final)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        tmp.rename(final)
-
-
 def run_cell(
     cell: Cell, out_dir: str | os.PathLike[str], drive: DriveSpec | None = None, *,
     force: bool = False,
@@ -136,7 +126,6 @@ def run_cell(
     row: dict[str, Any] = {"cell_id": cell.cell_id, "params": dict(cell.params),
                            "status": "failed", "error": ""}
     t_start = time.perf_counter()
-    tmp: Path | None = None
     try:
         cfg = resolve_config(cell)
         row["seed"] = cfg.seed
@@ -144,39 +133,35 @@ def run_cell(
         done = None if force else _finished(final, digest)
         if done is not None:
             return {**done, "params": dict(cell.params), "status": "skipped"}
-        root.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{cell.cell_id}.", suffix=".tmp", dir=root))
-        (tmp / "config.toml").write_text(toml_text(cfg), encoding="utf-8")
-        t0 = time.perf_counter()
-        scene = build_scene(cfg, seed=cfg.seed)
-        row["t_build_s"] = round(time.perf_counter() - t0, 4)
-        t0 = time.perf_counter()
-        written = write_scene(scene, tmp / "scene")
-        row["t_write_s"] = round(time.perf_counter() - t0, 4)
-        row.update(_scene_row(scene))
-        outputs = ["config.toml"] + [
-            p.relative_to(tmp).as_posix() for ps in written.values() for p in ps
-        ]
-        if drive is not None:
-            from marsscene.sweep.drive import drive_cell
-
+        with replacing_dir(final) as tmp:  # the cell folder is complete or absent
+            (tmp / "config.toml").write_text(toml_text(cfg), encoding="utf-8")
             t0 = time.perf_counter()
-            row.update(drive_cell(tmp / "scene", drive, tmp / "drive"))
-            row["t_drive_s"] = round(time.perf_counter() - t0, 4)
-            outputs += ["drive/gt.tum", "drive/odom.tum"]
-        row.update(status="ok", config_hash=digest, outputs=outputs)
-        row["t_total_s"] = round(time.perf_counter() - t_start, 4)
-        _write_json(tmp / RESULT_FILE, row)
-        _replace_dir(tmp, final)
-        tmp = None
+            scene = build_scene(cfg, seed=cfg.seed)
+            row["t_build_s"] = round(time.perf_counter() - t0, 4)
+            t0 = time.perf_counter()
+            written = write_scene(scene, tmp / "scene")
+            row["t_write_s"] = round(time.perf_counter() - t0, 4)
+            row.update(_scene_row(scene))
+            outputs = ["config.toml"] + [
+                p.relative_to(tmp).as_posix() for ps in written.values() for p in ps
+            ]
+            if drive is not None:
+                from marsscene.sweep.drive import drive_cell
+
+                t0 = time.perf_counter()
+                row.update(drive_cell(tmp / "scene", drive, tmp / "drive"))
+                row["t_drive_s"] = round(time.perf_counter() - t0, 4)
+                outputs += ["drive/gt.tum", "drive/odom.tum"]
+            row.update(status="ok", config_hash=digest, outputs=outputs)
+            row["t_total_s"] = round(time.perf_counter() - t_start, 4)
+            _write_json(tmp / RESULT_FILE, row)
     except MarsSceneError as err:
+        row["status"] = "failed"
         row["error"] = f"{type(err).__name__}: {err}"
     except Exception as err:  # one failing cell never stops the sweep
+        row["status"] = "failed"
         last = traceback.extract_tb(err.__traceback__)[-1]
         row["error"] = f"{type(err).__name__}: {err} ({Path(last.filename).name}:{last.lineno})"
-    finally:
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
     if row["status"] == "failed":
         row["error"] = " ".join(row["error"].split())  # one line in results.csv
         row["t_total_s"] = round(time.perf_counter() - t_start, 4)

@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import tomllib
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from marsscene._validate import check_range, dataclass_from_mapping
-from marsscene.config import SceneConfig
+from marsscene.config import SceneConfig, read_config_toml
 from marsscene.errors import ConfigError
 
 __all__ = ["DriveSpec", "SweepSpec", "load_sweep", "sweep_from_dict"]
@@ -207,17 +206,7 @@ def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a SWEEP.toml (relative DEM/ortho/route paths resolve against its folder)."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"sweep file not found: {p}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise ConfigError(f"{p}: not valid TOML ({err})") from None
-    terrain = data.get("terrain")
-    if isinstance(terrain, dict):
-        for key in ("dem_path", "ortho_path"):
-            if isinstance(terrain.get(key), str) and not Path(terrain[key]).is_absolute():
-                terrain[key] = str((p.parent / terrain[key]).resolve())
+    data = read_config_toml(p, what="sweep file")
     table = data.get("sweep")
     if isinstance(table, dict):  # swept DEM / ortho paths resolve like the base config's
         for key in ("terrain.dem_path", "terrain.ortho_path"):
