@@ -4,7 +4,6 @@ MuJoCo (two hfields, a dropped box, a short drive), byte reproducibility."""
 from __future__ import annotations
 
 import json
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +16,7 @@ import marsscene as ms  # noqa: E402
 from marsscene.export.mjcf.terrain_lod import HOLE_DEPTH_M  # noqa: E402
 from marsscene.export.usd import validate_stage  # noqa: E402
 from marsscene.export.usd.terrain_lod import LOD_ATTR  # noqa: E402
+from tests.mjcf_drop import drop_box  # noqa: E402
 
 #: A 3.6 km footprint (8 m outer posts) with a 200 m focus at 1 m: the reference scene's extent
 #: at a test-sized post count.
@@ -103,23 +103,6 @@ def test_mjcf_compiles_with_two_hfields(big: tuple[ms.Scene, Path]) -> None:
     np.testing.assert_allclose(model.hfield_size[hid][:2], [1800.0, 1800.0])
 
 
-def _drop_box(xml: Path, xy: tuple[float, float], z0: float) -> float:
-    root = ET.parse(xml).getroot()
-    world = root.find("worldbody")
-    assert world is not None
-    body = ET.SubElement(world, "body", name="box", pos=f"{xy[0]} {xy[1]} {z0}")
-    ET.SubElement(body, "freejoint")
-    ET.SubElement(body, "geom", name="box", type="box", size="0.2 0.2 0.2", mass="5")
-    assets = {str(p.relative_to(xml.parent)): p.read_bytes()
-              for p in (xml.parent / "assets").iterdir()}
-    model = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"), assets)
-    data = mujoco.MjData(model)
-    for _ in range(int(1.5 / model.opt.timestep)):
-        mujoco.mj_step(model, data)
-    assert not any(w.number for w in data.warning)
-    return float(data.body("box").xpos[2])
-
-
 @pytest.fixture(scope="module")
 def gentle(tmp_path_factory: pytest.TempPathFactory) -> tuple[ms.Scene, Path]:
     scene = ms.build_scene(ms.SceneConfig.from_dict(_GENTLE), seed=4)
@@ -135,7 +118,7 @@ def test_dropped_box_lands_on_the_right_surface(gentle: tuple[ms.Scene, Path],
     assert scene.outer is not None
     in_focus = bool(scene.heightfield.contains(*xy))
     ground = float((scene.heightfield if in_focus else scene.outer.heightfield).sample(*xy))
-    z = _drop_box(out / "mjcf" / "scene.xml", xy, ground + 1.0)
+    z = drop_box(out / "mjcf" / "scene.xml", (xy[0], xy[1], ground + 1.0))
     assert z == pytest.approx(ground + 0.2, abs=0.02)  # resting on the surface, not 2 m lower
     assert HOLE_DEPTH_M > 1.0
 

@@ -3,7 +3,6 @@ USD round trip through pxr (mesh and referenced USD assets), collision in MuJoCo
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import mujoco
@@ -15,6 +14,7 @@ import marsscene as ms
 from marsscene.assets import AssetConfig, find_site, habitat_model, place_assets
 from marsscene.errors import ConfigError
 from marsscene.terrain.heightfield import Heightfield
+from tests.mjcf_drop import drop_box
 
 
 def _rough_with_flat_patch(rng: np.random.Generator) -> Heightfield:
@@ -117,23 +117,9 @@ def test_usd_has_the_asset_prims_on_the_pad(base_scene) -> None:  # type: ignore
 def test_box_dropped_on_the_habitat_rests_on_its_roof(base_scene) -> None:  # type: ignore[no-untyped-def]
     scene, out = base_scene
     (a,) = scene.assets
-    xml = out / "mjcf" / "scene.xml"
-    root = ET.parse(xml).getroot()
-    world = root.find("worldbody")
-    assert world is not None
     x, y = a.xy_m[0] - 1.5, a.xy_m[1] - 1.0  # above the main module's dome top
     roof = a.base_z_m + a.model.parts[0].vertices[:, 2].max()
-    body = ET.SubElement(world, "body", name="box", pos=f"{x} {y} {roof + 1.0}")
-    ET.SubElement(body, "freejoint")
-    ET.SubElement(body, "geom", name="box", type="box", size="0.2 0.2 0.2", mass="5")
-    assets = {str(p.relative_to(xml.parent)): p.read_bytes()
-              for p in (xml.parent / "assets").iterdir()}
-    model = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"), assets)
-    data = mujoco.MjData(model)
-    for _ in range(int(1.5 / model.opt.timestep)):
-        mujoco.mj_step(model, data)
-    assert not any(w.number for w in data.warning)
-    z = float(data.body("box").xpos[2])
+    z = drop_box(out / "mjcf" / "scene.xml", (x, y, roof + 1.0))
     ground = float(scene.heightfield.sample(x, y))
     assert z > ground + 4.0  # held up by the habitat, not the terrain
     assert z == pytest.approx(roof + 0.2, abs=0.25)  # on the (domed) roof

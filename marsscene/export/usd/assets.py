@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics, UsdShade, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics, UsdShade
 
 from marsscene.errors import ConfigError
+from marsscene.export.usd.stage import author_tri_mesh
 
 __all__ = ["UsdAssetInfo", "author_assets", "read_usd_asset"]
 
@@ -74,18 +74,7 @@ def _material(stage: Any, root: Sdf.Path) -> UsdShade.Material:
 
 
 def _mesh(stage: Any, path: Sdf.Path, mesh: Any) -> UsdGeom.Mesh:
-    geom = UsdGeom.Mesh.Define(stage, path)
-    v = np.asarray(mesh.vertices, dtype=np.float32)
-    f = np.asarray(mesh.faces, dtype=np.int32)
-    geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(v))
-    geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(f), 3, np.int32)))
-    geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(f.ravel()))
-    geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(
-        np.asarray(mesh.vertex_normals, dtype=np.float32)))
-    geom.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
-    geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-    geom.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*v.min(axis=0).tolist()),
-                                         Gf.Vec3f(*v.max(axis=0).tolist())]))
+    geom = author_tri_mesh(stage, path, mesh, faceted=False)
     UsdPhysics.CollisionAPI.Apply(geom.GetPrim())
     UsdPhysics.MeshCollisionAPI.Apply(geom.GetPrim()).CreateApproximationAttr(
         UsdPhysics.Tokens.convexHull)

@@ -31,7 +31,7 @@ from marsscene.export.usd.physics import (
     author_physics_material,
     bind_physics_material,
 )
-from marsscene.export.usd.stage import WORLD, create_asset_stage, set_kind
+from marsscene.export.usd.stage import WORLD, author_tri_mesh, create_asset_stage, set_kind
 
 __all__ = ["ROCKS_ASSET", "ROCK_ALBEDO_RGB", "author_rocks"]
 
@@ -39,29 +39,6 @@ ROCKS_ASSET = "assets/rocks.usdc"
 #: Basaltic rock colour (linear sRGB), darker and less red than dusty soil (rock albedo ~0.1-0.2;
 #: Bell et al. 2008, doi:10.1017/CBO9780511536076.004).
 ROCK_ALBEDO_RGB = (0.20, 0.15, 0.12)
-
-
-def _vec3f_extent(points: np.ndarray) -> Vt.Vec3fArray:
-    lo = points.min(axis=0).tolist()
-    hi = points.max(axis=0).tolist()
-    return Vt.Vec3fArray([Gf.Vec3f(*lo), Gf.Vec3f(*hi)])
-
-
-def _mesh(stage: Any, path: Sdf.Path, mesh: Any) -> UsdGeom.Mesh:
-    geom = UsdGeom.Mesh.Define(stage, path)
-    v = np.asarray(mesh.vertices, dtype=np.float32)
-    f = np.asarray(mesh.faces, dtype=np.int32)
-    geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(v))
-    geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(f), 3, np.int32)))
-    geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(f.ravel()))
-    # faceted rocks: one flat normal per face corner
-    normals = np.repeat(np.asarray(mesh.face_normals, dtype=np.float32), 3, axis=0)
-    geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(normals)))
-    geom.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
-    geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-    geom.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
-    geom.CreateExtentAttr(_vec3f_extent(v))
-    return geom
 
 
 def _material(stage: Any, root: Sdf.Path) -> UsdShade.Material:
@@ -85,12 +62,12 @@ def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
     for proto in prototypes:  # a handful of prototypes
         path = scope.AppendChild(proto.name)
         UsdGeom.Xform.Define(stage, path)
-        visual = _mesh(stage, path.AppendChild("Visual"), proto.visual)
+        visual = author_tri_mesh(stage, path.AppendChild("Visual"), proto.visual, faceted=True)
         UsdShade.MaterialBindingAPI.Apply(visual.GetPrim()).Bind(material)
         coll = path.AppendChild("Collision")
         UsdGeom.Scope.Define(stage, coll)
         for i, part in enumerate(proto.collision):
-            geom = _mesh(stage, coll.AppendChild(f"part_{i}"), part)
+            geom = author_tri_mesh(stage, coll.AppendChild(f"part_{i}"), part, faceted=True)
             geom.CreatePurposeAttr(UsdGeom.Tokens.guide)
             UsdPhysics.CollisionAPI.Apply(geom.GetPrim())
             UsdPhysics.MeshCollisionAPI.Apply(geom.GetPrim()).CreateApproximationAttr(

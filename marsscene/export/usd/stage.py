@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 from pxr import Gf, Kind, Sdf, Usd, UsdGeom, UsdPhysics, Vt
 
 from marsscene._version import __version__
@@ -13,6 +14,7 @@ from marsscene.units import MARS_GRAVITY_M_S2
 
 __all__ = [
     "WORLD",
+    "author_tri_mesh",
     "crate_bytes",
     "create_asset_stage",
     "create_stage",
@@ -101,3 +103,28 @@ def crate_bytes(stage: Usd.Stage) -> bytes:
             return fh.read()
     finally:
         os.unlink(tmp)
+
+
+def author_tri_mesh(stage: Usd.Stage, path: Sdf.Path, mesh: Any, *,
+                    faceted: bool) -> UsdGeom.Mesh:
+    """A triangle mesh (trimesh-like ``vertices``/``faces``) with normals and extent:
+    ``faceted`` gives one flat normal per face corner (rocks), else smooth vertex normals."""
+    geom = UsdGeom.Mesh.Define(stage, path)
+    v = np.asarray(mesh.vertices, dtype=np.float32)
+    f = np.asarray(mesh.faces, dtype=np.int32)
+    geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(v))
+    geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(f), 3, np.int32)))
+    geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(f.ravel()))
+    if faceted:
+        normals = np.repeat(np.asarray(mesh.face_normals, dtype=np.float32), 3, axis=0)
+        interpolation = UsdGeom.Tokens.faceVarying
+    else:
+        normals = np.asarray(mesh.vertex_normals, dtype=np.float32)
+        interpolation = UsdGeom.Tokens.vertex
+    geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(normals)))
+    geom.SetNormalsInterpolation(interpolation)
+    geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    geom.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
+    geom.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*v.min(axis=0).tolist()),
+                                         Gf.Vec3f(*v.max(axis=0).tolist())]))
+    return geom
