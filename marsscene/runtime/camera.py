@@ -30,12 +30,14 @@ from numpy.typing import NDArray
 from marsscene.errors import RuntimeSimError
 from marsscene.runtime.camera_world import ALBEDO_SCALE, CameraWorld
 from marsscene.runtime.exposure import Exposure
+from marsscene.runtime.offscreen import OffscreenView
 
 __all__ = ["MastCamera", "scene_lighting"]
 
 #: Fixed-exposure mode: linear 1.0 is a surface of albedo ALBEDO_SCALE under this irradiance.
 FIXED_REFERENCE_W_M2 = 600.0
 _SHADOW_CLIP_M = 20.0
+_SKY_ZFAR_FRACTION = 0.45
 
 
 def scene_lighting(
@@ -108,13 +110,16 @@ class MastCamera:
             (m.geom_bodyid == 0) & (m.geom_type == mujoco.mjtGeom.mjGEOM_MESH)
             & (m.geom_contype != 0))
         self._show_window_rocks()
-        self.vis = mujoco.MjvOption()
+        self._flags = {mujoco.mjtRndFlag.mjRND_SHADOW: bool(cam.shadows),
+                       mujoco.mjtRndFlag.mjRND_REFLECTION: False,
+                       mujoco.mjtRndFlag.mjRND_FOG: True,
+                       mujoco.mjtRndFlag.mjRND_SKYBOX: True}
         self.exposure = Exposure(cam.exposure, target_mean=cam.target_mean,
                                  fixed_gain=cam.exposure_gain)
         self.exposure_stereo = Exposure(cam.exposure, target_mean=cam.target_mean,
                                        fixed_gain=cam.exposure_gain)
         try:
-            self.renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
+            self.view = OffscreenView(self.model, width=self.width, height=self.height)
         except Exception as err:
             raise RuntimeSimError(
                 f"cannot create an offscreen renderer (MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}):"
@@ -177,6 +182,8 @@ class MastCamera:
         vis.map.shadowclip = _SHADOW_CLIP_M / extent
         vis.quality.shadowsize = 2048
         vis.quality.offsamples = 0
+        vis.global_.offwidth = max(int(cam.width_px), 640)
+        vis.global_.offheight = max(int(cam.height_px), 480)
         vis_m = lt.visibility_m if math.isfinite(lt.visibility_m) else 1e9
         vis.map.fogstart = 0.0
         vis.map.fogend = float(min(vis_m, 1e9) / extent)
@@ -192,12 +199,8 @@ class MastCamera:
                                 quat=quat.tolist(), fovy=fovy)
 
     def _upload(self) -> None:
-        ctx = self.renderer._mjr_context
-        if self.renderer._gl_context:
-            self.renderer._gl_context.make_current()
         for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
-            mid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, name)
-            mujoco.mjr_uploadMesh(self.model, ctx, mid)
+            self.view.upload_mesh(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, name))
 
     # ---- rendering -----------------------------------------------------------------------------
     def _sync(self, sim: Any) -> None:
@@ -222,30 +225,31 @@ class MastCamera:
         inside = (p[:, 0] >= x0) & (p[:, 0] <= x1) & (p[:, 1] >= y0) & (p[:, 1] <= y1)
         self.model.geom_group[self.rock_geoms] = np.where(inside, 0, 5)
 
-    def _linear(self, camera_id: int) -> NDArray[np.float64]:
-        r = self.renderer
-        r.update_scene(self.data, camera=camera_id, scene_option=self.vis)
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.config.shadows
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = True
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = True
-        return r.render().astype(np.float32) * np.float32(1.0 / 255.0)
-
-    def _depth(self, camera_id: int) -> NDArray[np.float32]:
-        r = self.renderer
-        r.enable_depth_rendering()
-        r.update_scene(self.data, camera=camera_id, scene_option=self.vis)
-        depth = r.render().astype(np.float32)
-        r.disable_depth_rendering()
+    def _render(self, camera_id: int, depth: bool
+                ) -> tuple[NDArray[np.float32], NDArray[np.float32] | None]:
+        """Linear RGB in [0, 1] and (with ``depth``) metric depth from one render pass."""
+        rgb, depth_m = self.view.render(self.data, camera_id, self._flags, depth=depth)
+        linear = rgb.astype(np.float32) * np.float32(1.0 / 255.0)
+        if depth_m is None:
+            return linear, None
+        # the lit pass draws the skybox camera-centred at >= ~0.5 zfar (measured 0.504); the
+        # farthest terrain-window point is < 1.5 extent = 0.375 zfar: beyond 0.45 zfar is sky
         far = self.model.vis.map.zfar * self.model.stat.extent
-        return np.where(depth < 0.999 * far, depth, 0.0).astype(np.float32)  # sky: no return
+        return linear, np.where(depth_m < _SKY_ZFAR_FRACTION * far, depth_m, 0.0).astype(
+            np.float32)
+
+    def _linear(self, camera_id: int) -> NDArray[np.float32]:
+        return self._render(camera_id, False)[0]
 
     def render(self, sim: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
-        """RGB (H, W, 3) uint8 (exposed, sRGB) and depth (H, W) float32 in m (or None)."""
+        """RGB (H, W, 3) uint8 (exposed, sRGB) and depth (H, W) float32 in m (or None).
+
+        One render pass fills both: the depth buffer of the lit RGB pass is read back too
+        (0 where the ray meets the sky).
+        """
         self._sync(sim)
-        rgb = self.exposure.apply(self._linear(self.camera_id), self.noise_rng)
-        depth = self._depth(self.camera_id) if self.depth else None
-        return rgb, depth
+        linear, depth = self._render(self.camera_id, self.depth)
+        return self.exposure.apply(linear, self.noise_rng), depth
 
     def render_stereo(self, sim: Any) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
         """Rectified stereo pair (left, right) at the current state (call after :meth:`render`)."""
@@ -259,7 +263,7 @@ class MastCamera:
         return left, right
 
     def close(self) -> None:
-        self.renderer.close()
+        self.view.close()
 
 
 def _scene_seed(scene_dir: Any) -> int:
