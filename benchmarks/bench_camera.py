@@ -120,7 +120,8 @@ def main() -> None:
         wall, peak, r = measure(fn)
         print(f"camera: {label}: {r['ratio']:.2f}x real time ({SIM_S:.0f} sim s in "
               f"{r['wall_s']:.1f} s), RGB {r['rgb_ms']:.0f} ms, RGB + depth (one pass) "
-              f"{r['rgbd_ms']:.0f} ms per frame, load {os.getloadavg()[0]:.1f}, camera init {r['camera_init_s']:.1f} s, peak {peak:.0f} MB")
+              f"{r['rgbd_ms']:.0f} ms per frame, load {os.getloadavg()[0]:.1f}, camera init "
+              f"{r['camera_init_s']:.1f} s, peak {peak:.0f} MB")
         if i == 0:
             _, _, q = measure(_quality)
             print(f"camera: quality ({q['frames']} frames, {q['path_m']:.2f} m camera path): "

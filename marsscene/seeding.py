@@ -29,6 +29,7 @@ STAGE_IDS: dict[str, int] = {
     "terrain_focus": 9,
     "craters_focus": 10,
     "rocks_outer": 11,
+    "albedo": 12,
 }
 
 

@@ -93,6 +93,8 @@ class MastCamera:
             tile_m=cam.texture_tile_m, tile_px=cam.texture_px,
             sun_direction_enu=lt.sun_direction_enu, direct_share=share,
             rng=stage_rng(seed, "texture"),
+            field=scene_albedo_field(sim.scene_dir, sim.heightfield),
+            near_m=cam.near_window_m, far_stride=cam.far_post_stride,
         )
         rows, cols = sim.heightfield.shape
         self.windowed = self.world.nr < rows or self.world.nc < cols
@@ -100,7 +102,7 @@ class MastCamera:
         self._edit(spec, sim, lt)
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
-        self.world.update(self.model, tuple(sim.pose()[0][:2]), force=True)
+        self.world.update(self.model, tuple(sim.pose()[0][:2]), _forward_xy(sim), force=True)
         name = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, n)  # noqa: E731
         self.camera_id = name("rover/navcam")
         self.stereo_ids = (name("cam_left"), name("cam_right")) if cam.stereo else None
@@ -143,7 +145,7 @@ class MastCamera:
                                                        0.145 / ALBEDO_SCALE * 0.9,
                                                        0.11 / ALBEDO_SCALE * 0.9, 1.0],
                           specular=0.0, shininess=0.0, reflectance=0.0)
-        self.world.add_to_spec(spec, tuple(sim.pose()[0][:2]))
+        self.world.add_to_spec(spec, tuple(sim.pose()[0][:2]), _forward_xy(sim))
         e_dn, e_dif = lt.direct_normal_w_m2, lt.diffuse_horizontal_w_m2
         if cam.exposure == "fixed":
             k = 1.0 / FIXED_REFERENCE_W_M2
@@ -198,15 +200,25 @@ class MastCamera:
                 body.add_camera(name=name, pos=(pos + np.array([0.0, dy, 0.0])).tolist(),
                                 quat=quat.tolist(), fovy=fovy)
 
-    def _upload(self) -> None:
-        for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
-            self.view.upload_mesh(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, name))
+    def _upload(self, far: bool = True, near: bool = True) -> None:
+        mesh = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, n)  # noqa: E731
+        tex = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_TEXTURE, n)  # noqa: E731
+        self.view.upload_mesh(mesh("cam_terrain"))
+        if far:
+            self.view.upload_texture(tex("cam_ground_far"))
+            for name in ("cam_rocks", "cam_pebbles"):
+                self.view.upload_mesh(mesh(name))
+        if near:
+            self.view.upload_mesh(mesh("cam_terrain_near"))
+            self.view.upload_texture(tex("cam_ground_near"))
 
     # ---- rendering -----------------------------------------------------------------------------
     def _sync(self, sim: Any) -> None:
         xy = tuple(sim.pose()[0][:2])
-        if self.world.update(self.model, xy):
-            self._upload()
+        far, near = self.world.update(self.model, xy, _forward_xy(sim))
+        if far or near:
+            self._upload(far, near)
+        if far:
             self._show_window_rocks()
         self.data.qpos[: sim.data.qpos.size] = sim.data.qpos
         mujoco.mj_kinematics(self.model, self.data)
@@ -264,6 +276,32 @@ class MastCamera:
 
     def close(self) -> None:
         self.view.close()
+
+
+def _forward_xy(sim: Any) -> tuple[float, float]:
+    """Horizontal viewing direction of the mast camera (its -z axis)."""
+    fwd = -np.asarray(sim.data.cam_xmat[sim.camera_id]).reshape(3, 3)[:, 2]
+    return float(fwd[0]), float(fwd[1])
+
+
+def scene_albedo_field(scene_dir: Any, heightfield: Any) -> Any:
+    """The scene's large-scale albedo field (seeded), with its orthoimage if it drapes one."""
+    from marsscene.seeding import stage_rng
+    from marsscene.terrain.albedo_field import albedo_field, ortho_gain
+
+    ortho = None
+    from marsscene.export.mjcf.build import TEXTURE_ASSET
+
+    path = Path(scene_dir) / "mjcf" / TEXTURE_ASSET
+    if path.is_file():
+        from PIL import Image
+
+        with Image.open(path) as im:
+            img = np.asarray(im.convert("RGB"))
+        x0, y0 = heightfield.xy_of(0, 0)
+        ortho = ortho_gain(img, x0_m=float(x0), y0_m=float(y0),
+                           width_m=float(heightfield.size_m[0]))
+    return albedo_field(rng=stage_rng(_scene_seed(scene_dir), "albedo"), ortho=ortho)
 
 
 def _scene_seed(scene_dir: Any) -> int:

@@ -27,6 +27,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene.runtime.camera_ground import GroundWindow
+from marsscene.terrain.albedo_field import AlbedoField
 from marsscene.terrain.appearance import bump_shading, regolith_tile, rock_albedo_rgb
 from marsscene.terrain.heightfield import Heightfield
 
@@ -114,16 +116,18 @@ class CameraWorld:
         sun_direction_enu: tuple[float, float, float],
         direct_share: float,
         rng: np.random.Generator,
+        field: AlbedoField,
+        near_m: float = 16.0,
+        far_stride: int = 2,
     ) -> None:
         self.hf = heightfield
-        rows, cols = heightfield.shape
-        n = int(window_m / heightfield.cell_size_m) // 2 * 2 + 1
-        self.nr, self.nc = min(n, rows), min(n, cols)
-        self.step = max(n // 4, 1)
-        self.tile_m = float(tile_m)
         tile = regolith_tile(size_px=tile_px, tile_m=tile_m, rng=rng)
         shade = bump_shading(tile, sun_direction_enu, direct_share)
-        self.terrain_rgb = _to_u8(tile.albedo_rgb * shade[..., None] / ALBEDO_SCALE)
+        self.ground = GroundWindow(
+            heightfield, window_m=window_m, near_m=near_m, far_stride=far_stride,
+            tile_u8=_to_u8(tile.albedo_rgb * shade[..., None] / ALBEDO_SCALE), tile_m=tile_m,
+            field=field)
+        self.nr, self.nc = self.ground.nr, self.ground.nc
         self.rocks = read_rock_catalog(scene_dir)
         colours = rock_albedo_rgb(_ATLAS * _ATLAS, rng=rng)
         speckle = np.exp(0.25 * rng.standard_normal((_ATLAS * _CELL_PX,) * 2))
@@ -132,61 +136,42 @@ class CameraWorld:
         # two levels of detail: 80-face rocks, 20-face pebbles (most of them; cheaper to draw)
         self.lods = [_RockLOD("cam_rocks", True, PEBBLE_MAX_M, np.inf, rng),
                      _RockLOD("cam_pebbles", False, 0.0, PEBBLE_MAX_M, rng)]
-        self.origin: tuple[int, int] | None = None
 
     # ---- spec ------------------------------------------------------------------------------
-    def add_to_spec(self, spec: Any, xy_m: tuple[float, float]) -> None:
-        """Add textures, materials and the two meshes (initial window at ``xy_m``)."""
-        r0, c0 = self._window_origin(xy_m)
-        tv, tn, tt = self._terrain_arrays(r0, c0)
-        self.terrain_faces = _grid_faces(self.nr, self.nc)
-        _texture(spec, "cam_regolith", self.terrain_rgb)
+    def add_to_spec(self, spec: Any, xy_m: tuple[float, float],
+                    forward_xy: tuple[float, float]) -> None:
+        """Add textures, materials and the meshes (initial window at ``xy_m``)."""
+        g = self.ground
+        g.place(xy_m, forward_xy, force=True)
+        r0, c0 = g.origin if g.origin is not None else (0, 0)
+        _texture(spec, "cam_ground_far", g.far_texture())
+        _texture(spec, "cam_ground_near", g.near_texture())
         _texture(spec, "cam_rock", self.rock_rgb)
-        for name in ("cam_regolith", "cam_rock"):
+        for name in ("cam_ground_far", "cam_ground_near", "cam_rock"):
             mat = spec.add_material(name=name, rgba=[1, 1, 1, 1], specular=0.0, shininess=0.0,
                                     reflectance=0.0)
             mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = name
-        _mesh(spec, "cam_terrain", tv, tn, tt, self.terrain_faces)
+        fr, fc = g.far_shape
+        _mesh(spec, "cam_terrain", *g.far_arrays(), _grid_faces(fr, fc))
+        _mesh(spec, "cam_terrain_near", *g.near_arrays(), _grid_faces(g.nn_r, g.nn_c))
         idx = self._rocks_in(r0, c0)
         for lod in self.lods:
             lod.capacity = int(lod.select(self.rocks, idx).size * 1.5) + 64
             rv, rn, rt, rf = self._rock_arrays(lod, lod.select(self.rocks, idx))
             _mesh(spec, lod.name, rv, rn, rt, rf)
-        spec.worldbody.add_geom(name="cam_terrain", type=mujoco.mjtGeom.mjGEOM_MESH,
-                                meshname="cam_terrain", material="cam_regolith", contype=0,
-                                conaffinity=0, group=0)
+        for name, mat in (("cam_terrain", "cam_ground_far"),
+                          ("cam_terrain_near", "cam_ground_near")):
+            spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
+                                    material=mat, contype=0, conaffinity=0, group=0)
         for lod in self.lods:
             spec.worldbody.add_geom(name=lod.name, type=mujoco.mjtGeom.mjGEOM_MESH,
                                     meshname=lod.name, material="cam_rock", contype=0,
                                     conaffinity=0, group=0)
 
     # ---- window ----------------------------------------------------------------------------
-    def _window_origin(self, xy_m: tuple[float, float]) -> tuple[int, int]:
-        rows, cols = self.hf.shape
-        r, c = self.hf.rowcol_of(float(xy_m[0]), float(xy_m[1]))
-        r0 = int(np.clip(round(float(r)) - self.nr // 2, 0, rows - self.nr))
-        c0 = int(np.clip(round(float(c)) - self.nc // 2, 0, cols - self.nc))
-        return r0, c0
-
-    def _terrain_arrays(self, r0: int, c0: int) -> tuple[Any, Any, Any]:
-        hf = self.hf
-        z = hf.z_m[r0 : r0 + self.nr, c0 : c0 + self.nc].astype(np.float64)
-        rr, cc = np.meshgrid(np.arange(r0, r0 + self.nr), np.arange(c0, c0 + self.nc),
-                             indexing="ij")
-        x, y = hf.xy_of(rr, cc)
-        gy, gx = np.gradient(z, hf.cell_size_m)
-        nrm = np.stack([-gx, -gy, np.ones_like(z)], axis=-1)
-        nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
-        v = np.stack([x, y, z], axis=-1).reshape(-1, 3)
-        uv = np.stack([x, y], axis=-1).reshape(-1, 2) / self.tile_m
-        return v, nrm.reshape(-1, 3), uv
-
     def window_bounds_xy_m(self) -> tuple[float, float, float, float]:
         """(x0, y0, x1, y1) of the current window."""
-        r0, c0 = self.origin if self.origin is not None else (0, 0)
-        x0, y0 = self.hf.xy_of(r0, c0)
-        x1, y1 = self.hf.xy_of(r0 + self.nr - 1, c0 + self.nc - 1)
-        return (float(min(x0, x1)), float(min(y0, y1)), float(max(x0, x1)), float(max(y0, y1)))
+        return self.ground.bounds_xy_m()
 
     def _rocks_in(self, r0: int, c0: int) -> NDArray[np.int64]:
         x0, y0 = self.hf.xy_of(r0, c0)
@@ -235,20 +220,27 @@ class CameraWorld:
         f = (lod.faces[None] + (np.arange(cap) * nv)[:, None, None]).reshape(-1, 3)
         return v.reshape(-1, 3), n.reshape(-1, 3), uv.reshape(-1, 2), f
 
-    def update(self, model: Any, xy_m: tuple[float, float], force: bool = False) -> bool:
-        """Re-centre the window on ``xy_m`` when the rover moved a quarter window."""
-        r0, c0 = self._window_origin(xy_m)
-        if self.origin is not None and not force:
-            if max(abs(r0 - self.origin[0]), abs(c0 - self.origin[1])) < self.step:
-                return False
-        self.origin = (r0, c0)
-        tv, tn, tt = self._terrain_arrays(r0, c0)
-        _write_mesh(model, "cam_terrain", tv, tn, tt)
-        idx = self._rocks_in(r0, c0)
-        for lod in self.lods:
-            rv, rn, rt, _ = self._rock_arrays(lod, lod.select(self.rocks, idx))
-            _write_mesh(model, lod.name, rv, rn, rt)
-        return True
+    def update(self, model: Any, xy_m: tuple[float, float], forward_xy: tuple[float, float],
+               force: bool = False) -> tuple[bool, bool]:
+        """Re-place the ground meshes (and rocks with the far window); rewrite moved arrays.
+
+        Returns ``(far_changed, near_changed)`` as :meth:`GroundWindow.place`; the caller
+        re-uploads the meshes and textures that changed.
+        """
+        g = self.ground
+        far, near = g.place(xy_m, forward_xy, force=force)
+        if far:
+            _write_texture(model, "cam_ground_far", g.far_texture())
+            idx = self._rocks_in(*(g.origin if g.origin is not None else (0, 0)))
+            for lod in self.lods:
+                rv, rn, rt, _ = self._rock_arrays(lod, lod.select(self.rocks, idx))
+                _write_mesh(model, lod.name, rv, rn, rt)
+        if near:
+            _write_texture(model, "cam_ground_near", g.near_texture())
+            _write_mesh(model, "cam_terrain_near", *g.near_arrays())
+        if far or near:
+            _write_mesh(model, "cam_terrain", *g.far_arrays())
+        return far, near
 
 
 def _normals_of(v: NDArray[np.float64], f: NDArray[np.int32]) -> NDArray[np.float64]:
@@ -283,6 +275,12 @@ def _mesh(spec: Any, name: str, v: Any, n: Any, uv: Any, f: Any) -> None:
     mesh.usertexcoord = np.asarray(uv, dtype=np.float32).ravel().tolist()
     mesh.userface = np.asarray(f, dtype=np.int32).ravel().tolist()
     mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+
+
+def _write_texture(model: Any, name: str, rgb: NDArray[np.uint8]) -> None:
+    tid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXTURE, name)
+    adr = int(model.tex_adr[tid])
+    model.tex_data[adr : adr + rgb.size] = rgb.reshape(-1)
 
 
 def _write_mesh(model: Any, name: str, v: Any, n: Any, uv: Any) -> None:

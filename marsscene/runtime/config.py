@@ -181,6 +181,10 @@ class CameraConfig:
     """Ground size of the seeded regolith detail tile (it repeats with this period)."""
     texture_px: int = 2048
     """Texels per side of the detail tile (8 m / 2048 = 3.9 mm texels)."""
+    near_window_m: float = 16.0
+    """Full-resolution ground square ahead of the camera, textured at the tile's texel size."""
+    far_post_stride: int = 2
+    """The rest of the terrain window uses every n-th post (and 8x coarser texels)."""
     exposure: str = "auto"
     """``"auto"`` (mean sRGB intensity -> ``target_mean``) or ``"fixed"`` (``exposure_gain``)."""
     target_mean: float = 0.45
@@ -204,6 +208,9 @@ class CameraConfig:
         check_range("camera.fovy_deg", self.fovy_deg, 5.0, 170.0)
         check_range("camera.terrain_window_m", self.terrain_window_m, 5.0, 1e5)
         check_range("camera.texture_tile_m", self.texture_tile_m, 0.5, 100.0)
+        check_range("camera.near_window_m", self.near_window_m, 1.0, 1e4)
+        if not 1 <= int(self.far_post_stride) <= 8:
+            raise ConfigError(f"camera.far_post_stride = {self.far_post_stride!r}; allowed 1..8")
         if not 64 <= int(self.texture_px) <= 8192:
             raise ConfigError(f"camera.texture_px = {self.texture_px!r}; allowed 64..8192")
         check_choice("camera.exposure", self.exposure, ("auto", "fixed"))

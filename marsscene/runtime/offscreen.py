@@ -53,8 +53,8 @@ class OffscreenView:
         self._ctx = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._ctx)
         self._ctx.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
-        self._rgb = np.empty((self.height, self.width, 3), dtype=np.uint8)
-        self._depth = np.empty((self.height, self.width), dtype=np.float32)
+        self._rgb = np.zeros((self.height, self.width, 3), dtype=np.uint8)
+        self._depth = np.zeros((self.height, self.width), dtype=np.float32)
 
     def make_current(self) -> None:
         if self._gl is not None:

@@ -52,12 +52,22 @@ class AppearanceModel:
     """Std of the log-albedo mottling (metres to centimetres)."""
     mottle_spectral_slope: float
     """Amplitude spectrum ``~ f^-slope`` of the mottling (1 = scale-invariant look)."""
+    mottle_max_wavelength_m: float
+    """Longest mottling wavelength in the detail tile (longer ones: the albedo field)."""
     redness_exponent_rgb: tuple[float, float, float]
     pebbles_per_m2: float
     pebble_diameter_range_m: tuple[float, float]
     pebble_albedo_sigma: float
     bump_rms_m: float
     bump_max_wavelength_m: float
+    albedo_mid_sigma: float
+    """Std of the log albedo in the metre band (:mod:`marsscene.terrain.albedo_field`)."""
+    albedo_mid_band_m: tuple[float, float]
+    albedo_large_sigma: float
+    """Std of the log albedo in the decametre band (Guinness 1981 soil-unit spread)."""
+    albedo_large_band_m: tuple[float, float]
+    ortho_smoothing_m: float
+    """Gaussian smoothing of an orthoimage before it modulates the albedo."""
     extra: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
@@ -128,7 +138,8 @@ def regolith_tile(
     m = model if model is not None else AppearanceModel.default()
     n = int(size_px)
     texel = tile_m / n
-    mottle = _spectral_noise(n, texel, m.mottle_spectral_slope, 2 * texel, tile_m, rng)
+    mottle = _spectral_noise(n, texel, m.mottle_spectral_slope, 2 * texel,
+                             min(tile_m, m.mottle_max_wavelength_m), rng)
     bump = _spectral_noise(n, texel, 1.0, 2 * texel, m.bump_max_wavelength_m, rng)
     height = m.bump_rms_m * bump
     factor = np.exp(m.mottle_sigma * mottle)
