@@ -203,11 +203,10 @@ class MastCamera:
     def _upload(self, far: bool = True, near: bool = True) -> None:
         mesh = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, n)  # noqa: E731
         tex = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_TEXTURE, n)  # noqa: E731
-        self.view.upload_mesh(mesh("cam_terrain"))
+        for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
+            self.view.upload_mesh(mesh(name))
         if far:
             self.view.upload_texture(tex("cam_ground_far"))
-            for name in ("cam_rocks", "cam_pebbles"):
-                self.view.upload_mesh(mesh(name))
         if near:
             self.view.upload_mesh(mesh("cam_terrain_near"))
             self.view.upload_texture(tex("cam_ground_near"))

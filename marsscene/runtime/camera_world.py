@@ -86,9 +86,8 @@ def _icosphere(subdivide: bool) -> tuple[NDArray[np.float64], NDArray[np.int32]]
 class _RockLOD:
     """One merged rock mesh: a jittered icosphere template (8 variants) and a capacity."""
 
-    def __init__(self, name: str, subdivide: bool, d_lo_m: float, d_hi_m: float,
-                 rng: np.random.Generator) -> None:
-        self.name, self.d_lo_m, self.d_hi_m = name, d_lo_m, d_hi_m
+    def __init__(self, name: str, subdivide: bool, rng: np.random.Generator) -> None:
+        self.name = name
         base, self.faces = _icosphere(subdivide)
         self.v = base[None] * np.exp(0.22 * rng.standard_normal((_VARIANTS, len(base), 1)))
         self.n = np.stack([_normals_of(v, self.faces) for v in self.v])
@@ -96,10 +95,6 @@ class _RockLOD:
         self.uv = np.c_[0.5 + 0.45 * np.cos(lon) * (1 - np.abs(base[:, 2])) ** 0.5,
                         0.5 + 0.45 * base[:, 2]]
         self.capacity = 0
-
-    def select(self, rocks: NDArray[np.float64], idx: NDArray[np.int64]) -> NDArray[np.int64]:
-        d = rocks[idx, 4]
-        return idx[(d >= self.d_lo_m) & (d < self.d_hi_m)]
 
 
 class CameraWorld:
@@ -133,9 +128,9 @@ class CameraWorld:
         speckle = np.exp(0.25 * rng.standard_normal((_ATLAS * _CELL_PX,) * 2))
         cell = np.repeat(np.repeat(colours.reshape(_ATLAS, _ATLAS, 3), _CELL_PX, 0), _CELL_PX, 1)
         self.rock_rgb = _to_u8(cell * speckle[..., None] / ALBEDO_SCALE)
-        # two levels of detail: 80-face rocks, 20-face pebbles (most of them; cheaper to draw)
-        self.lods = [_RockLOD("cam_rocks", True, PEBBLE_MAX_M, np.inf, rng),
-                     _RockLOD("cam_pebbles", False, 0.0, PEBBLE_MAX_M, rng)]
+        # two levels of detail: 80 faces for rocks >= PEBBLE_MAX_M in the near square, 20 for
+        # the others (pebbles, and rocks farther away: a few pixels wide)
+        self.lods = [_RockLOD("cam_rocks", True, rng), _RockLOD("cam_pebbles", False, rng)]
 
     # ---- spec ------------------------------------------------------------------------------
     def add_to_spec(self, spec: Any, xy_m: tuple[float, float],
@@ -143,7 +138,6 @@ class CameraWorld:
         """Add textures, materials and the meshes (initial window at ``xy_m``)."""
         g = self.ground
         g.place(xy_m, forward_xy, force=True)
-        r0, c0 = g.origin if g.origin is not None else (0, 0)
         _texture(spec, "cam_ground_far", g.far_texture())
         _texture(spec, "cam_ground_near", g.near_texture())
         _texture(spec, "cam_rock", self.rock_rgb)
@@ -154,11 +148,11 @@ class CameraWorld:
         fr, fc = g.far_shape
         _mesh(spec, "cam_terrain", *g.far_arrays(), _grid_faces(fr, fc))
         _mesh(spec, "cam_terrain_near", *g.near_arrays(), _grid_faces(g.nn_r, g.nn_c))
-        idx = self._rocks_in(r0, c0)
-        for lod in self.lods:
-            lod.capacity = int(lod.select(self.rocks, idx).size * 1.5) + 64
-            rv, rn, rt, rf = self._rock_arrays(lod, lod.select(self.rocks, idx))
-            _mesh(spec, lod.name, rv, rn, rt, rf)
+        hi, lo = self._split()
+        self.lods[0].capacity = 2 * hi.size + 64
+        self.lods[1].capacity = int((hi.size + lo.size) * 1.5) + 64
+        for lod, idx in zip(self.lods, self._split(), strict=True):
+            _mesh(spec, lod.name, *self._rock_arrays(lod, idx))
         for name, mat in (("cam_terrain", "cam_ground_far"),
                           ("cam_terrain_near", "cam_ground_near")):
             spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
@@ -172,6 +166,22 @@ class CameraWorld:
     def window_bounds_xy_m(self) -> tuple[float, float, float, float]:
         """(x0, y0, x1, y1) of the current window."""
         return self.ground.bounds_xy_m()
+
+    def _split(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """Window rocks drawn with 80 faces (near square, >= PEBBLE_MAX_M) and with 20."""
+        g = self.ground
+        idx = self._rocks_in(*(g.origin if g.origin is not None else (0, 0)))
+        nr0, nc0 = g.near_origin if g.near_origin is not None else (0, 0)
+        x0, y0 = self.hf.xy_of(nr0, nc0)
+        x1, y1 = self.hf.xy_of(nr0 + g.nn_r - 1, nc0 + g.nn_c - 1)
+        rk = self.rocks[idx]
+        near = ((rk[:, 1] >= x0) & (rk[:, 1] <= x1) & (rk[:, 2] >= y0) & (rk[:, 2] <= y1)
+                & (rk[:, 4] >= PEBBLE_MAX_M))
+        hi = idx[near]
+        cap = self.lods[0].capacity
+        if cap and hi.size > cap:  # the largest get the fine mesh; the rest the coarse one
+            hi = np.sort(hi[np.argsort(-self.rocks[hi, 4], kind="stable")[:cap]])
+        return hi, np.setdiff1d(idx, hi, assume_unique=True)
 
     def _rocks_in(self, r0: int, c0: int) -> NDArray[np.int64]:
         x0, y0 = self.hf.xy_of(r0, c0)
@@ -231,15 +241,13 @@ class CameraWorld:
         far, near = g.place(xy_m, forward_xy, force=force)
         if far:
             _write_texture(model, "cam_ground_far", g.far_texture())
-            idx = self._rocks_in(*(g.origin if g.origin is not None else (0, 0)))
-            for lod in self.lods:
-                rv, rn, rt, _ = self._rock_arrays(lod, lod.select(self.rocks, idx))
-                _write_mesh(model, lod.name, rv, rn, rt)
         if near:
             _write_texture(model, "cam_ground_near", g.near_texture())
             _write_mesh(model, "cam_terrain_near", *g.near_arrays())
         if far or near:
             _write_mesh(model, "cam_terrain", *g.far_arrays())
+            for lod, idx in zip(self.lods, self._split(), strict=True):
+                _write_mesh(model, lod.name, *self._rock_arrays(lod, idx)[:3])
         return far, near
 
 

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from marsscene._validate import plain
-from marsscene.runtime.logs import CsvLog, ply_bytes, png_bytes, write_json
+from marsscene.runtime.logs import CsvLog, ImageWriter, ply_bytes, write_json
 from marsscene.runtime.pursuit import PurePursuit, PursuitConfig
 from marsscene.runtime.route import Route, cross_track_m
 from marsscene.runtime.rover import DRIVE_JOINTS, STEER_JOINTS
@@ -105,6 +105,7 @@ def drive(
         renderer = sim.make_renderer(rng=rng.spawn(1)[0])
     stereo = renderer is not None and renderer.stereo_ids is not None
     tick = math.gcd(*periods.values())
+    images_out = ImageWriter()  # camera PNGs are encoded beside the simulation
     out = Path(out_dir) if out_dir is not None else None
     logs: dict[str, CsvLog] = {}
     if out is not None:
@@ -190,19 +191,19 @@ def drive(
             if out is not None:
                 name = f"{n_cam:06d}.png"
                 (out / "camera" / "rgb").mkdir(parents=True, exist_ok=True)
-                (out / "camera" / "rgb" / name).write_bytes(png_bytes(rgb))
+                images_out.submit(out / "camera" / "rgb" / name, rgb)
                 dname = ""
                 if depth is not None:
                     (out / "camera" / "depth").mkdir(parents=True, exist_ok=True)
                     mm = np.clip(np.round(depth * 1000.0), 0, 65535).astype(np.uint16)
-                    (out / "camera" / "depth" / name).write_bytes(png_bytes(mm))
+                    images_out.submit(out / "camera" / "depth" / name, mm)
                     dname = "depth/" + name
                 logs["camera"].row(t, ("rgb/" + name, dname))
             if stereo:
                 pair = renderer.render_stereo(sim)
                 for side, img in zip(("left", "right"), pair, strict=True):
                     if out is not None:
-                        (out / "camera" / side / "rgb" / name).write_bytes(png_bytes(img))
+                        images_out.submit(out / "camera" / side / "rgb" / name, img)
                         logs[side].row(t, ("rgb/" + name,))
                 if keep_sensors:
                     stereo_images.append(pair)
@@ -214,6 +215,7 @@ def drive(
             next_report += 1.0
         sim.advance(tick)
         k += tick
+    images_out.close()
     for log in logs.values():
         log.close()
     if renderer is not None:

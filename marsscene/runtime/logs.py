@@ -82,6 +82,39 @@ def png_bytes(image: NDArray[Any]) -> bytes:
     return buf.getvalue()
 
 
+class ImageWriter:
+    """PNG-encodes and writes images on one background thread (zlib releases the GIL).
+
+    ``submit`` returns at once (at most ``max_pending`` images wait; then it blocks on the
+    oldest); ``close`` waits for all and re-raises the first error. Bytes are those of
+    :func:`png_bytes`, whatever the order the files are written in.
+    """
+
+    def __init__(self, max_pending: int = 8) -> None:
+        from collections import deque
+        from concurrent.futures import Future, ThreadPoolExecutor
+
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="marsscene-png")
+        self._pending: deque[Future[None]] = deque()
+        self._max = max_pending
+
+    @staticmethod
+    def _write(path: Path, image: NDArray[Any]) -> None:
+        path.write_bytes(png_bytes(image))
+
+    def submit(self, path: Path, image: NDArray[Any]) -> None:
+        while len(self._pending) >= self._max:
+            self._pending.popleft().result()
+        self._pending.append(self._pool.submit(self._write, path, np.array(image)))
+
+    def close(self) -> None:
+        try:
+            while self._pending:
+                self._pending.popleft().result()
+        finally:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+
+
 def write_json(path: Path, doc: dict[str, Any]) -> None:
     path.write_text(
         json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8"
