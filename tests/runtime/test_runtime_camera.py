@@ -226,3 +226,59 @@ def test_stereo_drive_becomes_stereo_bag_topics(drive_run, tmp_path) -> None:
         img = reader.deserialize(raw, conn.msgtype)
         got = np.frombuffer(img.data, np.uint8).reshape(img.height, img.width, -1)
         np.testing.assert_array_equal(got[..., :3], first_left[..., :3])
+
+
+def test_camera_ground_follows_the_draped_ortho(tmp_path) -> None:
+    """A scene's orthoimage modulates the camera's ground at large scale: in the baked far
+    texture (block means correlate with the image) and in the rendered frame (ground seen
+    where the image is dark renders darker), with the image's north up."""
+    import dataclasses
+
+    import mujoco
+    from scipy.ndimage import gaussian_filter
+
+    cfg = {**_ROCKY, "rocks": {"enabled": False}}
+    scene = ms.build_scene(ms.SceneConfig.from_dict(cfg), seed=5)
+    rows, cols = scene.heightfield.shape
+    rng = np.random.default_rng(2)
+    blob = gaussian_filter(rng.standard_normal((cols, cols)), 16, mode="wrap")
+    lum = 128 * np.exp(0.1 * blob / blob.std())
+    lum[: cols // 2] *= 0.5  # image rows 0.. = north: the northern half is darker
+    img = np.repeat(np.clip(lum, 0, 255).astype(np.uint8)[..., None], 3, axis=-1)
+    out = tmp_path / "scene"
+    ms.write_scene(dataclasses.replace(scene, texture_rgb=img), out, formats=("mjcf",))
+    sim = RoverSim(out, run=RunConfig(camera=CameraConfig(**_SMALL)), start_xy_m=(0.0, -8.0),
+                   start_yaw_rad=np.pi / 2)  # looking north, across the boundary at y = 0
+    cam = _renderer(sim)
+    m = cam.model
+    tid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TEXTURE, "cam_ground_far")
+    h, w = int(m.tex_height[tid]), int(m.tex_width[tid])
+    adr = int(m.tex_adr[tid])
+    tex = m.tex_data[adr : adr + h * w * 3].reshape(h, w, 3).astype(np.float64).mean(axis=-1)
+    g = cam.world.ground
+    x0, y0 = scene.heightfield.xy_of(*g.origin)
+    k = 8  # compare 8 x 8 blocks of the far texture with the image at the same ground
+    bt = tex[: h // k * k, : w // k * k].reshape(k, h // k, k, w // k).mean(axis=(1, 3))
+    bx = x0 + (np.arange(k) + 0.5) * (w // k) * (g.far_texel_m)
+    by = y0 + (np.arange(k) + 0.5) * (h // k) * (g.far_texel_m)
+    hf = scene.heightfield
+    px = (hf.size_m[0]) / cols
+    ci = ((bx - hf.xy_of(0, 0)[0]) / px).astype(int)
+    ri = (cols - 1 - ((by - hf.xy_of(0, 0)[1]) / px)).astype(int)  # image row 0 = north
+    bi = lum[np.ix_(ri, ci)]
+    assert np.corrcoef(np.log(bt).ravel(), np.log(bi).ravel())[0, 1] > 0.8
+    rgb, depth = sim.render(cam)
+    cam.close()
+    # back-project ground pixels to world y: north of y = 1 m is darker than south of -1 m
+    intr = sim.camera_intrinsics()
+    cid = sim.camera_id
+    vv, uu = np.mgrid[0:240, 0:320]
+    rays = np.stack([(uu - intr["cx"]) / intr["fx"], -(vv - intr["cy"]) / intr["fy"],
+                     -np.ones(uu.shape)], axis=-1) @ sim.data.cam_xmat[cid].reshape(3, 3).T
+    world_y = sim.data.cam_xpos[cid][1] + rays[..., 1] * depth
+    grey = rgb.astype(np.float64).mean(axis=-1)
+    north = grey[(depth > 0) & (world_y > 1.0)].mean()
+    south = grey[(depth > 0) & (world_y < -1.0)].mean()
+    # the image's brightness ratios are rescaled to the decametre albedo spread (std 0.09 in
+    # log albedo): the 2x step becomes ~ +-0.09, ~ 0.92 in sRGB; flipped north/south gives ~1.09
+    assert north < 0.95 * south
