@@ -1,4 +1,5 @@
-"""USD regolith appearance: detail albedo + normal map textures that exist and resolve."""
+"""USD regolith appearance: large-scale albedo + detail normal map textures that exist and
+resolve, and follow the seeded model."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from pxr import Sdf, Usd, UsdShade
 
 from marsscene.export.usd.appearance import DETAIL_TILE_M
 from marsscene.seeding import stage_rng
+from marsscene.terrain.albedo_field import albedo_field
 from marsscene.terrain.appearance import regolith_tile
 
 _CFG = {
@@ -42,25 +44,32 @@ def test_material_textures_exist_and_resolve_from_elsewhere(written, tmp_path, m
     stage = Usd.Stage.Open(str(out / "scene.usda"))
     shaders = _shaders(stage)
     files = {}
-    for name in ("DetailAlbedo", "DetailNormal"):
+    for name in ("LargeAlbedo", "DetailNormal"):
         attr = shaders[name].GetInput("file").GetAttr()
         resolved = attr.Get().resolvedPath
         assert resolved and Path(resolved).is_file(), name
         files[name] = Path(resolved)
     surface = shaders["PreviewSurface"]
     src = surface.GetInput("diffuseColor").GetConnectedSources()[0][0].source.GetPath()
-    assert src.name == "DetailAlbedo"
+    assert src.name == "LargeAlbedo"
     src = surface.GetInput("normal").GetConnectedSources()[0][0].source.GetPath()
     assert src.name == "DetailNormal"
     scale = shaders["DetailTransform"].GetInput("scale").Get()
     assert tuple(scale) == pytest.approx((24.0 / DETAIL_TILE_M, 16.0 / DETAIL_TILE_M))
     assert shaders["DetailNormal"].GetInput("sourceColorSpace").Get() == "raw"
-    # the albedo file is the seeded tile (sRGB-encoded, bottom row first in st)
+    assert shaders["LargeAlbedo"].GetInput("wrapS").Get() == "clamp"
+    # the albedo file is the detail tile's mean albedo times the seeded large-scale field at
+    # 0.5 m texel centres (sRGB-encoded, row 0 = north)
     from PIL import Image
 
-    img = np.asarray(Image.open(files["DetailAlbedo"])).astype(np.float64) / 255
+    img = np.asarray(Image.open(files["LargeAlbedo"])).astype(np.float64) / 255
     lin = np.where(img <= 0.04045, img / 12.92, ((img + 0.055) / 1.055) ** 2.4)
-    tile = regolith_tile(size_px=img.shape[0], tile_m=DETAIL_TILE_M,
-                         rng=stage_rng(scene.seed, "texture"))
-    np.testing.assert_allclose(lin[::-1], tile.albedo_rgb, atol=0.01)
+    assert img.shape == (32, 48, 3)
+    tile = regolith_tile(size_px=1024, tile_m=DETAIL_TILE_M, rng=stage_rng(scene.seed, "texture"))
+    field = albedo_field(rng=stage_rng(scene.seed, "albedo"))
+    x0, y0 = scene.heightfield.xy_of(0, 0)
+    xx, yy = np.meshgrid(x0 + 0.25 + 0.5 * np.arange(48), y0 + 0.25 + 0.5 * np.arange(32)[::-1])
+    expect = np.exp(field.log_gain(xx, yy))[..., None] * tile.albedo_rgb.mean(axis=(0, 1))
+    np.testing.assert_allclose(lin, expect, atol=0.006)
+    assert lin[..., 0].std() / lin[..., 0].mean() > 0.05  # metre-scale variation is there
     assert Sdf.Layer.FindOrOpen(str(out / "scene.usda")) is not None

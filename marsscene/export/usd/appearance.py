@@ -1,17 +1,22 @@
-"""Regolith appearance in USD: the camera's detail albedo and normal map on the terrain.
+"""Regolith appearance in USD: large-scale albedo as the diffuse colour, detail as normals.
 
-The same model as the MuJoCo camera (:mod:`marsscene.terrain.appearance`, drawn from the
-scene seed's ``"texture"`` stream): a seamless detail tile of ``DETAIL_TILE_M`` metres,
-repeated over the terrain through a ``UsdTransform2d`` on the terrain's ``st``:
+The same model as the MuJoCo camera (:mod:`marsscene.terrain.appearance`, tile from the
+scene seed's ``"texture"`` stream; :mod:`marsscene.terrain.albedo_field` from its ``"albedo"``
+stream). UsdPreviewSurface has no multiply node, so the camera's product "detail tile x
+large-scale gain" cannot be authored; USD gets its two halves on two inputs:
 
-* ``textures/regolith_detail_albedo.png`` (sRGB) drives ``diffuseColor`` when the scene has
-  no orthoimage (with one, the orthoimage stays the diffuse colour: UsdPreviewSurface has no
-  multiply node to modulate it);
-* ``textures/regolith_detail_normal.png`` (raw, tangent space, ``scale 2 / bias -1``) drives
-  ``normal`` in both cases, so Isaac Sim / Blender renders show the micro-relief.
+* ``diffuseColor``: without an orthoimage, ``textures/regolith_albedo_large.png`` (sRGB) over
+  the whole terrain: the detail tile's mean albedo times the seeded large-scale gain (metre
+  and decametre bands), texels of ``max(0.5 m, size / 4096)``; with an orthoimage, the
+  orthoimage (as before; its brightness is the large-scale pattern);
+* ``normal``: ``textures/regolith_detail_normal.png`` (raw, tangent space, ``scale 2 /
+  bias -1``), the seamless detail tile of ``DETAIL_TILE_M`` metres repeated through a
+  ``UsdTransform2d`` on the terrain's ``st``, so Isaac Sim / Blender renders show the
+  pebbles and micro-relief by shading.
 
-The tile here is 1024 px (7.8 mm texels); the runtime camera draws 2048 px from the same
-generator, so USD and MuJoCo share the statistics, not every texel.
+So USD renders lack the centimetre albedo mottling and the pebbles' own albedo that the MuJoCo
+camera draws (they show in USD as relief only). The tile here is 1024 px (7.8 mm texels); the
+runtime camera draws 2048 px from the same generator: USD and MuJoCo share the statistics.
 """
 
 from __future__ import annotations
@@ -25,12 +30,15 @@ from pxr import Gf, Sdf, UsdShade
 from marsscene.seeding import stage_rng
 from marsscene.terrain.appearance import normal_map_rgb, regolith_tile
 
-__all__ = ["ALBEDO_TEXTURE", "DETAIL_TILE_M", "NORMAL_TEXTURE", "author_regolith_detail"]
+__all__ = ["DETAIL_TILE_M", "LARGE_ALBEDO_TEXTURE", "NORMAL_TEXTURE", "author_regolith_detail",
+           "large_scale_albedo"]
 
 DETAIL_TILE_M = 8.0
 DETAIL_PX = 1024
-ALBEDO_TEXTURE = "textures/regolith_detail_albedo.png"
+LARGE_ALBEDO_TEXTURE = "textures/regolith_albedo_large.png"
 NORMAL_TEXTURE = "textures/regolith_detail_normal.png"
+LARGE_TEXEL_MIN_M = 0.5
+LARGE_MAX_PX = 4096
 
 
 def _png(rgb: np.ndarray) -> bytes:
@@ -47,13 +55,38 @@ def _srgb_u8(linear: np.ndarray) -> np.ndarray:
     return np.rint(s * 255.0).astype(np.uint8)
 
 
-def _texture(stage: Any, path: str, file: str, st: Any, color_space: str) -> Any:
+def large_scale_albedo(heightfield: Any, mean_albedo_rgb: np.ndarray, seed: int
+                       ) -> np.ndarray:
+    """Linear albedo (rows, cols, 3) over the terrain footprint, image order (row 0 = north).
+
+    ``mean_albedo_rgb`` times ``exp(log_gain)`` of the scene's albedo field at texel centres;
+    texels of ``max(LARGE_TEXEL_MIN_M, size / LARGE_MAX_PX)``.
+    """
+    from marsscene.terrain.albedo_field import albedo_field
+
+    field = albedo_field(rng=stage_rng(seed, "albedo"))
+    width_m, height_m = heightfield.size_m
+    texel = max(LARGE_TEXEL_MIN_M, width_m / LARGE_MAX_PX, height_m / LARGE_MAX_PX)
+    cols, rows = max(round(width_m / texel), 1), max(round(height_m / texel), 1)
+    x0, y0 = heightfield.xy_of(0, 0)
+    xs = x0 + (np.arange(cols) + 0.5) * width_m / cols
+    ys = y0 + (np.arange(rows)[::-1] + 0.5) * height_m / rows  # row 0 = north
+    out = np.zeros((rows, cols, 3), dtype=np.float32)
+    for a in range(0, rows, 256):  # bounded memory on big terrains
+        xx, yy = np.meshgrid(xs, ys[a : a + 256])
+        gain = np.exp(field.log_gain(xx, yy))
+        out[a : a + 256] = gain[..., None] * np.asarray(mean_albedo_rgb, dtype=np.float32)
+    return out
+
+
+def _texture(stage: Any, path: str, file: str, st: Any, color_space: str,
+             wrap: str = "repeat") -> Any:
     tex = UsdShade.Shader.Define(stage, Sdf.Path(path))
     tex.CreateIdAttr("UsdUVTexture")
     tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(f"../{file}")
     tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(color_space)
-    tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("repeat")
-    tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("repeat")
+    tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set(wrap)
+    tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set(wrap)
     tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(st, "result")
     return tex
 
@@ -61,7 +94,7 @@ def _texture(stage: Any, path: str, file: str, st: Any, color_space: str) -> Any
 def author_regolith_detail(
     stage: Any, material_path: str, surface: Any, scene: Any, assets: dict[str, bytes]
 ) -> None:
-    """Add the detail normal map (and albedo, without an orthoimage) to ``surface``.
+    """Add the detail normal map (and large-scale albedo, without an orthoimage) to ``surface``.
 
     ``surface`` is the material's UsdPreviewSurface shader; the terrain's ``st`` spans the
     whole terrain in [0, 1], so the detail coordinates are ``st * size / DETAIL_TILE_M``.
@@ -88,7 +121,10 @@ def author_regolith_detail(
     surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(
         normal.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
     if scene.texture_rgb is None:
-        assets[ALBEDO_TEXTURE] = _png(_srgb_u8(tile.albedo_rgb[::-1]))
-        albedo = _texture(stage, f"{material_path}/DetailAlbedo", ALBEDO_TEXTURE, st, "sRGB")
+        mean = tile.albedo_rgb.reshape(-1, 3).mean(axis=0)
+        assets[LARGE_ALBEDO_TEXTURE] = _png(_srgb_u8(large_scale_albedo(
+            scene.heightfield, mean, scene.seed)))
+        albedo = _texture(stage, f"{material_path}/LargeAlbedo", LARGE_ALBEDO_TEXTURE,
+                          reader.ConnectableAPI(), "sRGB", wrap="clamp")
         surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
             albedo.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
