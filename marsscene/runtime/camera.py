@@ -1,9 +1,9 @@
 """The mast camera (mono RGB-D, optional Navcam-like stereo): MuJoCo offscreen rendering.
 
 ``MUJOCO_GL=egl`` (or ``osmesa``). The camera renders its own model of the scene
-(:class:`marsscene.runtime.camera_world.CameraWorld`): a smooth, textured full-resolution
-terrain window and every catalogue rock in it as one visual-only mesh, re-centred when the
-rover has moved a quarter window. Lighting comes from the scene's lighting stage (manifest),
+(:class:`marsscene.runtime.camera_world.CameraWorld`): smooth terrain meshes around the rover
+with baked, non-repeating ground textures (:mod:`marsscene.runtime.camera_ground`) and every
+catalogue rock in the window as visual-only meshes. Lighting comes from the scene's lighting stage (manifest),
 in linear units:
 
 * sun: directional light, colour ``k E_dn sun_rgb``; shadow map centred on the camera;
@@ -12,7 +12,8 @@ in linear units:
 
 where ``k`` scales the brightest sunlit surface to just below 1. The image is then exposed
 (:class:`marsscene.runtime.exposure.Exposure`: auto-exposure, or fixed), optionally with
-seeded shot + read noise, and sRGB-encoded. Depth is metric (m), from the same model.
+seeded shot + read noise, and sRGB-encoded. Depth is metric (m), read from the depth buffer
+of the same render pass (:class:`marsscene.runtime.offscreen.OffscreenView`).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ __all__ = ["MastCamera", "scene_lighting"]
 FIXED_REFERENCE_W_M2 = 600.0
 _SHADOW_CLIP_M = 20.0
 _SHADOW_MAP_PX = 1024  # 3.9 cm texels over +-20 m; 2048 costs ~10-15 % more on llvmpipe
+_SHADOW_SNAP_M = 4.0
 _SKY_ZFAR_FRACTION = 0.45
 
 
@@ -222,10 +224,13 @@ class MastCamera:
             self._show_window_rocks()
         self.data.qpos[: sim.data.qpos.size] = sim.data.qpos
         mujoco.mj_kinematics(self.model, self.data)
-        # shadow map: a box of +-_SHADOW_CLIP_M around the ground ahead of the camera
+        # shadow map: a box of +-_SHADOW_CLIP_M around the ground ahead of the camera, its
+        # centre snapped to a world lattice: the shadow texels stay fixed to the ground between
+        # snaps, so shadow edges do not shimmer from frame to frame (features stay put)
         cam_pos = self.data.cam_xpos[self.camera_id]
         fwd = -self.data.cam_xmat[self.camera_id].reshape(3, 3)[:, 2]
-        centre = cam_pos + 0.5 * _SHADOW_CLIP_M * np.r_[fwd[:2], 0.0]
+        ahead = cam_pos + 0.5 * _SHADOW_CLIP_M * np.r_[fwd[:2], 0.0]
+        centre = np.round(ahead / _SHADOW_SNAP_M) * _SHADOW_SNAP_M
         s = np.asarray(self.lighting.sun_direction_enu)
         self.model.light_pos[self.sun_id] = centre + 2.0 * _SHADOW_CLIP_M * s
         mujoco.mj_camlight(self.model, self.data)

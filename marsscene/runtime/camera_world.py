@@ -1,19 +1,20 @@
-"""The camera's view of a scene: textured, smooth terrain window and visual-only small rocks.
+"""The camera's view of a scene: textured, smooth terrain meshes and visual-only small rocks.
 
 Built into a *separate* MuJoCo model that only the camera renders (the simulation model is not
 changed; contacts keep the scene's rule):
 
-* the terrain hfield is hidden and replaced by a **window mesh** of the full-resolution posts
-  around the rover, with per-vertex (smooth) normals and world-anchored texture coordinates
-  (``u, v = x, y / tile_m``) into a seeded regolith detail tile
-  (:func:`marsscene.terrain.appearance.regolith_tile`) with its micro-relief shading baked in;
+* the terrain hfield is hidden and replaced by a near and a far **ground mesh** with
+  per-vertex (smooth) normals and baked, world-anchored textures: the seeded regolith detail
+  tile (:func:`marsscene.terrain.appearance.regolith_tile`, micro-relief shading baked in)
+  times the large-scale albedo field (:mod:`marsscene.runtime.camera_ground`);
 * every catalogue rock (``rocks.csv``, down to ``rocks.d_min_m``) in the window that is not an
-  MJCF collision geom becomes part of **one merged visual mesh** (contype/conaffinity 0): a
-  jittered icosphere per rock, scaled to its diameter and height, coloured per rock from
+  MJCF collision geom becomes part of **one of two merged visual meshes** (contype/conaffinity
+  0): a jittered icosphere per rock (80 faces near the camera, 20 elsewhere), scaled to its
+  diameter and height, coloured per rock from
   :func:`marsscene.terrain.appearance.rock_albedo_rgb` through a texture atlas.
 
-Both meshes have a fixed vertex count; when the window moves their vertex, normal and
-texcoord arrays are rewritten in place and re-uploaded to GL (``mjr_uploadMesh``).
+All meshes have a fixed vertex count; when they move their vertex, normal and texcoord arrays
+are rewritten in place and re-uploaded to GL (``mjr_uploadMesh``, ``mjr_uploadTexture``).
 Textures hold ``albedo / ALBEDO_SCALE`` so that the renderer's 8 bits cover albedos up to 0.5.
 """
 

@@ -282,3 +282,25 @@ def test_camera_ground_follows_the_draped_ortho(tmp_path) -> None:
     # the image's brightness ratios are rescaled to the decametre albedo spread (std 0.09 in
     # log albedo): the 2x step becomes ~ +-0.09, ~ 0.92 in sRGB; flipped north/south gives ~1.09
     assert north < 0.95 * south
+
+
+def test_one_pass_depth_equals_mujoco_renderer_depth(rocky_scene) -> None:
+    """Depth read from the lit RGB pass is mujoco.Renderer's depth pass, sky (0) included."""
+    import mujoco
+
+    sim = RoverSim(rocky_scene, run=RunConfig(camera=CameraConfig(**_SMALL)),
+                   start_xy_m=(-6.0, 1.0), start_yaw_rad=0.3)
+    cam = _renderer(sim)
+    rgb, depth = sim.render(cam)
+    ref = mujoco.Renderer(cam.model, height=240, width=320)
+    ref.enable_depth_rendering()
+    ref.update_scene(cam.data, camera=cam.camera_id)
+    expect = ref.render()
+    ref.close()
+    cam.close()
+    far = cam.model.vis.map.zfar * cam.model.stat.extent
+    expect = np.where(expect < 0.999 * far, expect, 0.0)
+    assert depth is not None and 0.05 < (depth == 0).mean() < 0.8  # sky and ground in view
+    np.testing.assert_array_equal(depth == 0, expect == 0)
+    np.testing.assert_allclose(depth, expect, rtol=1e-5, atol=1e-5)
+    assert rgb[depth == 0].mean() > 0  # the sky is drawn in the RGB image of the same pass
