@@ -3,8 +3,8 @@
 ``MUJOCO_GL=egl`` (or ``osmesa``). The camera renders its own model of the scene
 (:class:`marsscene.runtime.camera_world.CameraWorld`): smooth terrain meshes around the rover
 with baked, non-repeating ground textures (:mod:`marsscene.runtime.camera_ground`) and every
-catalogue rock in the window as visual-only meshes. Lighting comes from the scene's lighting stage (manifest),
-in linear units:
+catalogue rock in the window as visual-only meshes. Lighting comes from the scene's lighting
+stage (manifest), in linear units:
 
 * sun: directional light, colour ``k E_dn sun_rgb``; shadow map centred on the camera;
 * sky: ambient ``k E_diffuse sky_rgb`` and a skybox of radiance ``E_diffuse / pi`` (zenith
