@@ -18,7 +18,6 @@ of the same render pass (:class:`marsscene.runtime.offscreen.OffscreenView`).
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from pathlib import Path
@@ -29,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.errors import RuntimeSimError
+from marsscene.runtime.camera_scene import scene_albedo_field, scene_lighting
 from marsscene.runtime.camera_world import ALBEDO_SCALE, CameraWorld
 from marsscene.runtime.exposure import Exposure
 from marsscene.runtime.offscreen import OffscreenView
@@ -41,36 +41,6 @@ _SHADOW_CLIP_M = 20.0
 _SHADOW_MAP_PX = 1024  # 3.9 cm texels over +-20 m; 2048 costs ~10-15 % more on llvmpipe
 _SHADOW_SNAP_M = 4.0
 _SKY_ZFAR_FRACTION = 0.45
-
-
-def scene_lighting(
-    scene_dir: Path,
-    *,
-    tau: float | None = None,
-    sun_elevation_deg: float | None = None,
-    sun_azimuth_deg: float | None = None,
-) -> Any:
-    """The scene's :class:`~marsscene.lighting.Lighting` from its manifest, with overrides."""
-    from marsscene._validate import dataclass_from_mapping
-    from marsscene.lighting import LightingConfig, compute_lighting
-
-    path = Path(scene_dir) / "manifest.json"
-    doc: dict[str, Any] = {}
-    if path.is_file():
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    cfg = dict((doc.get("config") or {}).get("lighting") or {})
-    summary = doc.get("summary") or {}
-    cfg.pop("enabled", None)
-    az = sun_azimuth_deg if sun_azimuth_deg is not None else summary.get(
-        "lighting_sun_azimuth_deg", 135.0)
-    el = sun_elevation_deg if sun_elevation_deg is not None else summary.get(
-        "lighting_sun_elevation_deg", 35.0)
-    cfg.update(utc=None, ltst_h=None, sun_azimuth_deg=float(az), sun_elevation_deg=float(el))
-    if tau is not None:
-        cfg["tau"] = float(tau)
-    config = dataclass_from_mapping(LightingConfig, cfg, "lighting")
-    return compute_lighting(config, lat_deg=0.0, lon_east_deg=0.0,
-                            grid_convergence_deg=float(summary.get("grid_convergence_deg", 0.0)))
 
 
 class MastCamera:
@@ -88,9 +58,10 @@ class MastCamera:
                             sun_azimuth_deg=cam.sun_azimuth_deg)
         self.lighting = lt
         share = lt.direct_horizontal_w_m2 / max(lt.global_horizontal_w_m2, 1e-9)
+        from marsscene.runtime.camera_scene import scene_seed
         from marsscene.seeding import stage_rng
 
-        seed = _scene_seed(sim.scene_dir)
+        seed = scene_seed(sim.scene_dir)
         self.world = CameraWorld(
             sim.heightfield, Path(sim.scene_dir), window_m=cam.terrain_window_m,
             tile_m=cam.texture_tile_m, tile_px=cam.texture_px,
@@ -287,32 +258,3 @@ def _forward_xy(sim: Any) -> tuple[float, float]:
     """Horizontal viewing direction of the mast camera (its -z axis)."""
     fwd = -np.asarray(sim.data.cam_xmat[sim.camera_id]).reshape(3, 3)[:, 2]
     return float(fwd[0]), float(fwd[1])
-
-
-def scene_albedo_field(scene_dir: Any, heightfield: Any) -> Any:
-    """The scene's large-scale albedo field (seeded), with its orthoimage if it drapes one."""
-    from marsscene.seeding import stage_rng
-    from marsscene.terrain.albedo_field import albedo_field, ortho_gain
-
-    ortho = None
-    from marsscene.export.mjcf.build import TEXTURE_ASSET
-
-    path = Path(scene_dir) / "mjcf" / TEXTURE_ASSET
-    if path.is_file():
-        from PIL import Image
-
-        with Image.open(path) as im:
-            img = np.asarray(im.convert("RGB"))
-        x0, y0 = heightfield.xy_of(0, 0)
-        ortho = ortho_gain(img, x0_m=float(x0), y0_m=float(y0),
-                           width_m=float(heightfield.size_m[0]))
-    return albedo_field(rng=stage_rng(_scene_seed(scene_dir), "albedo"), ortho=ortho)
-
-
-def _scene_seed(scene_dir: Any) -> int:
-    path = Path(scene_dir) / "manifest.json"
-    if path.is_file():
-        seed = json.loads(path.read_text(encoding="utf-8")).get("seed")
-        if isinstance(seed, int) and seed >= 0:
-            return seed
-    return 0
