@@ -38,7 +38,7 @@ def main(scene: str, out: str, x_m: float = 0.0, y_m: float = 0.0) -> None:
         tex = m.tex_data[adr : adr + h * w * 3].reshape(h, w, 3)
         Image.fromarray(np.ascontiguousarray(tex[::-1])).save(out_dir / f"ground_{name}.png")
     cam.close()
-    print(f"wrote {out_dir}/frame.png, depth.png, ground_near.png, ground_far.png")
+    sys.stdout.write(f"wrote {out_dir}/frame.png, depth.png, ground_near.png, ground_far.png\n")
 
 
 if __name__ == "__main__":
