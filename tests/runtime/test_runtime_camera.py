@@ -123,6 +123,17 @@ def test_visual_rocks_render_but_never_collide(rocky_scene) -> None:
     # every catalogue rock is drawn: the MJCF collision geoms plus all the others as visuals
     assert len(cam.world.rocks) == (~in_mjcf).sum() > in_mjcf.sum() > 0
     assert cam.world.rocks[:, 4].min() < 0.2  # pebbles below the MJCF cut are drawn
+    # 80-face rocks: only rocks >= 0.15 m inside the near square; every other window rock
+    # is in the 20-face mesh (each window rock in exactly one of them)
+    hi, lo = cam.world._split()
+    g = cam.world.ground
+    x0, y0 = sim.heightfield.xy_of(*g.near_origin)
+    x1, y1 = sim.heightfield.xy_of(g.near_origin[0] + g.nn_r - 1, g.near_origin[1] + g.nn_c - 1)
+    rk = cam.world.rocks
+    assert hi.size > 0 and rk[hi, 4].min() >= 0.15
+    assert (rk[hi, 1].min() >= x0) and (rk[hi, 1].max() <= x1)
+    assert (rk[hi, 2].min() >= y0) and (rk[hi, 2].max() <= y1)
+    assert np.intersect1d(hi, lo).size == 0 and lo.size > hi.size
     # depth with rocks stands above the bare terrain somewhere in view
     _, depth = sim.render(cam)
     cam.close()
