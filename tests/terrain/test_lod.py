@@ -25,31 +25,60 @@ def lod_pair() -> tuple[ms.Scene, ms.Scene]:
     return ms.build_scene(_cfg(200.0), seed=5), ms.build_scene(_cfg(320.0), seed=5)
 
 
-def test_focus_does_not_depend_on_the_outer_extent(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
-    small, large = lod_pair
-    assert small.outer is not None and large.outer is not None
-    assert small.outer.heightfield.shape == (201, 201)
-    assert large.outer.heightfield.shape == (321, 321)
-    assert small.heightfield.bounds_xy_m == large.heightfield.bounds_xy_m == (-20, -36, 40, 24)
-    assert small.heightfield.shape == (241, 241)  # 60 m at 0.25 m
-    np.testing.assert_array_equal(small.heightfield.z_m, large.heightfield.z_m)
-    assert float(small.heightfield.z_m.std()) > 0.1  # real relief, not a flat focus
+def test_a_tile_built_alone_equals_the_same_tile_of_the_full_build() -> None:
+    from marsscene.pipeline_lod import build_tile
 
-    def focus_rows(scene: ms.Scene) -> np.ndarray:
-        assert scene.rocks is not None and scene.craters is not None
-        r = scene.rocks
-        inside = scene.heightfield.contains(r.position_xyz_m[:, 0], r.position_xyz_m[:, 1])
-        return np.column_stack([r.position_xyz_m[inside], r.diameter_m[inside]])
+    cfg = _cfg(200.0, tile_m=20.0)  # a 60 m focus in 3 x 3 tiles of 80 x 80 cells
+    full = ms.build_scene(cfg, seed=5)
+    hf = full.heightfield
+    assert full.rocks is not None and full.craters is not None
+    # craters straddle tile borders (the halo case)
+    edges = np.array([-20.0, 0.0, 20.0, 40.0])
+    cx = full.craters.center_xy_m[:, 0]
+    r = full.craters.diameter_m / 2
+    assert np.any((np.abs(cx[:, None] - edges[None, 1:3]) < r[:, None]).any(axis=1))
+    for row, col in [(0, 0), (1, 1), (1, 2), (2, 2)]:
+        tile, rocks = build_tile(cfg, seed=5, row=row, col=col)
+        rs, cs = slice(row * 80, row * 80 + 81), slice(col * 80, col * 80 + 81)
+        assert tile.origin_xy_m == (hf.origin_xy_m[0] + col * 20, hf.origin_xy_m[1] + row * 20)
+        np.testing.assert_array_equal(tile.z_m, hf.z_m[rs, cs])  # border posts included
+        assert rocks is not None and len(rocks) > 10
+        p = full.rocks.position_xyz_m
+        inside = tile.contains(p[:, 0], p[:, 1])
+        np.testing.assert_array_equal(rocks.position_xyz_m, p[inside])
+        np.testing.assert_array_equal(rocks.diameter_m, full.rocks.diameter_m[inside])
+    with pytest.raises(ConfigError, match="outside the 3 x 3 focus tiles"):
+        build_tile(cfg, seed=5, row=3, col=0)
 
-    a, b = focus_rows(small), focus_rows(large)
-    assert len(a) > 200 and a.shape == b.shape
-    np.testing.assert_array_equal(a, b)
-    # the focus rocks have the full size-frequency distribution, the outer ones only >= 1 m
+
+def test_focus_rocks_have_the_full_sfd_and_outer_rocks_only_large(
+        lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
+    small = lod_pair[0]
     r = small.rocks
     assert r is not None
     outside = ~small.heightfield.contains(r.position_xyz_m[:, 0], r.position_xyz_m[:, 1])
     assert r.diameter_m[~outside].min() < 0.35
     assert outside.sum() > 5 and r.diameter_m[outside].min() >= 1.0
+
+
+def test_stitching_barely_bends_the_outer_terrain(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
+    """The coarse grid carries the long wavelengths and the focus is built on it, so the focus
+    border differs from the unstitched coarse terrain only by the sub-post detail and the fine
+    crater shapes (the first design drew the focus independently: ~2 m RMS, bent away over the
+    blend band, which steepened its slopes)."""
+    from marsscene.pipeline_lod import lod_craters, lod_world
+
+    for scene in lod_pair:
+        assert scene.outer is not None
+        cfg = scene.config
+        world = lod_world(cfg.terrain, scene.seed)
+        before, _, _ = lod_craters(world, cfg.craters, scene.seed)
+        bend = scene.outer.heightfield.z_m - before.z_m
+        relief = float(before.z_m.std())
+        assert relief > 0.5
+        assert float(np.sqrt(np.mean(bend[bend != 0] ** 2))) < 0.05 * relief
+        slope_before, slope_after = before.slope_deg(), scene.outer.heightfield.slope_deg()
+        assert abs(np.percentile(slope_after, 99) - np.percentile(slope_before, 99)) < 0.5
 
 
 def test_seam_has_no_height_jump(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
@@ -129,15 +158,6 @@ def test_impossible_plans_are_one_line_errors(terrain: dict[str, object], match:
         ms.build_scene(_cfg(200.0, **terrain), seed=1)
 
 
-def test_lod_is_ignored_with_a_dem_and_noted(synthetic_dem_path) -> None:  # type: ignore[no-untyped-def]
-    cfg = ms.SceneConfig.from_dict({
-        "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path), "lod": True},
-        "craters": {"enabled": False}, "rocks": {"enabled": False}})
-    scene = ms.build_scene(cfg, seed=1)
-    assert scene.outer is None
-    assert any("terrain.lod is ignored with a DEM" in n for n in scene.provenance.notes)
-
-
 def test_cli_focus_options(runner, tmp_path) -> None:  # type: ignore[no-untyped-def]
     from marsscene.cli import main
 
@@ -156,3 +176,37 @@ def test_cli_focus_options(runner, tmp_path) -> None:  # type: ignore[no-untyped
     lod = json.loads((tmp_path / "ok" / "manifest.json").read_text())["summary"]["lod"]
     assert lod["focus_bounds_xy_m"] == [10.0, -40.0, 50.0, 0.0]
     assert (lod["focus_post_m"], lod["outer_post_m"]) == (0.25, 1.0)
+
+
+def test_lod_with_a_dem_keeps_the_dem_posts_outside_and_details_the_focus(
+        synthetic_dem_path, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import mujoco
+
+    from marsscene.pipeline import lod_inputs
+
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path), "lod": True,
+                    "lod_blend_m": 5.0},
+        "craters": {"enabled": False}, "rocks": {"enabled": False},
+        "export": {"formats": ["mjcf"]}})
+    scene = ms.build_scene(cfg, seed=1)
+    assert scene.outer is not None
+    coarse, fine = scene.outer.heightfield, scene.heightfield
+    assert coarse.cell_size_m == 1.0 and coarse.shape == (48, 64)  # the DEM's own posts
+    assert fine.cell_size_m == 0.25
+    assert any("focus square does not fit" in n for n in scene.provenance.notes)
+    # the focus is the DEM (cubic between its posts) plus sub-metre detail of the continued
+    # spectrum: at the DEM posts it differs from the DEM by the detail alone
+    world, _ = lod_inputs(cfg, 1)
+    x0, y0, x1, y1 = fine.bounds_xy_m
+    xs, ys = coarse.grid_xy()
+    cols = np.flatnonzero((xs >= x0) & (xs <= x1))
+    rows = np.flatnonzero((ys >= y0) & (ys <= y1))
+    dem_posts = world.coarse.z_m[np.ix_(rows, cols)]
+    diff = fine.z_m[::4, ::4] - dem_posts
+    assert 0 < world.detail.rms_m < 0.05
+    assert float(np.sqrt(np.mean(diff**2))) < 3 * world.detail.rms_m
+    assert float(np.abs(fine.z_m - fine.z_m.mean()).max()) > 0.5  # the bowl is there
+    ms.write_scene(scene, tmp_path / "dem_lod")
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "dem_lod" / "mjcf" / "scene.xml"))
+    assert model.nhfield == 2  # focus + outer
