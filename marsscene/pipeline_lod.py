@@ -192,7 +192,7 @@ def build_tile(config: SceneConfig, *, seed: int, row: int, col: int,
     >>> hf.shape, hf.bounds_xy_m
     ((81, 81), (-20.0, 0.0, 0.0, 20.0))
     """
-    from marsscene.pipeline import lod_inputs
+    from marsscene.pipeline_terrain import lod_inputs
 
     world, _ = lod_inputs(config, seed, dem)
     if not (0 <= row < world.tiling.count and 0 <= col < world.tiling.count):

@@ -114,12 +114,20 @@ def cubic_upsample(zc: NDArray[Any], k: int) -> NDArray[np.float64]:
 
 
 def _halo_cells(craters: Any, bounds: tuple[float, float, float, float], ccfg: Any,
-                pc: float) -> int:
+                pc: float) -> tuple[int, int, int, int]:
+    """Coarse cells to grow the tile by on its west, south, east and north sides so that the
+    whole footprint of every crater reaching the tile lies in the window."""
     if craters is None or len(craters) == 0:
-        return 0
+        return (0, 0, 0, 0)
     reach = ccfg.ejecta_reach * craters.diameter_m / 2.0 / np.sqrt(ccfg.axis_ratio_min)
     hit = reaches_box(craters.center_xy_m, reach, bounds)
-    return int(np.ceil(2.0 * float(reach[hit].max()) / pc)) + 1 if hit.any() else 0
+    if not hit.any():
+        return (0, 0, 0, 0)
+    cx, cy, r = craters.center_xy_m[hit, 0], craters.center_xy_m[hit, 1], reach[hit]
+    x0, y0, x1, y1 = bounds
+    past = [x0 - (cx - r), y0 - (cy - r), (cx + r) - x1, (cy + r) - y1]
+    west, south, east, north = (int(np.ceil(max(float(v.max()), 0.0) / pc)) + 1 for v in past)
+    return west, south, east, north
 
 
 def tile_terrain(coarse: Heightfield, tiling: FocusTiling, row: int, col: int, *,
@@ -130,12 +138,12 @@ def tile_terrain(coarse: Heightfield, tiling: FocusTiling, row: int, col: int, *
     plan, k, pc = tiling.plan, tiling.plan.ratio, tiling.plan.coarse_post_m
     pf = plan.fine_post_m
     bounds = tiling.bounds_xy_m(row, col)
-    halo = _halo_cells(craters, bounds, ccfg, pc)
+    west, south, east, north = _halo_cells(craters, bounds, ccfg, pc)
     rows_c, cols_c = coarse.shape
     (r0, r1), (c0, c1) = tiling.cells(row), tiling.cells(col)
     # the window in absolute coarse posts, inside the posts the cubic can reach
-    ar0, ar1 = max(plan.row0 + r0 - halo, 1), min(plan.row0 + r1 + halo, rows_c - 2)
-    ac0, ac1 = max(plan.col0 + c0 - halo, 1), min(plan.col0 + c1 + halo, cols_c - 2)
+    ar0, ar1 = max(plan.row0 + r0 - south, 1), min(plan.row0 + r1 + north, rows_c - 2)
+    ac0, ac1 = max(plan.col0 + c0 - west, 1), min(plan.col0 + c1 + east, cols_c - 2)
     z = cubic_upsample(coarse.z_m[ar0 - 1:ar1 + 2, ac0 - 1:ac1 + 2], k)
     fr0, fc0 = (ar0 - plan.row0) * k, (ac0 - plan.col0) * k  # focus-relative fine indices
     x0, y0 = plan.bounds_xy_m[:2]

@@ -182,7 +182,7 @@ def test_lod_with_a_dem_keeps_the_dem_posts_outside_and_details_the_focus(
         synthetic_dem_path, tmp_path) -> None:  # type: ignore[no-untyped-def]
     import mujoco
 
-    from marsscene.pipeline import lod_inputs
+    from marsscene.pipeline_terrain import lod_inputs
 
     cfg = ms.SceneConfig.from_dict({
         "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path), "lod": True,
