@@ -60,7 +60,7 @@ def _fade(t: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def gradient_noise(x_m: NDArray[np.float64], y_m: NDArray[np.float64], *, cell_m: float,
-                   key: int) -> NDArray[np.float64]:
+                   key: int) -> NDArray[np.float32]:
     """2-D gradient noise on the grid ``y_m x x_m`` (rows x cols), lattice spacing ``cell_m``.
 
     A pure function of the coordinates, ``cell_m`` and the 64-bit ``key``.
@@ -77,26 +77,32 @@ def gradient_noise(x_m: NDArray[np.float64], y_m: NDArray[np.float64], *, cell_m
         lv = np.arange(iv0, int(iv.max()) + 2, dtype=np.int64).astype(np.uint64)
         h = _mix((lv[:, None] * _M1) ^ (lu[None, :] * _M2) ^ np.uint64(key))
         angle = _unit(h) * (2.0 * np.pi)
-    gx, gy = np.cos(angle), np.sin(angle)
+    gx, gy = np.cos(angle).astype(np.float32), np.sin(angle).astype(np.float32)
     cu = (iu - iu0).astype(np.intp)
     cv = (iv - iv0).astype(np.intp)
-    out = np.zeros((len(cv), len(cu)))
-    su, sv = _fade(fu), _fade(fv)
+    fu32, fv32 = fu.astype(np.float32), fv.astype(np.float32)
+    su, sv = _fade(fu).astype(np.float32), _fade(fv).astype(np.float32)
+    out = np.zeros((len(cv), len(cu)), dtype=np.float32)
     for dv in (0, 1):
         wv = (sv if dv else 1.0 - sv)[:, None]
+        # gradients of the posts' lattice rows: two 1-D gathers instead of one 2-D gather
+        row_gx, row_gy = gx[cv + dv], gy[cv + dv]
+        ev = (fv32 - dv)[:, None]
         for du in (0, 1):
             wu = (su if du else 1.0 - su)[None, :]
-            g = np.ix_(cv + dv, cu + du)
-            dot = gx[g] * (fu - du)[None, :] + gy[g] * (fv - dv)[:, None]
-            out += wv * wu * dot
+            dot = row_gx[:, cu + du] * (fu32 - du)[None, :]
+            dot += row_gy[:, cu + du] * ev
+            dot *= wu
+            dot *= wv
+            out += dot
     return out
 
 
 @lru_cache(maxsize=1)
 def _noise_std() -> float:
     """Standard deviation of :func:`gradient_noise` (a constant of the method; measured once on
-    a dense 512 x 512-cell reference grid with a fixed key)."""
-    t = np.arange(0, 512, 0.25)
+    a dense 256 x 256-cell reference grid with a fixed key: 65 536 independent cells, < 1 %)."""
+    t = np.arange(0, 256, 0.25)
     return float(gradient_noise(t, t, cell_m=1.0, key=0x5EED).std())
 
 
@@ -123,7 +129,8 @@ def fractal_detail(x_m: NDArray[np.float64], y_m: NDArray[np.float64], *,
         return np.zeros((len(y_m), len(x_m)), dtype=np.float32)
     amps = np.array([c**hurst for c in cells_m])
     scale = rms_m / (_noise_std() * float(np.sqrt(np.sum(amps**2))))
-    z = np.zeros((len(y_m), len(x_m)))
+    z = np.zeros((len(y_m), len(x_m)), dtype=np.float32)
     for i, (c, a) in enumerate(zip(cells_m, amps, strict=True)):
-        z += a * gradient_noise(x_m, y_m, cell_m=c, key=int(_hash_word(key, 100 + i)))
-    return (z * scale).astype(np.float32)
+        z += np.float32(a * scale) * gradient_noise(x_m, y_m, cell_m=c,
+                                                     key=int(_hash_word(key, 100 + i)))
+    return z
