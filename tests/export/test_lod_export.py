@@ -22,7 +22,8 @@ from tests.mjcf_drop import drop_box  # noqa: E402
 #: at a test-sized post count.
 _BIG = {"terrain": {"source": "procedural", "size_m": [3600.0, 3600.0], "post_m": 8.0,
                     "lod": True, "focus_size_m": 200.0, "focus_post_m": 1.0,
-                    "landform": "crater", "landform_size_m": 1500.0, "rms_height_m": 2.0},
+                    "landform": "crater", "landform_size_m": 1500.0, "rms_height_m": 2.0,
+                    "tile_m": 100.0},
         "craters": {"d_min_m": 20.0, "d_max_m": 200.0},
         "rocks": {"d_min_m": 0.5, "outer_d_min_m": 2.0},
         "export": {"max_tile_posts": 129}}
@@ -71,6 +72,42 @@ def test_usd_holds_the_whole_footprint_as_lod_payloads(big: tuple[ms.Scene, Path
     man = json.loads((out / "manifest.json").read_text())
     assert man["summary"]["lod"]["footprint_bounds_xy_m"] == [-1800.0, -1800.0, 1800.0, 1800.0]
     assert man["summary"]["lod"]["outer_posts"] == 451 * 451
+
+
+def test_usd_rocks_are_payloads_per_focus_tile_and_outer(big: tuple[ms.Scene, Path]) -> None:
+    from pxr import Usd, UsdGeom
+
+    scene, out = big
+    assert scene.rocks is not None and scene.outer is not None
+    stage = Usd.Stage.Open(str(out / "scene.usda"))
+    group = stage.GetPrimAtPath("/World/Rocks")
+    assert Usd.ModelAPI(group).GetKind() == "group"
+    assert group.GetAttribute("marsscene:rockCount").Get() == len(scene.rocks)
+    lod = scene.provenance.extra["lod"]
+    # 200 m focus, tile_m 100 snapped to whole 8 m cells: 96 m tiles, 3 x 3
+    assert lod["focus_tiles"] == [3, 3] and lod["focus_tile_m"] == 96.0
+    names = sorted(p.GetName() for p in group.GetChildren())
+    assert names == ["outer"] + [f"tile_{r}_{c}" for r in range(3) for c in range(3)]
+    tile_m = 96.0
+    fx0, fy0 = scene.outer.focus_bounds_xy_m[:2]
+    total = 0
+    for prim in group.GetChildren():
+        assert prim.HasAuthoredPayloads() and Usd.ModelAPI(prim).GetKind() == "component"
+        inst = UsdGeom.PointInstancer(prim.GetChild("Instancer"))
+        pos = np.asarray(inst.GetPositionsAttr().Get())
+        assert len(pos) == prim.GetAttribute("marsscene:rockCount").Get() > 0
+        total += len(pos)
+        if prim.GetName() == "outer":
+            assert prim.GetAttribute(LOD_ATTR).Get() == 1
+            scale = np.asarray(inst.GetScalesAttr().Get())
+            assert float(scale[:, 0].min()) >= 2.0 - 1e-6  # outer_d_min_m: large rocks only
+            continue
+        assert prim.GetAttribute(LOD_ATTR).Get() == 0
+        row, col = map(int, prim.GetName().split("_")[1:])
+        x0, y0 = fx0 + tile_m * col, fy0 + tile_m * row
+        assert np.all((pos[:, 0] >= x0) & (pos[:, 0] <= x0 + tile_m))
+        assert np.all((pos[:, 1] >= y0) & (pos[:, 1] <= y0 + tile_m))
+    assert total == len(scene.rocks)
 
 
 @pytest.mark.parametrize("usd_format", ["usda", "usdz"])
