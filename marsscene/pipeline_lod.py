@@ -93,6 +93,21 @@ def _plan(coarse: Heightfield, tcfg: TerrainConfig, notes: list[str]) -> FocusPl
     return plan
 
 
+def _check_focus_posts(plan: FocusPlan) -> None:
+    """The focus square is held whole (MuJoCo compiles it into one hfield): refuse one that
+    would not fit the memory plan of a single grid."""
+    from marsscene.errors import MemoryBudgetError
+    from marsscene.terrain.synth import MAX_POSTS
+
+    n = plan.cells * plan.ratio + 1
+    if n * n > MAX_POSTS:
+        side = plan.cells * plan.coarse_post_m
+        raise MemoryBudgetError(
+            f"a {side:g} m focus square at {plan.fine_post_m:g} m posts has {n * n:,} posts; "
+            f"the limit is {MAX_POSTS:,}: shrink terrain.focus_size_m (--focus-size-m) or "
+            "raise terrain.focus_post_m")
+
+
 def lod_world(tcfg: TerrainConfig, seed: int, *, dem_hf: Heightfield | None = None,
               notes: list[str] | None = None) -> LodWorld:
     """Stage 1: the coarse terrain, the focus plan, the tiles and the detail model."""
@@ -102,6 +117,7 @@ def lod_world(tcfg: TerrainConfig, seed: int, *, dem_hf: Heightfield | None = No
     else:
         coarse = _snap_dem(dem_hf, tcfg.focus_post_m, notes)
     plan = _plan(coarse, tcfg, notes)
+    _check_focus_posts(plan)
     if dem_hf is not None and not tcfg.detail:
         rms = 0.0
     elif tcfg.detail_rms_m is not None:

@@ -210,3 +210,14 @@ def test_lod_with_a_dem_keeps_the_dem_posts_outside_and_details_the_focus(
     ms.write_scene(scene, tmp_path / "dem_lod")
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "dem_lod" / "mjcf" / "scene.xml"))
     assert model.nhfield == 2  # focus + outer
+
+
+def test_a_focus_square_too_large_to_hold_is_a_one_line_error(runner, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from marsscene.cli import main
+
+    res = runner.invoke(main, ["build", "--procedural", "--size-m", "3600", "3600", "--post-m",
+                               "1", "--focus-size-m", "3000", "--format", "mjcf", "--seed", "1",
+                               "--out", str(tmp_path / "big")])
+    assert res.exit_code != 0 and "Traceback" not in res.output
+    assert "3000 m focus square at 0.25 m posts has 144,024,001 posts" in res.output
+    assert not (tmp_path / "big").exists()
