@@ -169,13 +169,14 @@ def test_cli_focus_options(runner, tmp_path) -> None:  # type: ignore[no-untyped
     assert "must lie inside the footprint" in res.output and "Traceback" not in res.output
     assert not (tmp_path / "bad" / "manifest.json").exists()
     res = runner.invoke(main, [*base, "--focus-xy", "30", "-20", "--focus-size-m", "40",
-                               "--out", str(tmp_path / "ok")])
+                               "--tile-m", "20", "--out", str(tmp_path / "ok")])
     assert res.exit_code == 0, res.output
     import json
 
     lod = json.loads((tmp_path / "ok" / "manifest.json").read_text())["summary"]["lod"]
     assert lod["focus_bounds_xy_m"] == [10.0, -40.0, 50.0, 0.0]
     assert (lod["focus_post_m"], lod["outer_post_m"]) == (0.25, 1.0)
+    assert lod["focus_tiles"] == [2, 2] and lod["focus_tile_m"] == 20.0
 
 
 def test_lod_with_a_dem_keeps_the_dem_posts_outside_and_details_the_focus(
