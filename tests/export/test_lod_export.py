@@ -212,3 +212,26 @@ def test_lod_outputs_are_byte_reproducible(tmp_path: Path) -> None:
     assert any("terrain_outer.bin" in str(f) for f in files)
     for rel in files:
         assert (outs[0] / rel).read_bytes() == (outs[1] / rel).read_bytes(), rel
+
+
+def test_streamed_asset_layers_equal_the_in_memory_ones(tmp_path: Path) -> None:
+    """write_usd exports each asset layer (terrain tiles, rock payloads) as soon as it is
+    authored; the files equal those of the in-memory stage exported afterwards."""
+    from marsscene.export.usd import to_stage
+
+    cfg = ms.SceneConfig.from_dict({**_GENTLE, "rocks": {"d_min_m": 0.3},
+                                    "terrain": {**_GENTLE["terrain"], "tile_m": 12.0}})
+    scene = ms.build_scene(cfg, seed=3)
+    _, kept = to_stage(scene)
+    _, streamed = to_stage(scene, stream_to=tmp_path / "streamed")
+    assert sorted(kept) == sorted(streamed) and any(r.startswith("assets/rocks/") for r in kept)
+    for rel, blob in kept.items():
+        path = streamed[rel]
+        assert path == tmp_path / "streamed" / rel and path.is_file()
+        if isinstance(blob, bytes):
+            assert path.read_bytes() == blob
+        else:
+            ref = tmp_path / "kept" / rel
+            ref.parent.mkdir(parents=True, exist_ok=True)
+            assert blob.GetRootLayer().Export(str(ref))
+            assert ref.read_bytes() == path.read_bytes()
