@@ -48,12 +48,14 @@ log = logging.getLogger("marsscene")
 @dataclass(frozen=True, eq=False)
 class LodWorld:
     """What every focus tile is built from: the coarse terrain (before craters), the focus
-    square, its tiling and the detail model."""
+    square, its tiling, the detail model and the base grid the focus is interpolated from
+    (the coarse grid itself, or a DEM at its own posts under a coarser outer level)."""
 
     coarse: Heightfield
     plan: FocusPlan
     tiling: FocusTiling
     detail: TileDetail
+    base: Heightfield
 
 
 def _procedural_coarse(tcfg: TerrainConfig, seed: int) -> Heightfield:
@@ -75,6 +77,21 @@ def _snap_dem(hf: Heightfield, fine_post_m: float, notes: list[str]) -> Heightfi
     notes.append(f"terrain: the DEM's {hf.cell_size_m:g} m posts resampled to {post:g} m "
                  f"(a whole multiple of terrain.focus_post_m) for the outer terrain")
     return resample(hf, post_m=post)
+
+
+def _average_to(base: Heightfield, post_m: float, notes: list[str]) -> Heightfield:
+    """The outer level of a DEM: ``base`` averaged over ``post_m`` boxes centred on every
+    ``post_m / base post``-th post (so the outer posts are base posts)."""
+    import numpy as np
+    from scipy.ndimage import uniform_filter
+
+    f = round(post_m / base.cell_size_m)
+    if f < 2:
+        return base
+    z = uniform_filter(base.z_m.astype(np.float64), size=f | 1, mode="nearest")[::f, ::f]
+    notes.append(f"terrain: outer level = the DEM averaged to {f * base.cell_size_m:g} m posts; "
+                 f"the focus square keeps the DEM's {base.cell_size_m:g} m posts")
+    return Heightfield(z.astype(np.float32), f * base.cell_size_m, base.origin_xy_m)
 
 
 def _plan(coarse: Heightfield, tcfg: TerrainConfig, notes: list[str]) -> FocusPlan:
@@ -113,9 +130,11 @@ def lod_world(tcfg: TerrainConfig, seed: int, *, dem_hf: Heightfield | None = No
     """Stage 1: the coarse terrain, the focus plan, the tiles and the detail model."""
     notes = notes if notes is not None else []
     if dem_hf is None:
-        coarse = _procedural_coarse(tcfg, seed)
+        base = coarse = _procedural_coarse(tcfg, seed)
     else:
-        coarse = _snap_dem(dem_hf, tcfg.focus_post_m, notes)
+        base = _snap_dem(dem_hf, tcfg.focus_post_m, notes)
+        outer_post = tcfg.post_m if tcfg.post_m is not None else base.cell_size_m
+        coarse = _average_to(base, outer_post, notes)
     plan = _plan(coarse, tcfg, notes)
     _check_focus_posts(plan)
     if dem_hf is not None and not tcfg.detail:
@@ -123,9 +142,9 @@ def lod_world(tcfg: TerrainConfig, seed: int, *, dem_hf: Heightfield | None = No
     elif tcfg.detail_rms_m is not None:
         rms = tcfg.detail_rms_m
     else:
-        rms = detail_rms_m(coarse, plan, tcfg.hurst)
+        rms = detail_rms_m(base, plan, tcfg.hurst)
     detail = TileDetail(rms, tcfg.hurst, stage_key(seed, "terrain_detail_lod"))
-    return LodWorld(coarse, plan, FocusTiling.of(plan, tcfg.tile_m), detail)
+    return LodWorld(coarse, plan, FocusTiling.of(plan, tcfg.tile_m), detail, base)
 
 
 def lod_craters(world: LodWorld, ccfg: CraterConfig, seed: int
@@ -152,7 +171,7 @@ def focus_heightfield(world: LodWorld, craters: CraterTable | None,
     for row in range(tiling.count):
         for col in range(tiling.count):  # a few tiles: each call is vectorised
             tile = tile_terrain(world.coarse, tiling, row, col, detail=world.detail,
-                                craters=craters, ccfg=ccfg)
+                                craters=craters, ccfg=ccfg, base=world.base)
             z[tiling.posts(row), tiling.posts(col)] = tile.z_m
             log.info("[terrain] tile %d/%d", row * tiling.count + col + 1, tiling.count ** 2)
     return Heightfield(z, plan.fine_post_m, plan.bounds_xy_m[:2])
@@ -219,7 +238,7 @@ def build_tile(config: SceneConfig, *, seed: int, row: int, col: int,
         _, craters, _ = lod_craters(world, config.craters, seed)
     ccfg = config.craters if craters is not None else None
     hf = tile_terrain(world.coarse, world.tiling, row, col, detail=world.detail,
-                      craters=craters, ccfg=ccfg)
+                      craters=craters, ccfg=ccfg, base=world.base)
     rocks = None
     if config.rocks.enabled:
         table = craters if craters is not None else CraterTable.empty()

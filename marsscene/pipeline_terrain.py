@@ -4,6 +4,7 @@ crater table exists."""
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -78,6 +79,8 @@ def _dem_terrain(config: SceneConfig, seed: int, dem: DEM, inputs: dict[str, str
     target post spacing."""
     tcfg = config.terrain
     default_post = 0.25 if tcfg.source == "default" else None
+    if tcfg.lod:  # the focus uses the DEM's own posts; the outer level averages them itself
+        tcfg, default_post = dataclasses.replace(tcfg, post_m=None), None
     dem, post_m, dem_notes, dem_summary = prepare_dem(dem, tcfg, default_post_m=default_post)
     notes.extend(dem_notes)
     if "data_file" in dem.metadata:  # the .IMG of a detached .LBL
@@ -112,10 +115,11 @@ def terrain_stage(config: SceneConfig, seed: int, dem: DEM | None, models: list[
 
             models.append(ModelRef("terrain", "sub-post pointwise fractal detail (tiles)",
                                    LATTICE_CITATION))
-            return TerrainStage(None, _PROCEDURAL, inputs, world=lod_world(tcfg, seed, notes=notes))
+            return TerrainStage(None, _PROCEDURAL, inputs,
+                                world=lod_world(tcfg, seed, notes=notes))
         return TerrainStage(_procedural(config, seed), _PROCEDURAL, inputs)
     hf, frame, post_m = _dem_terrain(config, seed, dem, inputs, models, notes, summary)
-    world = None
+    world: LodWorld | None = None
     if tcfg.lod:
         from marsscene.pipeline_lod import lod_world
 

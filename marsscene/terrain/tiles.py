@@ -113,59 +113,78 @@ def cubic_upsample(zc: NDArray[Any], k: int) -> NDArray[np.float64]:
     return _upsample_rows(z.T, k).T
 
 
-def _halo_cells(craters: Any, bounds: tuple[float, float, float, float], ccfg: Any,
-                pc: float) -> tuple[int, int, int, int]:
-    """Coarse cells to grow the tile by on its west, south, east and north sides so that the
-    whole footprint of every crater reaching the tile lies in the window."""
+def _halo_m(craters: Any, bounds: tuple[float, float, float, float],
+            ccfg: Any) -> tuple[float, float, float, float]:
+    """Metres to grow the tile by on its west, south, east and north sides so that the whole
+    footprint of every crater reaching the tile lies in the window."""
     if craters is None or len(craters) == 0:
-        return (0, 0, 0, 0)
+        return (0.0, 0.0, 0.0, 0.0)
     reach = ccfg.ejecta_reach * craters.diameter_m / 2.0 / np.sqrt(ccfg.axis_ratio_min)
     hit = reaches_box(craters.center_xy_m, reach, bounds)
     if not hit.any():
-        return (0, 0, 0, 0)
+        return (0.0, 0.0, 0.0, 0.0)
     cx, cy, r = craters.center_xy_m[hit, 0], craters.center_xy_m[hit, 1], reach[hit]
     x0, y0, x1, y1 = bounds
     past = [x0 - (cx - r), y0 - (cy - r), (cx + r) - x1, (cy + r) - y1]
-    west, south, east, north = (int(np.ceil(max(float(v.max()), 0.0) / pc)) + 1 for v in past)
+    west, south, east, north = (max(float(v.max()), 0.0) for v in past)
     return west, south, east, north
 
 
+def _base_range(origin_m: float, post_m: float, n: int, lo_m: float, hi_m: float
+                ) -> tuple[int, int]:
+    """Base posts covering [lo_m, hi_m] and two more on each side (the stamp's low-pass at the
+    footprint edge), kept where the cubic has its margin posts."""
+    i0 = int(np.floor((lo_m - origin_m) / post_m + 1e-9)) - 2
+    i1 = int(np.ceil((hi_m - origin_m) / post_m - 1e-9)) + 2
+    return max(i0, 1), min(i1, n - 2)
+
+
 def tile_terrain(coarse: Heightfield, tiling: FocusTiling, row: int, col: int, *,
-                 detail: TileDetail, craters: Any = None, ccfg: Any = None) -> Heightfield:
-    """The full-resolution surface of focus tile ``(row, col)`` (see the module docstring)."""
+                 detail: TileDetail, craters: Any = None, ccfg: Any = None,
+                 base: Heightfield | None = None) -> Heightfield:
+    """The full-resolution surface of focus tile ``(row, col)`` (see the module docstring).
+
+    ``base`` is the grid the tile is interpolated from (default ``coarse``; a DEM at its own
+    posts when the outer level is coarser): its posts lie on the fine lattice, a whole number of
+    fine posts apart.
+    """
     from marsscene.craters import stamp_craters
 
-    plan, k, pc = tiling.plan, tiling.plan.ratio, tiling.plan.coarse_post_m
+    plan, k = tiling.plan, tiling.plan.ratio
     pf = plan.fine_post_m
+    base = base if base is not None else coarse
+    pb, kb = base.cell_size_m, round(base.cell_size_m / pf)
     bounds = tiling.bounds_xy_m(row, col)
-    west, south, east, north = _halo_cells(craters, bounds, ccfg, pc)
-    rows_c, cols_c = coarse.shape
-    (r0, r1), (c0, c1) = tiling.cells(row), tiling.cells(col)
-    # the window in absolute coarse posts, inside the posts the cubic can reach
-    ar0, ar1 = max(plan.row0 + r0 - south, 1), min(plan.row0 + r1 + north, rows_c - 2)
-    ac0, ac1 = max(plan.col0 + c0 - west, 1), min(plan.col0 + c1 + east, cols_c - 2)
-    z = cubic_upsample(coarse.z_m[ar0 - 1:ar1 + 2, ac0 - 1:ac1 + 2], k)
-    fr0, fc0 = (ar0 - plan.row0) * k, (ac0 - plan.col0) * k  # focus-relative fine indices
+    west, south, east, north = _halo_m(craters, bounds, ccfg)
+    (bx0, by0), (rows_b, cols_b) = base.origin_xy_m, base.shape
+    ar0, ar1 = _base_range(by0, pb, rows_b, bounds[1] - south, bounds[3] + north)
+    ac0, ac1 = _base_range(bx0, pb, cols_b, bounds[0] - west, bounds[2] + east)
+    z = cubic_upsample(base.z_m[ar0 - 1:ar1 + 2, ac0 - 1:ac1 + 2], kb)
     x0, y0 = plan.bounds_xy_m[:2]
+    fr0 = round((by0 + ar0 * pb - y0) / pf)  # focus-relative fine index of the window start
+    fc0 = round((bx0 + ac0 * pb - x0) / pf)
     xs = np.asarray(x0 + (fc0 + np.arange(z.shape[1])) * pf, dtype=np.float64)
     ys = np.asarray(y0 + (fr0 + np.arange(z.shape[0])) * pf, dtype=np.float64)
-    cells = octave_cells_m(pc, pf)
-    z += fractal_detail(xs, ys, cells_m=cells, hurst=detail.hurst, rms_m=detail.rms_m,
-                        key=detail.key)
+    z += fractal_detail(xs, ys, cells_m=octave_cells_m(pb, pf), hurst=detail.hurst,
+                        rms_m=detail.rms_m, key=detail.key)
     hf = Heightfield(z.astype(np.float32), pf, (float(xs[0]), float(ys[0])))
     if craters is not None and len(craters):
         hf = stamp_craters(hf, craters, profile_kwargs=ccfg.profile_kwargs())
     # crop the halo away, then fade the detail to the coarse surface at the focus border
+    (r0, r1), (c0, c1) = tiling.cells(row), tiling.cells(col)
     rs, cs = slice(r0 * k - fr0, r1 * k - fr0 + 1), slice(c0 * k - fc0, c1 * k - fc0 + 1)
     tile = Heightfield(hf.z_m[rs, cs], pf, (x0 + c0 * k * pf, y0 + r0 * k * pf))
     return taper_detail(tile, plan, origin_posts=(r0 * k, c0 * k))
 
 
-def detail_rms_m(coarse: Heightfield, plan: FocusPlan, hurst: float) -> float:
-    """RMS of the sub-coarse detail that continues the coarse spectrum over the focus square."""
+def detail_rms_m(base: Heightfield, plan: FocusPlan, hurst: float) -> float:
+    """RMS of the detail below the base grid's posts that continues its spectrum, measured on
+    its posts over the focus square."""
     from marsscene.terrain.synth import _continued_detail_rms
 
-    n = plan.cells
-    window = Heightfield(coarse.z_m[plan.row0:plan.row0 + n + 1, plan.col0:plan.col0 + n + 1],
-                         plan.coarse_post_m, plan.bounds_xy_m[:2])
+    (bx0, by0), pb = base.origin_xy_m, base.cell_size_m
+    x0, y0, x1, y1 = plan.bounds_xy_m
+    c0, c1 = (round((v - bx0) / pb) for v in (x0, x1))
+    r0, r1 = (round((v - by0) / pb) for v in (y0, y1))
+    window = Heightfield(base.z_m[r0:r1 + 1, c0:c1 + 1], pb, (x0, y0))
     return _continued_detail_rms(window, plan.fine_post_m, hurst)

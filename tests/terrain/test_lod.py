@@ -222,3 +222,41 @@ def test_a_focus_square_too_large_to_hold_is_a_one_line_error(runner, tmp_path) 
     assert res.exit_code != 0 and "Traceback" not in res.output
     assert "3000 m focus square at 0.25 m posts has 144,024,001 posts" in res.output
     assert not (tmp_path / "big").exists()
+
+
+def test_dem_focus_keeps_the_dem_posts_under_a_coarser_outer_level(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """--dem X --lod --post-m 4: the outer level averages the DTM to 4 m, but the focus is
+    interpolated from the DTM's own 1 m posts, so relief finer than 4 m survives there."""
+    import rasterio
+    from affine import Affine
+
+    from marsscene.pipeline_terrain import lod_inputs
+
+    rows = cols = 200
+    yy, xx = np.mgrid[0:rows, 0:cols].astype(np.float64)
+    ripple = 0.5 * np.sin(2 * np.pi * xx / 3.0) * np.cos(2 * np.pi * yy / 5.0)  # < 4 m
+    z = -2000.0 + 0.02 * xx + ripple
+    path = tmp_path / "ripple.tif"
+    with rasterio.open(path, "w", driver="GTiff", height=rows, width=cols, count=1,
+                       dtype="float32", crs="+proj=eqc +R=3396190 +units=m +no_defs",
+                       transform=Affine(1.0, 0.0, 0.0, 0.0, -1.0, 0.0)) as ds:
+        ds.write(z.astype(np.float32), 1)
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "dem", "dem_path": str(path), "lod": True, "post_m": 4.0,
+                    "focus_size_m": 120.0, "lod_blend_m": 8.0},
+        "craters": {"enabled": False}, "rocks": {"enabled": False}})
+    scene = ms.build_scene(cfg, seed=2)
+    assert scene.outer is not None
+    assert scene.outer.heightfield.cell_size_m == 4.0
+    assert any("averaged to 4 m" in n for n in scene.provenance.notes)
+    world, _ = lod_inputs(cfg, 2)
+    assert world.base.cell_size_m == 1.0 and world.coarse.cell_size_m == 4.0
+    fine = scene.heightfield
+    xs, ys = fine.grid_xy()
+    inner = slice(34, -34)  # past the taper (8 outer posts = 32 m) at the focus border
+    at_posts = fine.z_m[::4, ::4][inner, inner]
+    dem = world.base.sample(*np.meshgrid(xs[::4], ys[::4]))[inner, inner]
+    assert float(np.sqrt(np.mean((at_posts - dem) ** 2))) < 3 * world.detail.rms_m + 1e-3
+    # the 3 m ripple is there (the 4 m outer level cannot hold it)
+    detrended = at_posts - at_posts.mean(axis=1, keepdims=True)
+    assert float(detrended.std()) > 0.2
