@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from marsscene.config import SceneConfig
@@ -126,17 +127,26 @@ def _check_focus_posts(plan: FocusPlan) -> None:
 
 
 def lod_world(tcfg: TerrainConfig, seed: int, *, dem_hf: Heightfield | None = None,
-              notes: list[str] | None = None) -> LodWorld:
-    """Stage 1: the coarse terrain, the focus plan, the tiles and the detail model."""
+              notes: list[str] | None = None,
+              base_reader: Callable[[FocusPlan], Heightfield] | None = None) -> LodWorld:
+    """Stage 1: the coarse terrain, the focus plan, the tiles and the detail model.
+
+    ``base_reader`` (a DTM read averaged: :mod:`marsscene.pipeline_dem_lod`) reads the focus
+    window at the DTM's posts once the plan is known; ``dem_hf`` is then the outer level.
+    """
     notes = notes if notes is not None else []
     if dem_hf is None:
         base = coarse = _procedural_coarse(tcfg, seed)
+    elif base_reader is not None:
+        coarse = dem_hf
     else:
         base = _snap_dem(dem_hf, tcfg.focus_post_m, notes)
         outer_post = tcfg.post_m if tcfg.post_m is not None else base.cell_size_m
         coarse = _average_to(base, outer_post, notes)
     plan = _plan(coarse, tcfg, notes)
     _check_focus_posts(plan)
+    if base_reader is not None:
+        base = base_reader(plan)
     if dem_hf is not None and not tcfg.detail:
         rms = 0.0
     elif tcfg.detail_rms_m is not None:

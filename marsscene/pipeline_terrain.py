@@ -104,7 +104,17 @@ def _dem_terrain(config: SceneConfig, seed: int, dem: DEM, inputs: dict[str, str
 def terrain_stage(config: SceneConfig, seed: int, dem: DEM | None, models: list[ModelRef],
                    notes: list[str], summary: dict[str, object]) -> TerrainStage:
     tcfg = config.terrain
-    dem, inputs = load_inputs(config, dem)
+    averaged = None
+    if tcfg.lod and dem is None:  # a whole DTM: the outer level read averaged, strip by strip
+        from marsscene.pipeline_dem_lod import read_averaged_outer
+
+        averaged = read_averaged_outer(config)
+    if averaged is not None:
+        dem, inputs = averaged.dem, dict(averaged.inputs)
+        notes.append(f"terrain: outer level read averaged to {averaged.dem.post_m:g} m posts "
+                     "strip by strip; the focus window read at the DEM's posts")
+    else:
+        dem, inputs = load_inputs(config, dem)
     if dem is None:
         models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
         if tcfg.landform in LANDFORM_CITATIONS:
@@ -123,7 +133,8 @@ def terrain_stage(config: SceneConfig, seed: int, dem: DEM | None, models: list[
     if tcfg.lod:
         from marsscene.pipeline_lod import lod_world
 
-        world = lod_world(tcfg, seed, dem_hf=hf, notes=notes)
+        reader = averaged.base_reader(config, frame) if averaged is not None else None
+        world = lod_world(tcfg, seed, dem_hf=hf, notes=notes, base_reader=reader)
         p, n = world.plan, world.plan.cells  # the ortho is draped over the focus square
         hf = Heightfield(world.coarse.z_m[p.row0:p.row0 + n + 1, p.col0:p.col0 + n + 1],
                          p.coarse_post_m, p.bounds_xy_m[:2])
