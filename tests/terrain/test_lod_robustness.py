@@ -61,3 +61,33 @@ def test_any_lod_configuration_builds_or_gives_a_one_line_error(
     np.testing.assert_array_equal(outer.heightfield.z_m[np.ix_(rows, cols)], fine.z_m[::k, ::k])
     if scene.rocks is not None and len(scene.rocks):
         assert np.isfinite(scene.rocks.position_xyz_m).all()
+
+
+@settings(max_examples=12, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(
+    post_m=st.sampled_from([None, 1.0, 2.0, 3.0, 4.0]),
+    focus_size_m=st.floats(10.0, 320.0),
+    focus_uv=st.tuples(st.floats(-1.0, 1.0), st.floats(-1.0, 1.0)),
+    tile_m=st.floats(5.0, 300.0),
+    seed=st.integers(0, 2**31 - 1),
+)
+def test_any_lod_configuration_on_the_bundled_dtm_builds_or_gives_a_one_line_error(
+        post_m: float | None, focus_size_m: float, focus_uv: tuple[float, float], tile_m: float,
+        seed: int) -> None:
+    """The bundled Gale DTM (1 m posts): the outer level at its posts or read averaged to
+    ``post_m``, the focus from its own posts (the crop is 347 m x 336 m)."""
+    room = max(330.0 - focus_size_m, 0.0) / 2.0
+    cfg = {"terrain": {"lod": True, "post_m": post_m, "focus_size_m": focus_size_m,
+                       "focus_xy_m": [focus_uv[0] * room, focus_uv[1] * room],
+                       "tile_m": tile_m, "lod_blend_m": 10.0},
+           "craters": {"enabled": False}, "rocks": {"enabled": False},
+           "lighting": {"enabled": False}}
+    try:
+        scene = ms.build_scene(ms.SceneConfig.from_dict(cfg), seed=seed)
+    except MarsSceneError as err:
+        assert "\n" not in str(err) and "focus square" in str(err)
+        return
+    assert scene.outer is not None and np.isfinite(scene.heightfield.z_m).all()
+    assert scene.outer.heightfield.cell_size_m == (post_m or 1.0)
+    assert scene.heightfield.cell_size_m == 0.25
