@@ -155,12 +155,23 @@ class Heightfield:
         return out
 
     def grid_normals(self) -> NDArray[np.float32]:
-        """Unit normals at every post, shape ``(rows, cols, 3)``."""
-        gx, gy = self.grid_gradient()
-        inv = 1.0 / np.sqrt(gx * gx + gy * gy + 1.0)  # no (rows, cols, 3) float64 temporaries
+        """Unit normals at every post, shape ``(rows, cols, 3)``.
+
+        Computed in float32 (the output precision) from the float32 posts: differences of
+        neighbouring posts lose nothing that a float32 normal keeps, and no float64
+        ``(rows, cols)`` temporaries are made.
+        """
+        gy, gx = np.gradient(self.z_m, np.float32(self.cell_size_m))
+        inv = gx * gx
+        inv += gy * gy
+        inv += 1.0
+        np.sqrt(inv, out=inv)
+        np.reciprocal(inv, out=inv)
         n = np.zeros((*gx.shape, 3), dtype=np.float32)
-        np.multiply(gx, -inv, out=n[..., 0], casting="same_kind")
-        np.multiply(gy, -inv, out=n[..., 1], casting="same_kind")
+        np.multiply(gx, inv, out=n[..., 0])
+        np.negative(n[..., 0], out=n[..., 0])
+        np.multiply(gy, inv, out=n[..., 1])
+        np.negative(n[..., 1], out=n[..., 1])
         n[..., 2] = inv
         return n
 
