@@ -161,8 +161,9 @@ class Heightfield:
         neighbouring posts lose nothing that a float32 normal keeps, and no float64
         ``(rows, cols)`` temporaries are made.
         """
-        gy, gx = np.gradient(self.z_m, np.float32(self.cell_size_m))
-        inv = gx * gx
+        gy, gx = (np.asarray(g, dtype=np.float32)
+                  for g in np.gradient(self.z_m, np.float32(self.cell_size_m)))
+        inv: NDArray[np.float32] = gx * gx
         inv += gy * gy
         inv += 1.0
         np.sqrt(inv, out=inv)
