@@ -1,4 +1,5 @@
-"""Rock catalogue written beside the scene: ``rocks.csv`` (one row per rock).
+"""Rock catalogue written beside the scene: ``rocks.csv`` (one row per rock), and/or
+``rocks.parquet`` (``[export] rock_catalogue``; :mod:`marsscene.export.catalog_parquet`).
 
 Columns: ``id, x_m, y_m, z_m, diameter_m, height_m, burial_m, prototype, in_mjcf`` —
 ``(x, y, z)`` is the rock's base centre in the scene frame (z = surface - burial), ``height_m``
@@ -15,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ROCK_CATALOG", "rock_catalog_bytes", "write_rock_catalog"]
+__all__ = ["ROCK_CATALOG", "rock_catalog_bytes", "rock_catalog_columns", "write_rock_catalog"]
 
 ROCK_CATALOG = "rocks.csv"
 COLUMNS = ("id", "x_m", "y_m", "z_m", "diameter_m", "height_m", "burial_m", "prototype",
@@ -63,36 +64,54 @@ def _fixed(values: NDArray[np.float64], decimals: int) -> NDArray[np.uint8]:
     return np.concatenate(parts, axis=1)
 
 
-def rock_catalog_bytes(scene: Any) -> bytes:
-    """The CSV text of the scene's rock catalogue."""
+def rock_catalog_columns(scene: Any) -> dict[str, NDArray[Any]]:
+    """The catalogue's columns (:data:`COLUMNS`, in order) as arrays (no copies of the rocks)."""
     from marsscene.rocks.report import mjcf_rock_selection
 
     rocks = scene.rocks
     n = len(rocks)
-    in_mjcf = np.zeros(n)
-    in_mjcf[mjcf_rock_selection(rocks, scene.config.rocks)] = 1
-    cols: list[tuple[NDArray[np.float64], int]] = [
-        (np.arange(n, dtype=np.float64), 0),
-        *[(rocks.position_xyz_m[:, i], 4) for i in range(3)],
-        (rocks.diameter_m, 4), (rocks.height_m, 4), (rocks.burial_m, 4),
-        (rocks.prototype.astype(np.float64), 0), (in_mjcf, 0),
-    ]
+    in_mjcf = np.zeros(n, dtype=bool)
+    in_mjcf[mjcf_rock_selection(rocks, scene.config.rocks)] = True
+    pos = rocks.position_xyz_m
+    return {"id": np.arange(n, dtype=np.int64), "x_m": pos[:, 0], "y_m": pos[:, 1],
+            "z_m": pos[:, 2], "diameter_m": rocks.diameter_m, "height_m": rocks.height_m,
+            "burial_m": rocks.burial_m, "prototype": rocks.prototype, "in_mjcf": in_mjcf}
+
+
+def _csv_bytes(columns: dict[str, NDArray[Any]]) -> bytes:
     header = (",".join(COLUMNS) + "\n").encode("ascii")
+    n = len(columns["id"])
     if n == 0:
         return header
     blocks = []
-    for i, (values, decimals) in enumerate(cols):
-        blocks.append(_fixed(values, decimals))
-        sep = "\n" if i == len(cols) - 1 else ","
+    for i, name in enumerate(COLUMNS):
+        decimals = 4 if name.endswith("_m") else 0
+        blocks.append(_fixed(np.asarray(columns[name], dtype=np.float64), decimals))
+        sep = "\n" if i == len(COLUMNS) - 1 else ","
         blocks.append(np.full((n, 1), ord(sep), np.uint8))
     table = np.concatenate(blocks, axis=1).ravel()
     return header + table[table != 0].tobytes()
 
 
+def rock_catalog_bytes(scene: Any) -> bytes:
+    """The CSV text of the scene's rock catalogue."""
+    return _csv_bytes(rock_catalog_columns(scene))
+
+
 def write_rock_catalog(scene: Any, out_dir: Path) -> list[Path]:
-    """Write ``rocks.csv`` beside the scene; nothing when the stage is disabled."""
+    """Write ``rocks.csv`` and/or ``rocks.parquet`` beside the scene, as
+    ``scene.config.export.rock_catalogue`` says; nothing when the stage is disabled."""
     if scene.rocks is None:
         return []
-    path = Path(out_dir) / ROCK_CATALOG
-    path.write_bytes(rock_catalog_bytes(scene))
-    return [path]
+    kind = scene.config.export.rock_catalogue
+    columns = rock_catalog_columns(scene)
+    written = []
+    if kind in ("csv", "both"):
+        path = Path(out_dir) / ROCK_CATALOG
+        path.write_bytes(_csv_bytes(columns))
+        written.append(path)
+    if kind in ("parquet", "both"):
+        from marsscene.export.catalog_parquet import ROCK_PARQUET, write_rock_parquet
+
+        written.append(write_rock_parquet(columns, Path(out_dir) / ROCK_PARQUET))
+    return written
