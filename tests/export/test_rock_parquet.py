@@ -77,7 +77,7 @@ def test_parquet_only_catalogue_serves_the_runtime_camera(scene: ms.Scene,
 
 
 def test_bad_choice_and_cli_flag(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match="export.rock_catalogue"):
+    with pytest.raises(ConfigError, match=r"export\.rock_catalogue"):
         ms.SceneConfig.from_dict({"export": {"rock_catalogue": "xlsx"}})
     from marsscene.cli import main
 
