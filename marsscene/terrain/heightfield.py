@@ -155,14 +155,25 @@ class Heightfield:
         return out
 
     def grid_normals(self) -> NDArray[np.float32]:
-        """Unit normals at every post, shape ``(rows, cols, 3)``.
+        """Unit normals at every post, shape ``(rows, cols, 3)``."""
+        rows, cols = self.shape
+        return self.window_normals((0, rows), (0, cols))
+
+    def window_normals(self, rows: tuple[int, int],
+                       cols: tuple[int, int]) -> NDArray[np.float32]:
+        """Unit normals of the posts ``[r0, r1) x [c0, c1)``, shape ``(r1 - r0, c1 - c0, 3)``;
+        equal to that window of :meth:`grid_normals` (the gradient reads one post beyond the
+        window where there is one), so a mesh can be made tile by tile.
 
         Computed in float32 (the output precision) from the float32 posts: differences of
-        neighbouring posts lose nothing that a float32 normal keeps, and no float64
-        ``(rows, cols)`` temporaries are made.
+        neighbouring posts lose nothing that a float32 normal keeps.
         """
-        gy, gx = (np.asarray(g, dtype=np.float32)
-                  for g in np.gradient(self.z_m, np.float32(self.cell_size_m)))
+        (r0, r1), (c0, c1) = rows, cols
+        h0, h1 = max(r0 - 1, 0), min(r1 + 1, self.shape[0])
+        g0, g1 = max(c0 - 1, 0), min(c1 + 1, self.shape[1])
+        grads = np.gradient(self.z_m[h0:h1, g0:g1], np.float32(self.cell_size_m))
+        window = (slice(r0 - h0, r1 - h0), slice(c0 - g0, c1 - g0))
+        gy, gx = (np.asarray(g, dtype=np.float32)[window] for g in grads)
         inv: NDArray[np.float32] = gx * gx
         inv += gy * gy
         inv += 1.0
@@ -170,9 +181,8 @@ class Heightfield:
         np.reciprocal(inv, out=inv)
         n = np.zeros((*gx.shape, 3), dtype=np.float32)
         np.multiply(gx, inv, out=n[..., 0])
-        np.negative(n[..., 0], out=n[..., 0])
         np.multiply(gy, inv, out=n[..., 1])
-        np.negative(n[..., 1], out=n[..., 1])
+        n[..., :2] *= -1.0
         n[..., 2] = inv
         return n
 

@@ -72,12 +72,12 @@ def iter_heightfield_tiles(hf: Heightfield, *,
     a time (south-west first), so a caller that converts and drops each tile holds one tile's
     arrays, not the whole mesh twice.
 
-    Arrays are filled straight into float32 buffers (no float64 meshgrid temporaries); tiles of
-    the same shape share one read-only ``face_vertex_indices`` array.
+    Arrays are filled straight into float32 buffers (no float64 meshgrid temporaries, no
+    whole-grid normal array: each tile's normals come from its window); tiles of the same shape
+    share one read-only ``face_vertex_indices`` array.
     """
     rows, cols = hf.shape
     xs, ys = hf.grid_xy()
-    normals = hf.grid_normals()
     x32, y32 = xs.astype(np.float32), ys.astype(np.float32)
     s_all = ((xs - xs[0]) / (xs[-1] - xs[0])).astype(np.float32)
     t_all = ((ys - ys[0]) / (ys[-1] - ys[0])).astype(np.float32)
@@ -98,7 +98,7 @@ def iter_heightfield_tiles(hf: Heightfield, *,
             yield TerrainTile(
                 name=f"tile_{ti}_{tj}",
                 points_m=pts.reshape(-1, 3),
-                normals=normals[r0:r1, c0:c1].reshape(-1, 3),
+                normals=hf.window_normals((r0, r1), (c0, c1)).reshape(-1, 3),
                 st=st.reshape(-1, 2),
                 face_vertex_indices=faces[nr, nc],
             )

@@ -9,6 +9,8 @@ match the USD terrain exactly at the posts.
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from marsscene.terrain.heightfield import Heightfield
@@ -20,10 +22,8 @@ class HfieldSpec:
     """``size`` and ``pos`` attributes and the ``.bin`` bytes of one hfield."""
 
     def __init__(self, hf: Heightfield) -> None:
-        z = hf.z_m.astype(np.float64)
-        rows, cols = hf.shape
-        z_min = float(z.min())
-        z_range = float(z.max() - z_min)
+        z_min = float(hf.z_m.min())
+        z_range = float(float(hf.z_m.max()) - z_min)
         self.elevation_range_m = max(z_range, 1e-3)
         self.z_min_m = z_min
         width, height = hf.size_m
@@ -32,9 +32,15 @@ class HfieldSpec:
         self.center_xy_m = ((x0 + x1) / 2.0, (y0 + y1) / 2.0)
         #: Thickness of the solid box under the lowest post (in m).
         self.base_m = max(0.1 * self.elevation_range_m, 1.0)
-        norm = (z - z_min) / self.elevation_range_m
+        self._hf = hf
+
+    @cached_property
+    def bin_bytes(self) -> bytes:
+        """The ``.bin`` asset (made on first use: the extent alone needs only min and max)."""
+        rows, cols = self._hf.shape
+        norm = (self._hf.z_m.astype(np.float64) - self.z_min_m) / self.elevation_range_m
         header = np.array([rows, cols], dtype="<i4").tobytes()
-        self.bin_bytes = header + norm.astype("<f4").tobytes()
+        return header + norm.astype("<f4").tobytes()
 
     @property
     def size(self) -> tuple[float, float, float, float]:
