@@ -169,20 +169,27 @@ class Heightfield:
         neighbouring posts lose nothing that a float32 normal keeps.
         """
         (r0, r1), (c0, c1) = rows, cols
-        h0, h1 = max(r0 - 1, 0), min(r1 + 1, self.shape[0])
-        g0, g1 = max(c0 - 1, 0), min(c1 + 1, self.shape[1])
-        grads = np.gradient(self.z_m[h0:h1, g0:g1], np.float32(self.cell_size_m))
-        window = (slice(r0 - h0, r1 - h0), slice(c0 - g0, c1 - g0))
-        gy, gx = (np.asarray(g, dtype=np.float32)[window] for g in grads)
-        inv: NDArray[np.float32] = gx * gx
-        inv += gy * gy
+        # -dz/dx, -dz/dy: central differences, one-sided on the grid's edge posts (as
+        # np.gradient); contiguous float32 arrays, interleaved into (x, y, z) only at the end
+        slopes = []
+        for axis, lo, hi, size in ((1, c0, c1, self.shape[1]), (0, r0, r1, self.shape[0])):
+            j = np.arange(lo, hi)
+            fwd, bwd = np.minimum(j + 1, size - 1), np.maximum(j - 1, 0)
+            a, b = int(bwd[0]), int(fwd[-1]) + 1  # the posts read along this axis
+            z = self.z_m[r0:r1, a:b] if axis else self.z_m[a:b, c0:c1]
+            diff = np.take(z, bwd - a, axis=axis) - np.take(z, fwd - a, axis=axis)
+            step = ((fwd - bwd) * np.float32(self.cell_size_m)).astype(np.float32)
+            diff /= step[None, :] if axis else step[:, None]
+            slopes.append(diff)
+        ngx, ngy = slopes
+        inv = np.square(ngx)
+        inv += np.square(ngy)
         inv += 1.0
         np.sqrt(inv, out=inv)
-        np.reciprocal(inv, out=inv)
-        n = np.zeros((*gx.shape, 3), dtype=np.float32)
-        np.multiply(gx, inv, out=n[..., 0])
-        np.multiply(gy, inv, out=n[..., 1])
-        n[..., :2] *= -1.0
+        np.reciprocal(inv, out=inv)  # 1 / |(-gx, -gy, 1)|
+        n = np.zeros((r1 - r0, c1 - c0, 3), dtype=np.float32)
+        np.multiply(ngx, inv, out=n[..., 0])
+        np.multiply(ngy, inv, out=n[..., 1])
         n[..., 2] = inv
         return n
 
