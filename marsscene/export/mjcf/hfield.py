@@ -38,9 +38,17 @@ class HfieldSpec:
     def bin_bytes(self) -> bytes:
         """The ``.bin`` asset (made on first use: the extent alone needs only min and max)."""
         rows, cols = self._hf.shape
-        norm = (self._hf.z_m.astype(np.float64) - self.z_min_m) / self.elevation_range_m
+        # (z - z_min) / range in float64, rounded to float32, a block of rows at a time (no
+        # float64 copy of the whole grid; same values)
+        norm = np.zeros((rows, cols), dtype="<f4")
+        step = max(1, (1 << 16) // cols)
+        for r in range(0, rows, step):
+            block = self._hf.z_m[r:r + step].astype(np.float64)
+            block -= self.z_min_m
+            block /= self.elevation_range_m
+            norm[r:r + step] = block
         header = np.array([rows, cols], dtype="<i4").tobytes()
-        return header + norm.astype("<f4").tobytes()
+        return header + norm.tobytes()
 
     @property
     def size(self) -> tuple[float, float, float, float]:
