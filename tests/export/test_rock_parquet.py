@@ -101,3 +101,14 @@ def test_missing_pyarrow_fails_before_writing(scene: ms.Scene, tmp_path: Path,
     assert list(tmp_path.iterdir()) == []
     ms.write_scene(_with_catalogue(scene, "csv"), tmp_path / "y")  # csv needs no pyarrow
     assert (tmp_path / "y" / "rocks.csv").is_file()
+
+
+def test_example_script_reads_the_catalogue(tmp_path: Path) -> None:
+    import runpy
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "rock_catalogue_parquet.py"
+    result = runpy.run_path(str(example))["main"](tmp_path / "demo")
+    table = pq.read_table(tmp_path / "demo" / "rocks.parquet")
+    assert result["rocks"] == table.num_rows > 10_000  # k = 0.05, D >= 0.1 m on 0.04 km^2
+    assert result["mjcf_rocks"] == int(table.column("in_mjcf").to_numpy().sum()) > 0
+    assert not (tmp_path / "demo" / "rocks.csv").exists()
