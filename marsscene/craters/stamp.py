@@ -52,6 +52,19 @@ def _families(profile_kwargs: dict[str, float | str] | None,
             for i in np.unique(used)}
 
 
+def _edge_padded(z: np.ndarray, pad: int) -> np.ndarray:
+    """``np.pad(z.astype(float64), pad, mode="edge")`` without the intermediate float64 copy
+    (one 16 M-post float64 array less on a 1 km scene)."""
+    rows, cols = z.shape
+    out = np.zeros((rows + 2 * pad, cols + 2 * pad), dtype=np.float64)
+    out[pad:pad + rows, pad:pad + cols] = z
+    out[:pad, pad:pad + cols] = z[0]
+    out[pad + rows:, pad:pad + cols] = z[-1]
+    out[:, :pad] = out[:, pad:pad + 1]
+    out[:, pad + cols:] = out[:, pad + cols - 1:pad + cols]
+    return out
+
+
 def _waves(r0: np.ndarray, r1: np.ndarray, c0: np.ndarray, c1: np.ndarray,
            shape: tuple[int, int]) -> np.ndarray:
     """Wave index of each crater (inputs in stamping order)."""
@@ -133,7 +146,7 @@ def stamp_craters(
     wave = _waves(br0[order] + _PAD, br1[order] + _PAD, bc0[order] + _PAD, bc1[order] + _PAD,
                   (rows + 2 * _PAD, cols + 2 * _PAD))
     # edge-replicated padding: the interior low-pass never sees artificial values
-    zpad = np.pad(heightfield.z_m.astype(np.float64), _PAD, mode="edge")
+    zpad = _edge_padded(heightfield.z_m, _PAD)
     xs, ys = heightfield.grid_xy()
     xpad = ox + (np.arange(cols + 2 * _PAD) - _PAD) * cs
     ypad = oy + (np.arange(rows + 2 * _PAD) - _PAD) * cs

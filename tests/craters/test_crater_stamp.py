@@ -140,3 +140,11 @@ def test_only_the_profile_families_in_use_are_tabulated() -> None:
     assert profile_family.cache_info().currsize == 2  # + profile 2's table
     left, right = mixed.z_m[:, :40], mixed.z_m[:, 41:][:, ::-1]  # mirror images if alike
     assert np.abs(left - right).max() > 1e-3  # each crater got its own profile
+
+
+@pytest.mark.parametrize("shape", [(2, 2), (5, 7), (70, 66)])
+def test_edge_padding_equals_numpy_pad(shape: tuple[int, int]) -> None:
+    z = np.random.default_rng(3).normal(size=shape).astype(np.float32)
+    for pad in (1, 4, 64):
+        expected = np.pad(z.astype(np.float64), pad, mode="edge")
+        np.testing.assert_array_equal(stamp_mod._edge_padded(z, pad), expected)
