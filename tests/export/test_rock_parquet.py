@@ -112,3 +112,16 @@ def test_example_script_reads_the_catalogue(tmp_path: Path) -> None:
     assert result["rocks"] == table.num_rows > 10_000  # k = 0.05, D >= 0.1 m on 0.04 km^2
     assert result["mjcf_rocks"] == int(table.column("in_mjcf").to_numpy().sum()) > 0
     assert not (tmp_path / "demo" / "rocks.csv").exists()
+
+
+def test_cli_without_pyarrow_is_a_one_line_error_before_building(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from marsscene.cli import main
+
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    out = tmp_path / "nope"
+    result = CliRunner().invoke(main, ["build", "--procedural", "--rock-catalogue", "both",
+                                       "--out", str(out)])
+    assert result.exit_code != 0
+    assert "marsscene[parquet]" in result.output and "Traceback" not in result.output
+    assert not out.exists()
