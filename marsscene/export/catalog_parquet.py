@@ -6,9 +6,9 @@ typed instead of text: ``id`` int32; ``x_m, y_m, z_m, diameter_m, height_m, buri
 float32 (the precision of the USD PointInstancer; < 0.13 mm at 2 km from the origin, finer
 than the CSV's 0.1 mm rounding elsewhere); ``prototype`` int16; ``in_mjcf`` bool. Each field
 carries its unit in the field metadata (``unit``). Compression: zstd, byte-stream-split floats,
-dictionaries only on the two small-cardinality columns, one row group per 2^20 rows, no
-statistics that depend on anything but the values, so the bytes are reproducible for the same
-pyarrow version.
+dictionaries only on the two small-cardinality columns, one row group per 2^20 rows. Nothing in
+the file depends on time or place (the footer records the writer's pyarrow version), so the
+bytes are reproducible for a given pyarrow version (tested).
 """
 
 from __future__ import annotations
