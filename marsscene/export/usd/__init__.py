@@ -110,13 +110,12 @@ def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda") -> l
     written = [p for _, p in sorted(assets.items())]
     layer = stage.GetRootLayer()
     if usd_format == "usdz":
-        from pxr import UsdUtils
+        from marsscene.export.usd.usdz import package_usdz
 
         tmp = out / "scene.usdc"
         layer.Export(str(tmp))
         target = out / "scene.usdz"
-        if not UsdUtils.CreateNewUsdzPackage(str(tmp), str(target)):
-            raise OSError(f"could not package {target}")
+        package_usdz(tmp, target)  # reproducible bytes: fixed zip header dates
         tmp.unlink()
         for p in written:  # packaged inside the .usdz
             p.unlink()
