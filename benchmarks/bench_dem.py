@@ -4,6 +4,11 @@ Writes a synthetic HiRISE-style DTEEC ``.IMG`` (attached, assembled label; 20000
 samples float32, 480 MB, NULL outside the stereo strip and a small hole inside) in row blocks,
 then measures in a fresh process: windowed read, Laplace fill, bilinear resampling to 0.5 m
 (64 M posts). Target (issue 3): < 5 s and < 2 GB.
+
+Then the whole DTM as a level-of-detail scene (issue 15): ``terrain.lod`` with a 4 m outer
+level (the DTM read averaged strip by strip, :mod:`marsscene.pipeline_dem_lod`) and a 1 km focus
+at 0.25 m read by window from the DTM's 1 m posts: wall time and peak RSS against the 480 MB
+of samples a full read would hold (and its float64 work copies).
 """
 
 from __future__ import annotations
@@ -61,6 +66,29 @@ def _read_and_resample() -> dict[str, float]:
             "mean_in": float(dem.elevation_m.mean()), "mean_out": float(out.elevation_m.mean())}
 
 
+def _whole_dtm_lod() -> dict[str, float]:
+    import warnings
+
+    import marsscene as ms
+
+    assert _PATH is not None
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "dem", "dem_path": str(_PATH), "lod": True, "post_m": 4.0,
+                    "focus_size_m": 1000.0},
+        "craters": {"enabled": False}, "rocks": {"enabled": False}})
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = ms.build_scene(cfg, seed=7)
+    assert scene.outer is not None
+    return {"build_s": time.perf_counter() - t0,
+            "outer_rows": float(scene.outer.heightfield.shape[0]),
+            "outer_cols": float(scene.outer.heightfield.shape[1]),
+            "focus_posts_M": scene.heightfield.z_m.size / 1e6,
+            "terrain_s": float(scene.provenance.timings_s["terrain"]),
+            "tiles_s": float(scene.provenance.timings_s["tiles"])}
+
+
 def main() -> None:
     global _PATH
     with tempfile.TemporaryDirectory(prefix="bench_dem_") as tmp:
@@ -70,12 +98,17 @@ def main() -> None:
         print(f"wrote {LINES} x {SAMPLES} PDS3 DTM ({_PATH.stat().st_size / 1e6:.0f} MB) "
               f"in {time.perf_counter() - t0:.1f} s")
         wall, peak_mb, extra = measure(_read_and_resample)
+        lod_wall, lod_peak_mb, lod = measure(_whole_dtm_lod)
     print(f"crop {CROP[2]} x {CROP[3]} at 1 m -> {int(extra['rows'])} x {int(extra['cols'])} "
           f"at 0.5 m (bilinear); filled {int(extra['filled'])} posts")
     print(f"  read {extra['read_s']:.2f} s, fill {extra['fill_s']:.2f} s, "
           f"resample {extra['resample_s']:.2f} s")
     print(f"  wall {wall:.2f} s (target < 5 s), peak RSS {peak_mb:.0f} MB (target < 2048 MB)")
     print(f"  mean elevation {extra['mean_in']:.4f} -> {extra['mean_out']:.4f} m")
+    print(f"whole DTM, level of detail: outer {int(lod['outer_rows'])} x {int(lod['outer_cols'])}"
+          f" at 4 m (read averaged), focus {lod['focus_posts_M']:.1f} M posts at 0.25 m")
+    print(f"  terrain {lod['terrain_s']:.2f} s, tiles {lod['tiles_s']:.2f} s, wall "
+          f"{lod_wall:.2f} s, peak RSS {lod_peak_mb:.0f} MB (the DTM's samples alone: 480 MB)")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,9 @@ posts, rocks and craters, and the stage timings. The 3-3.6 km scenes use the two
 (0.25 m over the central 1 km, 1 m outside): ``posts_M`` is focus + outer posts and
 ``lod1_tiles`` the number of outer USD tile payloads. The scaling run keeps the 1 km focus and
 grows the footprint from 1.2 km to 3.6 km. Run: ``python benchmarks/run.py worlds`` (about
-5 min on the 2-core machine), or ``python benchmarks/bench_worlds.py main-crater``.
+5 min on the 2-core machine), or ``python benchmarks/bench_worlds.py main-crater``;
+``python benchmarks/bench_worlds.py tile`` builds one 500 m focus tile of main-crater alone
+(``pipeline_lod.build_tile``: the coarse 3.6 km grid, the crater table and one tile).
 """
 
 from __future__ import annotations
@@ -55,9 +57,27 @@ def _build() -> dict[str, object]:
             "output_MB": round(size_mb, 1), "stages_s": scene.provenance.timings_s}
 
 
+def _one_tile() -> dict[str, object]:
+    """One focus tile of main-crater built alone (``pipeline_lod.build_tile``)."""
+    import marsscene as ms
+    from marsscene.pipeline_lod import build_tile
+
+    cfg = ms.SceneConfig.from_dict({"preset": "main-crater"})
+    t0 = time.perf_counter()
+    hf, rocks = build_tile(cfg, seed=7, row=0, col=0)
+    return {"tile_s": round(time.perf_counter() - t0, 1), "tile_posts_M": hf.z_m.size / 1e6,
+            "rocks": len(rocks) if rocks is not None else 0}
+
+
 def main(names: list[str] | None = None) -> None:
     global _NAME, _SIZE_M
     from marsscene.presets import PRESET_NAMES
+
+    if names == ["tile"]:
+        wall, peak_mb, extra = measure(_one_tile)
+        print(f"main-crater tile (0, 0) alone: {wall:6.1f} s, peak {peak_mb / 1024:5.2f} GB, "
+              f"{extra}", flush=True)
+        return
 
     for name in names or list(PRESET_NAMES):
         _NAME, _SIZE_M = name, None

@@ -1,75 +1,43 @@
 """``build_scene``: the only module that wires the stages together, in pipeline order.
 
-DEM / procedural -> terrain (+ sub-DEM detail) -> craters -> rocks -> lighting -> Scene.
+DEM / procedural -> terrain (+ sub-DEM detail) -> craters -> [level of detail: focus tiles]
+-> assets -> [level of detail: stitch] -> rocks -> lighting -> Scene. The terrain stage is
+:mod:`marsscene.pipeline_terrain`; the level-of-detail stages are :mod:`marsscene.pipeline_lod`.
 Each stage draws from its own random stream (:func:`marsscene.seeding.stage_rng`), so changing
 one stage's parameters never changes another stage's random draws.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import time
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 
 from marsscene.assets import clear_rocks, place_assets
 from marsscene.assets.io import load_assets
 from marsscene.config import SceneConfig
 from marsscene.craters import crater_models, sample_craters, stamp_craters
-from marsscene.craters.config import CraterConfig
-from marsscene.craters.population import PopulationStats
 from marsscene.craters.table import CraterTable
 from marsscene.dem.model import DEM
-from marsscene.errors import MarsSceneWarning, NoGeoreferenceWarning
-from marsscene.inputs import HIRISE_DTM_CITATION, drape_ortho, load_inputs
+from marsscene.errors import MarsSceneWarning
 from marsscene.lighting.compute import compute_lighting
 from marsscene.lighting.config import DEFAULT_SITE_LAT_LON_EAST_DEG
 from marsscene.lighting.irradiance import AF_CITATION, DELTA_EDDINGTON_CITATION
 from marsscene.lighting.mars24 import MARS24_CITATION
+from marsscene.pipeline_terrain import terrain_stage
 from marsscene.rocks import make_prototypes, place_rocks
-from marsscene.rocks.config import RockConfig
 from marsscene.rocks.report import EJECTA_CITATION, rock_notes, rock_summary
 from marsscene.rocks.sfd import GOLOMBEK_CITATION
-from marsscene.rocks.table import RockTable
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
-from marsscene.terrain import add_detail, heightfield_from_dem, resample, synthesize
-from marsscene.terrain.config import TerrainConfig
-from marsscene.terrain.default import DEFAULT_DEM_CITATION
-from marsscene.terrain.from_dem import (
-    GeoFrame,
-    prepare_dem,
-)
 from marsscene.terrain.heightfield import Heightfield
-from marsscene.terrain.landforms import LANDFORM_CITATIONS, add_landform, default_size_m
-from marsscene.terrain.lod import (
-    FocusPlan,
-    OuterTerrain,
-    concat_tables,
-    lod_summary,
-    merge_craters,
-    plan_focus,
-    stitch,
-    synthesize_focus,
-    taper_detail,
-)
+from marsscene.terrain.lod import OuterTerrain, lod_summary, stitch
 
 __all__ = ["build_scene"]
 
 log = logging.getLogger("marsscene")
-
-_FBM_CITATION = (
-    "fractional Brownian surface by spectral synthesis (Saupe 1988; Turcotte 1997, "
-    "doi:10.1017/CBO9781139174695); Mars self-affinity: Orosei et al. 2003, "
-    "doi:10.1029/2002JE001883"
-)
-
-
-_LOD_DEM_NOTE = ("terrain: terrain.lod is ignored with a DEM (level-of-detail DEM terrain is not "
-                 "implemented yet): one heightfield at post_m")
 
 
 class _Timer:
@@ -84,64 +52,6 @@ class _Timer:
         dt = time.perf_counter() - t0
         self.timings_s[name] = round(dt, 4)
         log.info("[%s] done in %.2f s", name, dt)
-
-
-def _warn_no_georeference(dem: DEM, config: SceneConfig) -> None:
-    lcfg = config.lighting
-    sun = ""
-    if lcfg.enabled and (lcfg.site_lat_deg is None or lcfg.site_lon_east_deg is None):
-        lat, lon = DEFAULT_SITE_LAT_LON_EAST_DEG
-        sun = (f"; the sun uses the default site (lat {lat}, lon {lon} E) unless "
-               "lighting.site_lat_deg and lighting.site_lon_east_deg are set")
-    name = Path(str(dem.source_path)).name if dem.source_path else "the DEM"
-    warnings.warn(f"{name} has no geo-reference (no CRS): the scene has no lon/lat{sun}",
-                  NoGeoreferenceWarning, stacklevel=3)
-
-
-def _lod_terrain(tcfg: TerrainConfig, seed: int) -> tuple[Heightfield, Heightfield, FocusPlan]:
-    """Level-of-detail terrain: (focus heightfield, coarse footprint, focus plan)."""
-    size = tcfg.effective_size_m
-    lf_size = tcfg.landform_size_m if tcfg.landform_size_m is not None else \
-        default_size_m(tcfg.landform, min(size))
-    coarse = synthesize(size, tcfg.post_m if tcfg.post_m is not None else 1.0, hurst=tcfg.hurst,
-                        rms_height_m=tcfg.rms_height_m, rms_slope_deg=tcfg.rms_slope_deg,
-                        rng=stage_rng(seed, "terrain"))
-    plan = plan_focus(coarse, center_xy_m=tcfg.focus_xy_m, size_m=tcfg.focus_size_m,
-                      fine_post_m=tcfg.focus_post_m)
-    fine = synthesize_focus(plan, hurst=tcfg.hurst, rms_height_m=tcfg.rms_height_m,
-                            rms_slope_deg=tcfg.rms_slope_deg, rng=stage_rng(seed, "terrain_focus"))
-    coarse, fine = (add_landform(h, tcfg.landform, size_m=lf_size, depth_m=tcfg.landform_depth_m)
-                    for h in (coarse, fine))
-    return fine, coarse, plan
-
-
-def _lod_craters(hf: Heightfield, coarse: Heightfield, plan: FocusPlan, ccfg: CraterConfig,
-                 seed: int) -> tuple[Heightfield, Heightfield, CraterTable, PopulationStats]:
-    """Craters of a level-of-detail scene: the focus square samples its own craters."""
-    focus, _ = sample_craters(plan.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters_focus"),
-                              heightfield=hf)
-    outer, stats = sample_craters(coarse.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters"),
-                                  heightfield=coarse)
-    table = merge_craters(focus, outer, plan.bounds_xy_m, ejecta_reach=ccfg.ejecta_reach,
-                          axis_ratio_min=ccfg.axis_ratio_min)
-    kwargs = ccfg.profile_kwargs()
-    return (stamp_craters(hf, focus, profile_kwargs=kwargs),
-            stamp_craters(coarse, table, profile_kwargs=kwargs), table, stats)
-
-
-def _outer_rocks(rocks: RockTable, outer: OuterTerrain, craters: CraterTable, rcfg: RockConfig,
-                 seed: int) -> RockTable:
-    """Add rocks of at least ``rocks.outer_d_min_m`` outside the focus square."""
-    d_min = max(rcfg.d_min_m, rcfg.outer_d_min_m)
-    if d_min >= rcfg.d_max_m:
-        return rocks
-    cfg = dataclasses.replace(rcfg, d_min_m=d_min)
-    far = place_rocks(outer.heightfield, craters, cfg, rng=stage_rng(seed, "rocks_outer"))
-    x0, y0, x1, y1 = outer.focus_bounds_xy_m
-    x, y = far.position_xyz_m[:, 0], far.position_xyz_m[:, 1]
-    result: RockTable = concat_tables(rocks, far.take(~((x >= x0) & (x <= x1) & (y >= y0)
-                                                        & (y <= y1))))
-    return result
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
@@ -175,72 +85,11 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     notes: list[str] = []  # rules applied and warnings (manifest)
     summary: dict[str, object] = {}  # stage summary values: counts, tau, ... (manifest)
 
-    texture_rgb = None
-    plan: FocusPlan | None = None
-    coarse: Heightfield | None = None  # the outer grid of a level-of-detail terrain
     with timer.stage("terrain"):
-        dem, inputs = load_inputs(config, dem)
-        if dem is None and tcfg.lod:
-            hf, coarse, plan = _lod_terrain(tcfg, seed)
-            frame = GeoFrame(0.0, None, None, "", 1.0)
-            models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
-            if tcfg.landform in LANDFORM_CITATIONS:
-                models.append(ModelRef("terrain", f"{tcfg.landform} landform",
-                                       LANDFORM_CITATIONS[tcfg.landform]))
-        elif dem is None:
-            hf = synthesize(
-                tcfg.effective_size_m,
-                tcfg.post_m if tcfg.post_m is not None else 0.25,
-                hurst=tcfg.hurst,
-                rms_height_m=tcfg.rms_height_m,
-                rms_slope_deg=tcfg.rms_slope_deg,
-                rng=stage_rng(seed, "terrain"),
-            )
-            hf = add_landform(hf, tcfg.landform, size_m=tcfg.landform_size_m,
-                              depth_m=tcfg.landform_depth_m)
-            if tcfg.landform in LANDFORM_CITATIONS:
-                models.append(ModelRef("terrain", f"{tcfg.landform} landform",
-                                       LANDFORM_CITATIONS[tcfg.landform]))
-            frame = GeoFrame(0.0, None, None, "", 1.0)
-            models.append(ModelRef("terrain", "procedural fBm terrain", _FBM_CITATION))
-        else:
-            default_post = 0.25 if tcfg.source == "default" else None
-            if tcfg.lod:
-                notes.append(_LOD_DEM_NOTE)
-                log.warning(_LOD_DEM_NOTE)
-            dem, post_m, dem_notes, dem_summary = prepare_dem(
-                dem, tcfg, default_post_m=default_post
-            )
-            notes.extend(dem_notes)
-            if "data_file" in dem.metadata:  # the .IMG of a detached .LBL
-                inputs["dem_data"] = str(dem.metadata["data_file"])
-            summary.update(dem_summary)
-            hf, frame = heightfield_from_dem(dem, z_scale=tcfg.z_scale)
-            if not frame.crs_wkt:
-                _warn_no_georeference(dem, config)
-            if tcfg.source == "default":
-                models.append(ModelRef("terrain", "default DEM", DEFAULT_DEM_CITATION))
-            if "HIRISE" in str(dem.metadata.get("DATA_SET_ID", "")).upper():
-                dataset = str(dem.metadata["DATA_SET_ID"])
-                models.append(ModelRef("terrain", dataset, HIRISE_DTM_CITATION))
-            if post_m < hf.cell_size_m * (1 - 1e-9):
-                if tcfg.detail:
-                    hf = add_detail(
-                        hf,
-                        post_m=post_m,
-                        hurst=tcfg.hurst,
-                        detail_rms_m=tcfg.detail_rms_m,
-                        rng=stage_rng(seed, "terrain_detail"),
-                    )
-                    models.append(ModelRef("terrain", "sub-DEM fractal detail", _FBM_CITATION))
-                else:
-                    hf = resample(hf, post_m=post_m)
-            if frame.crs_wkt:
-                from marsscene.dem.crs import iau_2015_code
-
-                summary["crs_iau_2015"] = iau_2015_code(frame.crs_wkt)
-                summary["grid_convergence_deg"] = frame.grid_convergence_deg
-            texture_rgb = drape_ortho(tcfg, dem, hf, frame, inputs, notes, summary)
+        terrain = terrain_stage(config, seed, dem, models, notes, summary)
+    frame, inputs, texture_rgb, world = (terrain.frame, terrain.inputs, terrain.texture_rgb,
+                                         terrain.world)
+    coarse: Heightfield | None = world.coarse if world is not None else None
 
     # --- craters stage (issue: craters) ---------------------------------------------------
     craters = None
@@ -248,9 +97,13 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     if ccfg.enabled:
         with timer.stage("craters"), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", MarsSceneWarning)
-            if plan is not None and coarse is not None:
-                hf, coarse, craters, cstats = _lod_craters(hf, coarse, plan, ccfg, seed)
+            if world is not None:
+                from marsscene.pipeline_lod import lod_craters
+
+                coarse, craters, cstats = lod_craters(world, ccfg, seed)
             else:
+                assert terrain.hf is not None
+                hf = terrain.hf
                 craters, cstats = sample_craters(
                     hf.bounds_xy_m, ccfg, rng=stage_rng(seed, "craters"), heightfield=hf,
                     origin_lonlat_deg=frame.origin_lonlat_deg,
@@ -275,8 +128,14 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
         }
 
     # --- end of craters stage -------------------------------------------------------------
-    if plan is not None:
-        hf = taper_detail(hf, plan)  # the focus border now lies on the coarse surface
+    if world is not None:  # the focus square, tile by tile, now that the craters are known
+        from marsscene.pipeline_lod import focus_heightfield
+
+        with timer.stage("tiles"):
+            hf = focus_heightfield(world, craters, ccfg if craters is not None else None)
+    elif craters is None:
+        assert terrain.hf is not None
+        hf = terrain.hf
 
     placed = None
     if config.assets.active:
@@ -286,11 +145,14 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
                                   "base_z_m": round(a.base_z_m, 4),
                                   "pad_radius_m": round(a.pad_radius_m, 3)} for a in placed]
     outer = None
-    if plan is not None and coarse is not None:
+    if world is not None and coarse is not None:
         with timer.stage("stitch"):
-            outer = OuterTerrain(stitch(coarse, hf, plan, blend_m=tcfg.lod_blend_m),
-                                 plan.bounds_xy_m)
-            summary["lod"] = lod_summary(hf, outer, tcfg)
+            outer = OuterTerrain(stitch(coarse, hf, world.plan, blend_m=tcfg.lod_blend_m),
+                                 world.plan.bounds_xy_m)
+            tiling = world.tiling
+            summary["lod"] = lod_summary(hf, outer, tcfg, tiles=tiling.count,
+                                         tile_m=tiling.tile_cells * world.plan.coarse_post_m,
+                                         detail_rms_m=world.detail.rms_m)
 
     # --- rocks stage (issue: rocks) -------------------------------------------------------
     rocks = None
@@ -300,10 +162,15 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
             rcfg = config.rocks
             rock_prototypes = make_prototypes(rcfg, rng=stage_rng(seed, "rock_shapes"))
             crater_table = craters if craters is not None else CraterTable.empty()
-            rocks = place_rocks(hf, crater_table, rcfg, rng=stage_rng(seed, "rocks"))
-            rocks = clear_rocks(rocks, placed) if placed else rocks
-            if outer is not None:
-                rocks = _outer_rocks(rocks, outer, crater_table, rcfg, seed)
+            if world is not None and outer is not None:
+                from marsscene.pipeline_lod import focus_rocks, outer_rocks
+
+                rocks = focus_rocks(hf, world.tiling, crater_table, rcfg, seed)
+                rocks = clear_rocks(rocks, placed) if placed else rocks
+                rocks = outer_rocks(rocks, outer, crater_table, rcfg, seed)
+            else:
+                rocks = place_rocks(hf, crater_table, rcfg, rng=stage_rng(seed, "rocks"))
+                rocks = clear_rocks(rocks, placed) if placed else rocks
             models.append(ModelRef("rocks", "Golombek-Rapp rock size-frequency F_k(D) = "
                                    "k exp(-q(k) D), q = 1.79 + 0.152/k", GOLOMBEK_CITATION))
             if rcfg.placement == "ejecta":

@@ -13,7 +13,7 @@ import numpy as np
 from marsscene._validate import plain
 from marsscene.errors import ConfigError
 
-__all__ = ["STAGE_IDS", "as_generator", "stage_rng"]
+__all__ = ["STAGE_IDS", "as_generator", "stage_key", "stage_rng", "tile_rng"]
 
 #: Stage name -> spawn key. Append new stages; never renumber existing ones.
 STAGE_IDS: dict[str, int] = {
@@ -29,7 +29,9 @@ STAGE_IDS: dict[str, int] = {
     "terrain_focus": 9,
     "craters_focus": 10,
     "rocks_outer": 11,
-    "albedo": 12,
+    "rocks_tile": 12,
+    "terrain_detail_lod": 13,
+    "albedo": 14,
 }
 
 
@@ -61,6 +63,19 @@ def stage_rng(seed: int, stage: str) -> np.random.Generator:
     except KeyError:
         raise ConfigError(f"unknown stage {stage!r}; known: {sorted(STAGE_IDS)}") from None
     return np.random.default_rng(np.random.SeedSequence(_check_seed(seed), spawn_key=(stage_id,)))
+
+
+def tile_rng(seed: int, stage: str, row: int, col: int) -> np.random.Generator:
+    """The generator of one tile of a stage: ``SeedSequence(seed, spawn_key=(stage_id, row,
+    col))``, independent of every other tile's and of the stage's own stream."""
+    key = (STAGE_IDS[stage], int(row), int(col))
+    return np.random.default_rng(np.random.SeedSequence(_check_seed(seed), spawn_key=key))
+
+
+def stage_key(seed: int, stage: str) -> int:
+    """A 64-bit seed word of a stage, for pointwise (hash-based) noise."""
+    ss = np.random.SeedSequence(_check_seed(seed), spawn_key=(STAGE_IDS[stage],))
+    return int(ss.generate_state(1, dtype=np.uint64)[0])
 
 
 def as_generator(rng: np.random.Generator | int) -> np.random.Generator:

@@ -17,7 +17,8 @@ log = logging.getLogger("marsscene")
 _FORMATS = ("usda", "usdc", "usdz", "mjcf")
 
 
-def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[str, ...]) -> Any:
+def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[str, ...],
+                rock_catalogue: str | None = None) -> Any:
     terrain = cfg.terrain
     if dem is not None and procedural:
         raise click.UsageError("--dem and --procedural are mutually exclusive")
@@ -34,6 +35,8 @@ def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[
         export = dataclasses.replace(
             export, formats=tuple(kinds), usd_format=usd[0] if usd else export.usd_format
         )
+    if rock_catalogue is not None:
+        export = dataclasses.replace(export, rock_catalogue=rock_catalogue)
     return cfg.replace(terrain=terrain, export=export)
 
 
@@ -49,6 +52,9 @@ def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[
 @click.option("--format", "formats", type=click.Choice(_FORMATS), multiple=True,
               help="Output(s); repeatable. Default: usda and mjcf.")
 @click.option("--procedural", is_flag=True, help="Synthesise terrain instead of reading a DEM.")
+@click.option("--rock-catalogue", type=click.Choice(["csv", "parquet", "both"]), default=None,
+              help="Rock catalogue file(s): rocks.csv, rocks.parquet (needs pyarrow) or both. "
+                   "Default: config's [export] rock_catalogue, else csv.")
 @options_assets.options
 @options_dem.options
 @options_lighting.options
@@ -59,6 +65,7 @@ def build(
     out_dir: Path,
     formats: tuple[str, ...],
     procedural: bool,
+    rock_catalogue: str | None,
     **stage_options: Any,
 ) -> None:
     """Build a scene and write OUT/scene.usda, OUT/mjcf/scene.xml and OUT/manifest.json.
@@ -68,21 +75,24 @@ def build(
       marsscene build --seed 7 --out scenes/demo
       marsscene build --dem jezero.img --seed 7
       marsscene build --procedural --format usdc --format mjcf
+      marsscene build --procedural --rock-catalogue parquet
       marsscene build --preset main-crater --seed 7 --out scenes/crater
       marsscene build --preset mars-base --asset habitat.glb --asset-xy 120 -40
     """
     from marsscene import SceneConfig, build_scene, write_scene
-    from marsscene.export import check_output_dir
+    from marsscene.export import check_export_dependencies, check_output_dir
 
     with user_errors():
         check_output_dir(out_dir)
         preset = stage_options.pop("preset")
         cfg = (SceneConfig.from_toml(config_path, preset=preset) if config_path
                else SceneConfig.from_dict({"preset": preset}))
-        cfg = _apply_core(cfg, dem=dem, procedural=procedural, formats=formats)
+        cfg = _apply_core(cfg, dem=dem, procedural=procedural, formats=formats,
+                          rock_catalogue=rock_catalogue)
         cfg = options_dem.apply(cfg, stage_options)
         cfg = options_lighting.apply(cfg, stage_options)
         cfg = options_assets.apply(cfg, stage_options)
+        check_export_dependencies(cfg.export)
         use_seed = seed if seed is not None else (cfg.seed if cfg.seed is not None else 0)
         scene = build_scene(cfg, seed=use_seed)
         log.info("[export] writing %s", ", ".join(cfg.export.formats))

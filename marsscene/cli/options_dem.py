@@ -5,8 +5,8 @@
 for a centred crop), output post spacing, vertical scale, elevation band and resampling. Each
 maps onto the ``[terrain]`` key of the same name (``crop_lonlat``, ``size_m``, ``crop_px``,
 ``post_m``, ``z_scale``, ``band``, ``ortho_path``, ``resampling``), plus the level-of-detail
-keys ``lod``, ``focus_xy_m``, ``focus_size_m``, ``focus_post_m`` (``--focus-xy`` and
-``--focus-size-m`` imply ``--lod``).
+keys ``lod``, ``focus_xy_m``, ``focus_size_m``, ``focus_post_m``, ``tile_m`` (``--focus-xy``,
+``--focus-size-m`` and ``--tile-m`` imply ``--lod``).
 """
 
 from __future__ import annotations
@@ -44,14 +44,17 @@ _OPTIONS = compose(
     click.option("--band", "band", type=click.IntRange(min=1), default=None,
                  help="Elevation band of a multi-band DEM (1-based)."),
     click.option("--lod/--no-lod", "lod", default=None, help="Two-level terrain: full "
-                 "resolution (--focus-post-m) over a focus square, --post-m outside "
-                 "(procedural terrain)."),
+                 "resolution (--focus-post-m) over a focus square, --post-m (with --dem: the "
+                 "DEM's posts) outside."),
     click.option("--focus-xy", "focus_xy_m", type=(float, float), default=None, metavar="X Y",
                  help="Centre of the full-resolution focus square (m); implies --lod."),
     click.option("--focus-size-m", "focus_size_m", type=click.FloatRange(min=0, min_open=True),
                  default=None, help="Side of the focus square (m, default 1000); implies --lod."),
     click.option("--focus-post-m", "focus_post_m", type=click.FloatRange(min=0, min_open=True),
                  default=None, help="Post spacing inside the focus square (m, default 0.25)."),
+    click.option("--tile-m", "tile_m", type=click.FloatRange(min=0, min_open=True),
+                 default=None, help="Side of a focus tile, built independently (m, default "
+                 "500); implies --lod."),
     click.option("--resampling", "resampling", type=click.Choice(["bilinear", "cubic", "area"]),
                  default=None, help="DEM resampling (default: area when coarsening)."),
 )
@@ -72,12 +75,13 @@ def apply(cfg: Any, values: dict[str, Any]) -> Any:
         if values.get(key) is not None:
             changes[key] = tuple(values[key])
     for key in ("post_m", "z_scale", "band", "resampling", "lod", "focus_size_m",
-                "focus_post_m"):
+                "focus_post_m", "tile_m"):
         if values.get(key) is not None:
             changes[key] = values[key]
     if values.get("focus_xy_m") is not None:
         changes["focus_xy_m"] = tuple(values["focus_xy_m"])
-    if values.get("lod") is None and ("focus_xy_m" in changes or "focus_size_m" in changes):
+    if values.get("lod") is None and any(k in changes for k in ("focus_xy_m", "focus_size_m",
+                                                                  "tile_m")):
         changes["lod"] = True
     if not changes:
         return cfg

@@ -41,10 +41,28 @@ _BATCH_POSTS = 1_000_000
 _LOWPASS_RADII = 0.2
 
 
-def _families(profile_kwargs: dict[str, float | str] | None) -> dict[int, ProfileFamily]:
+def _families(profile_kwargs: dict[str, float | str] | None,
+              used: np.ndarray) -> dict[int, ProfileFamily]:
+    """The profile families of the profile ids in ``used`` only (tabulating one costs ~0.15 s);
+    called with keywords in :meth:`CraterConfig.profile_kwargs` order, so the family the
+    population sampler already made comes from ``profile_family``'s cache."""
     kw = dict(profile_kwargs or {})
     kw.pop("model", None)
-    return {i: profile_family(name, **kw) for i, name in enumerate(PROFILE_MODELS)}
+    return {int(i): profile_family(model=PROFILE_MODELS[int(i)], **kw)
+            for i in np.unique(used)}
+
+
+def _edge_padded(z: np.ndarray, pad: int) -> np.ndarray:
+    """``np.pad(z.astype(float64), pad, mode="edge")`` without the intermediate float64 copy
+    (one 16 M-post float64 array less on a 1 km scene)."""
+    rows, cols = z.shape
+    out = np.zeros((rows + 2 * pad, cols + 2 * pad), dtype=np.float64)
+    out[pad:pad + rows, pad:pad + cols] = z
+    out[:pad, pad:pad + cols] = z[0]
+    out[pad + rows:, pad:pad + cols] = z[-1]
+    out[:, :pad] = out[:, pad:pad + 1]
+    out[:, pad + cols:] = out[:, pad + cols - 1:pad + cols]
+    return out
 
 
 def _waves(r0: np.ndarray, r1: np.ndarray, c0: np.ndarray, c1: np.ndarray,
@@ -96,7 +114,7 @@ def stamp_craters(
     """
     if len(craters) == 0:
         return heightfield
-    fams = _families(profile_kwargs)
+    fams = _families(profile_kwargs, craters.profile)
     p = _Params(craters, fams)
     rows, cols = heightfield.shape
     ox, oy = heightfield.origin_xy_m
@@ -128,7 +146,7 @@ def stamp_craters(
     wave = _waves(br0[order] + _PAD, br1[order] + _PAD, bc0[order] + _PAD, bc1[order] + _PAD,
                   (rows + 2 * _PAD, cols + 2 * _PAD))
     # edge-replicated padding: the interior low-pass never sees artificial values
-    zpad = np.pad(heightfield.z_m.astype(np.float64), _PAD, mode="edge")
+    zpad = _edge_padded(heightfield.z_m, _PAD)
     xs, ys = heightfield.grid_xy()
     xpad = ox + (np.arange(cols + 2 * _PAD) - _PAD) * cs
     ypad = oy + (np.arange(rows + 2 * _PAD) - _PAD) * cs
@@ -162,10 +180,11 @@ class _Params:
     def __init__(self, craters: CraterTable, fams: dict[int, ProfileFamily]) -> None:
         n = len(craters)
         d = craters.diameter_m
-        self.step = fams[0].rho[1] - fams[0].rho[0]
-        n_s = fams[0].s.size
+        first = next(iter(fams.values()))  # all families share the rho step and s grid
+        self.step = first.rho[1] - first.rho[0]
+        n_s = first.s.size
         n_rho = max(f.rho.size for f in fams.values()) + 2
-        self.table = np.zeros((len(fams), n_s, n_rho))
+        self.table = np.zeros((len(PROFILE_MODELS), n_s, n_rho))
         self.i0 = np.zeros(n, dtype=np.int64)
         self.f = np.zeros(n)
         self.reach = np.zeros(n)

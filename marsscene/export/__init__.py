@@ -15,7 +15,7 @@ from typing import Any
 from marsscene._atomic import probe_writable, replacing_dir
 from marsscene.errors import ExportError, MarsSceneError
 
-__all__ = ["WRITERS", "check_output_dir", "write_scene"]
+__all__ = ["WRITERS", "check_export_dependencies", "check_output_dir", "write_scene"]
 
 
 def _write_usd(scene: Any, out: Path) -> list[Path]:
@@ -58,6 +58,15 @@ def check_output_dir(out_dir: str | os.PathLike[str]) -> Path:
     return final
 
 
+def check_export_dependencies(export: Any) -> None:
+    """Fail early (before a long build) when an optional writer the ``[export]`` config asks
+    for is not installed (pyarrow for a Parquet rock catalogue)."""
+    if export.rock_catalogue in ("parquet", "both"):
+        from marsscene.export.catalog_parquet import require_pyarrow
+
+        require_pyarrow()
+
+
 def write_scene(
     scene: Any,
     out_dir: str | os.PathLike[str],
@@ -86,6 +95,7 @@ def write_scene(
     unknown = [f for f in fmts if f not in WRITERS]
     if unknown:
         raise ExportError(f"unknown export format(s) {unknown}; known: {sorted(WRITERS)}")
+    check_export_dependencies(scene.config.export)
     final = Path(out_dir).resolve()
     written: dict[str, list[Path]] = {}
     try:

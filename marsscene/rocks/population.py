@@ -249,18 +249,21 @@ def orientations(
     surface normal (gradient ``gx, gy``) plus ``jitter_rad`` (N, 2), clamped to
     ``max_tilt_rad``.
     """
-    # tilt vector: direction of the up axis' horizontal lean, magnitude = tilt angle
-    normal_tilt = np.arctan(np.hypot(gx, gy))
-    az = np.arctan2(-gy, -gx)  # the normal leans downhill
-    tx = normal_tilt * np.cos(az) + jitter_rad[:, 0]
-    ty = normal_tilt * np.sin(az) + jitter_rad[:, 1]
+    # tilt vector: direction of the up axis' horizontal lean, magnitude = tilt angle; the
+    # normal leans downhill, along -(gx, gy), by atan|g| (direction cosines by division, not
+    # by atan2 + cos/sin: 1e6 rocks)
+    slope = np.hypot(gx, gy)
+    lean = np.divide(np.arctan(slope), slope, out=np.ones_like(slope), where=slope > 0)
+    tx = -gx * lean + jitter_rad[:, 0]
+    ty = -gy * lean + jitter_rad[:, 1]
     tilt = np.hypot(tx, ty)
-    phi = np.arctan2(ty, tx)
-    tilt = np.minimum(tilt, max_tilt_rad)
-    half = 0.5 * tilt
+    cos_phi = np.divide(tx, tilt, out=np.ones_like(tilt), where=tilt > 0)
+    sin_phi = np.divide(ty, tilt, out=np.zeros_like(tilt), where=tilt > 0)
+    half = 0.5 * np.minimum(tilt, max_tilt_rad)
+    sin_half = np.sin(half)
     # rotation taking +z to (sin t cos p, sin t sin p, cos t): axis (-sin p, cos p, 0)
-    qt = np.column_stack([np.cos(half), -np.sin(phi) * np.sin(half),
-                          np.cos(phi) * np.sin(half), np.zeros_like(half)])
+    qt = np.column_stack([np.cos(half), -sin_phi * sin_half, cos_phi * sin_half,
+                          np.zeros_like(half)])
     hy = 0.5 * yaw_rad
     qy = np.column_stack([np.cos(hy), np.zeros_like(hy), np.zeros_like(hy), np.sin(hy)])
     return _qmul(qt, qy)

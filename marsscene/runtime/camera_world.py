@@ -44,10 +44,26 @@ _VARIANTS = 8
 PEBBLE_MAX_M = 0.15
 
 
+def _read_parquet_catalog(path: Path) -> NDArray[np.float64]:
+    from marsscene.export.catalog_parquet import require_pyarrow
+
+    require_pyarrow()
+    import pyarrow.parquet as pq
+
+    t = pq.read_table(str(path))
+    col = {name: t.column(name).to_numpy().astype(np.float64) for name in t.column_names}
+    keep = col["in_mjcf"] == 0
+    return np.column_stack([col[k][keep] for k in ("id", "x_m", "y_m", "z_m", "diameter_m")]
+                           + [(col["height_m"] + col["burial_m"])[keep]]).reshape(-1, 6)
+
+
 def read_rock_catalog(scene_dir: Path) -> NDArray[np.float64]:
-    """``rocks.csv`` rows not already MJCF geoms: (N, 5) id, x, y, z, d, h+burial (m)."""
+    """``rocks.csv`` (else ``rocks.parquet``) rows not already MJCF geoms: (N, 6) id, x, y,
+    z, d, h+burial (m)."""
     path = scene_dir / "rocks.csv"
     if not path.is_file():
+        if (scene_dir / "rocks.parquet").is_file():
+            return _read_parquet_catalog(scene_dir / "rocks.parquet")
         return np.zeros((0, 6))
     with open(path, encoding="utf-8") as fh:
         header = next(csv.reader(fh))

@@ -11,6 +11,7 @@ resampled every ``spacing_m``.
 from __future__ import annotations
 
 import itertools
+import logging
 import math
 import warnings
 from dataclasses import dataclass
@@ -18,13 +19,20 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
-from scipy.ndimage import binary_dilation, gaussian_filter1d, maximum_filter
+from scipy.ndimage import (
+    binary_dilation,
+    distance_transform_edt,
+    gaussian_filter1d,
+    maximum_filter,
+)
 from scipy.sparse.csgraph import dijkstra
 
 from marsscene._validate import check_range
 from marsscene.errors import MarsSceneWarning, RuntimeSimError
 from marsscene.runtime.tum import Trajectory
 from marsscene.terrain.heightfield import Heightfield
+
+log = logging.getLogger("marsscene")
 
 __all__ = ["Obstacles", "Route", "RouteWarning", "author_route", "cross_track_m", "resample_xy"]
 
@@ -178,6 +186,21 @@ def _clear(blocked: NDArray[np.bool_], a: NDArray[np.float64], b: NDArray[np.flo
     return not blocked[rc[:, 0], rc[:, 1]].any()
 
 
+def _escape(grid: NDArray[np.bool_], start: tuple[int, int],
+            nearest_free: NDArray[np.intp]) -> bool:
+    """Open the straight cells from ``start`` to the nearest free cell of ``grid`` (in place):
+    a waypoint inside an obstacle's clearance or an inflated steep patch leaves it by the
+    shortest way. True if something was opened."""
+    r, c = start
+    tr, tc = int(nearest_free[0][r, c]), int(nearest_free[1][r, c])
+    if (tr, tc) == (r, c):
+        return False
+    n = max(abs(tr - r), abs(tc - c)) + 1
+    grid[np.rint(np.linspace(r, tr, n)).astype(int), np.rint(np.linspace(c, tc, n)).astype(int)] \
+        = False
+    return True
+
+
 def _shortcut(blocked: NDArray[np.bool_], nodes: NDArray[np.int64]) -> NDArray[np.int64]:
     """Line-of-sight string pulling of a grid path (removes 8-connected zig-zags)."""
     p = nodes.astype(np.float64)
@@ -253,6 +276,8 @@ def author_route(
         hf, cell_m, max_slope_deg, obstacles, max_obstacle_height_m, clearance_m, inflation_m
     )
     rc = lambda p: (round((p[1] - oy) / cell), round((p[0] - ox) / cell))  # noqa: E731
+    nearest_free = distance_transform_edt(plan, return_distances=False, return_indices=True)
+    escaped = np.zeros_like(plan)  # cells opened to leave a blocked waypoint
     pieces = [wp[:1]]
     for a, b in itertools.pairwise(wp):
         leg = resample_xy(np.vstack([a, b]), cell / 2)
@@ -262,7 +287,11 @@ def author_route(
             pieces.append(leg[1:])
             continue
         grid = plan.copy()
-        grid[rc(a)] = grid[rc(b)] = False
+        for end in (a, b):
+            if _escape(grid, rc(end), nearest_free):
+                log.info("route: waypoint (%.1f, %.1f) m lies in a blocked area; the route "
+                         "leaves it by the shortest way", end[0], end[1])
+        escaped |= plan & ~grid
         nodes = _grid_path(grid, rc(a), rc(b))
         if nodes is not None:
             nodes = _shortcut(grid, nodes)
@@ -284,9 +313,12 @@ def author_route(
     xy = resample_xy(dense, spacing_m)
     r = np.clip(np.round((xy[:, 1] - oy) / cell).astype(int), 0, blocked.shape[0] - 1)
     c = np.clip(np.round((xy[:, 0] - ox) / cell).astype(int), 0, blocked.shape[1] - 1)
-    if blocked[r, c].any():
+    if escaped.any():  # smoothing may round the corner where the escape meets the detour
+        escaped = binary_dilation(escaped, iterations=max(1, math.ceil(smooth_m / cell)))
+    touched = blocked[r, c] & ~escaped[r, c]
+    if touched.any():
         warnings.warn(
-            f"the smoothed route touches {int(blocked[r, c].sum())} blocked cells; "
+            f"the smoothed route touches {int(touched.sum())} blocked cells; "
             "reduce smooth_m or add waypoints",
             RouteWarning,
             stacklevel=2,

@@ -72,8 +72,8 @@ class TerrainConfig:
     """Largest side of the draped orthoimage texture (in pixels)."""
     lod: bool = False
     """Two-level terrain (:mod:`marsscene.terrain.lod`): ``focus_post_m`` posts over the focus
-    square, ``post_m`` posts over the whole footprint outside it. Procedural terrain only: with
-    a DEM it is ignored (one heightfield at ``post_m``; noted in the manifest)."""
+    square, ``post_m`` posts over the whole footprint outside it (with a DEM: the DEM's posts,
+    snapped to a whole multiple of ``focus_post_m``)."""
     focus_xy_m: tuple[float, float] | None = None
     """Centre of the full-resolution focus square (in m, scene frame); default the origin."""
     focus_size_m: float = 1000.0
@@ -82,6 +82,9 @@ class TerrainConfig:
     """Post spacing inside the focus square (in m); ``post_m`` must be a whole multiple."""
     lod_blend_m: float = 100.0
     """Width of the outer band over which the coarse terrain is bent onto the focus border."""
+    tile_m: float = 500.0
+    """Side of a focus tile (in m, snapped to whole ``post_m`` cells); each tile's terrain and
+    rocks are built independently of the others (:mod:`marsscene.terrain.tiles`)."""
 
     def __post_init__(self) -> None:
         check_choice("terrain.source", self.source, TERRAIN_SOURCES)
@@ -120,6 +123,7 @@ class TerrainConfig:
         check_range("terrain.focus_size_m", self.focus_size_m, 0.0, 20_000.0, lo_open=True)
         check_range("terrain.focus_post_m", self.focus_post_m, 0.0, 100.0, lo_open=True)
         check_range("terrain.lod_blend_m", self.lod_blend_m, 0.0, 10_000.0)
+        check_range("terrain.tile_m", self.tile_m, 0.0, 20_000.0, lo_open=True)
 
     def _check_dem_keys(self) -> None:
         crops = [k for k in ("crop_px", "crop_bounds_m", "crop_lonlat") if getattr(self, k)]

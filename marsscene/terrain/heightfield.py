@@ -156,11 +156,40 @@ class Heightfield:
 
     def grid_normals(self) -> NDArray[np.float32]:
         """Unit normals at every post, shape ``(rows, cols, 3)``."""
-        gx, gy = self.grid_gradient()
-        inv = 1.0 / np.sqrt(gx * gx + gy * gy + 1.0)  # no (rows, cols, 3) float64 temporaries
-        n = np.zeros((*gx.shape, 3), dtype=np.float32)
-        np.multiply(gx, -inv, out=n[..., 0], casting="same_kind")
-        np.multiply(gy, -inv, out=n[..., 1], casting="same_kind")
+        rows, cols = self.shape
+        return self.window_normals((0, rows), (0, cols))
+
+    def window_normals(self, rows: tuple[int, int],
+                       cols: tuple[int, int]) -> NDArray[np.float32]:
+        """Unit normals of the posts ``[r0, r1) x [c0, c1)``, shape ``(r1 - r0, c1 - c0, 3)``;
+        equal to that window of :meth:`grid_normals` (the gradient reads one post beyond the
+        window where there is one), so a mesh can be made tile by tile.
+
+        Computed in float32 (the output precision) from the float32 posts: differences of
+        neighbouring posts lose nothing that a float32 normal keeps.
+        """
+        (r0, r1), (c0, c1) = rows, cols
+        # -dz/dx, -dz/dy: central differences, one-sided on the grid's edge posts (as
+        # np.gradient); contiguous float32 arrays, interleaved into (x, y, z) only at the end
+        slopes = []
+        for axis, lo, hi, size in ((1, c0, c1, self.shape[1]), (0, r0, r1, self.shape[0])):
+            j = np.arange(lo, hi)
+            fwd, bwd = np.minimum(j + 1, size - 1), np.maximum(j - 1, 0)
+            a, b = int(bwd[0]), int(fwd[-1]) + 1  # the posts read along this axis
+            z = self.z_m[r0:r1, a:b] if axis else self.z_m[a:b, c0:c1]
+            diff = np.take(z, bwd - a, axis=axis) - np.take(z, fwd - a, axis=axis)
+            step = ((fwd - bwd) * np.float32(self.cell_size_m)).astype(np.float32)
+            diff /= step[None, :] if axis else step[:, None]
+            slopes.append(diff)
+        ngx, ngy = slopes
+        inv = np.square(ngx)
+        inv += np.square(ngy)
+        inv += 1.0
+        np.sqrt(inv, out=inv)
+        np.reciprocal(inv, out=inv)  # 1 / |(-gx, -gy, 1)|
+        n = np.zeros((r1 - r0, c1 - c0, 3), dtype=np.float32)
+        np.multiply(ngx, inv, out=n[..., 0])
+        np.multiply(ngy, inv, out=n[..., 1])
         n[..., 2] = inv
         return n
 

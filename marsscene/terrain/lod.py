@@ -5,9 +5,10 @@ Level 0 is the **focus square** (``terrain.focus_size_m`` around ``terrain.focus
 ``terrain.post_m``. The focus square is snapped to the coarse posts, so every coarse post on or
 inside it coincides with a fine post.
 
-* **Independence.** The focus terrain draws from its own streams (``terrain_focus``,
-  ``craters_focus``) over its own square, so it does not depend on the outer extent: the same
-  focus in a 2 km or a 3.6 km world has identical heights (tested).
+* **Independence.** The focus terrain is built in tiles (:mod:`marsscene.terrain.tiles`): a
+  cubic interpolation of the coarse grid (which carries every wavelength it resolves) plus
+  pointwise fractal detail and the scene's craters, so a tile built alone equals the same tile
+  of a full build (tested) and the focus agrees with the coarse terrain around it.
 * **Seams.** :func:`taper_detail` fades the fine terrain's sub-coarse-post detail to 0 over
   :data:`TAPER_POSTS` coarse posts inside the focus border, so the fine border posts lie on the
   straight segments between coarse border posts. :func:`stitch` then sets the coarse posts on and
@@ -30,11 +31,10 @@ from numpy.typing import NDArray
 
 from marsscene.errors import ConfigError
 from marsscene.terrain.heightfield import Heightfield
-from marsscene.terrain.synth import synthesize
 
 __all__ = ["TAPER_POSTS", "FocusPlan", "OuterTerrain", "concat_tables", "lod_summary",
            "merge_craters",
-           "plan_focus", "reaches_box", "stitch", "synthesize_focus", "taper_detail"]
+           "plan_focus", "reaches_box", "stitch", "taper_detail"]
 
 #: Width of the sub-post detail taper inside the focus border, in coarse posts.
 TAPER_POSTS = 8
@@ -96,15 +96,6 @@ def plan_focus(coarse: Heightfield, *, center_xy_m: tuple[float, float] | None, 
     return FocusPlan((x0, y0, x0 + side, y0 + side), fine_post_m, pc, row0, col0, cells)
 
 
-def synthesize_focus(plan: FocusPlan, *, hurst: float, rms_height_m: float,
-                     rms_slope_deg: float | None, rng: np.random.Generator) -> Heightfield:
-    """Self-affine terrain over the focus square at ``plan.fine_post_m`` (its own stream)."""
-    side = plan.cells * plan.coarse_post_m
-    hf = synthesize((side, side), plan.fine_post_m, hurst=hurst, rms_height_m=rms_height_m,
-                    rms_slope_deg=rms_slope_deg, rng=rng)
-    return Heightfield(hf.z_m, plan.fine_post_m, plan.bounds_xy_m[:2])
-
-
 def _smoothstep(t: NDArray[np.float64]) -> NDArray[np.float64]:
     t = np.clip(t, 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
@@ -125,15 +116,21 @@ def coarse_surface(fine: Heightfield, k: int) -> NDArray[np.float32]:
     return np.asarray(rows[:, c0] * (1 - fc) + rows[:, c0 + 1] * fc, dtype=np.float32)
 
 
-def taper_detail(fine: Heightfield, plan: FocusPlan) -> Heightfield:
-    """Fade the detail between coarse posts to 0 at the focus border (coarse posts unchanged)."""
+def taper_detail(fine: Heightfield, plan: FocusPlan, *,
+                 origin_posts: tuple[int, int] = (0, 0)) -> Heightfield:
+    """Fade the detail between coarse posts to 0 at the focus border (coarse posts unchanged).
+
+    ``fine`` is the whole focus grid or a window of it whose first post is focus post
+    ``origin_posts`` (a whole number of coarse cells from the focus corner).
+    """
     k = plan.ratio
     lin = coarse_surface(fine, k)
     rows, cols = fine.shape
-    r = np.arange(rows)
-    c = np.arange(cols)
-    d_r = np.minimum(r, rows - 1 - r).astype(np.float64)
-    d_c = np.minimum(c, cols - 1 - c).astype(np.float64)
+    n = plan.cells * k + 1  # fine posts per focus side
+    r = origin_posts[0] + np.arange(rows)
+    c = origin_posts[1] + np.arange(cols)
+    d_r = np.minimum(r, n - 1 - r).astype(np.float64)
+    d_c = np.minimum(c, n - 1 - c).astype(np.float64)
     span = TAPER_POSTS * k
     w_r = _smoothstep(d_r / span).astype(np.float32)
     w_c = _smoothstep(d_c / span).astype(np.float32)
@@ -175,19 +172,19 @@ def reaches_box(centers_xy_m: NDArray[np.float64], reach_m: NDArray[np.float64],
     return np.asarray(ddx**2 + ddy**2 <= reach_m**2)
 
 
-def concat_tables(a: Any, b: Any) -> Any:
-    """Row-concatenate two column tables of the same dataclass type (``None`` columns stay
-    ``None`` only when both are)."""
+def concat_tables(*tables: Any) -> Any:
+    """Row-concatenate column tables of the same dataclass type (``None`` columns stay
+    ``None`` only when every table's is)."""
+    first = tables[0]
     out: dict[str, Any] = {}
-    for f in dataclasses.fields(a):
-        va, vb = getattr(a, f.name), getattr(b, f.name)
-        if va is None and vb is None:
+    for f in dataclasses.fields(first):
+        cols = [getattr(t, f.name) for t in tables]
+        if all(v is None for v in cols):
             out[f.name] = None
             continue
-        va = va if va is not None else _fill(f.name, len(a))
-        vb = vb if vb is not None else _fill(f.name, len(b))
-        out[f.name] = np.concatenate([np.asarray(va), np.asarray(vb)])
-    return type(a)(**out)
+        out[f.name] = np.concatenate([np.asarray(v) if v is not None else _fill(f.name, len(t))
+                                      for v, t in zip(cols, tables, strict=True)])
+    return type(first)(**out)
 
 
 def _fill(name: str, n: int) -> NDArray[np.float64]:
@@ -209,10 +206,14 @@ def merge_craters(focus: Any, outer: Any, bounds_xy_m: tuple[float, float, float
     return table.take(order)
 
 
-def lod_summary(fine: Heightfield, outer: OuterTerrain, tcfg: Any) -> dict[str, Any]:
-    """Manifest summary of a level-of-detail terrain."""
+def lod_summary(fine: Heightfield, outer: OuterTerrain, tcfg: Any, *, tiles: int, tile_m: float,
+                detail_rms_m: float) -> dict[str, Any]:
+    """Manifest summary of a level-of-detail terrain (``tiles``: focus tiles per side)."""
     coarse = outer.heightfield
     return {
+        "focus_tiles": [tiles, tiles],
+        "focus_tile_m": round(tile_m, 6),
+        "focus_detail_rms_m": round(detail_rms_m, 6),
         "levels": 2,
         "footprint_bounds_xy_m": [round(v, 6) for v in coarse.bounds_xy_m],
         "focus_bounds_xy_m": [round(v, 6) for v in outer.focus_bounds_xy_m],

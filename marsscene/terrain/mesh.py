@@ -6,6 +6,7 @@ Tiles share their border posts so adjacent tiles meet without cracks. Each tile 
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,7 +14,13 @@ from numpy.typing import NDArray
 
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["TerrainTile", "grid_faces", "heightfield_tiles", "tile_ranges"]
+__all__ = [
+    "TerrainTile",
+    "grid_faces",
+    "heightfield_tiles",
+    "iter_heightfield_tiles",
+    "tile_ranges",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,14 +66,21 @@ def grid_faces(rows: int, cols: int) -> NDArray[np.int32]:
     return np.stack([tri_a, tri_b], axis=1).reshape(-1, 3).astype(np.int32)
 
 
-def heightfield_tiles(hf: Heightfield, *, max_tile_posts: int = 513) -> list[TerrainTile]:
-    """Mesh a heightfield as tiles of at most ``max_tile_posts**2`` vertices each."""
+def iter_heightfield_tiles(hf: Heightfield, *,
+                           max_tile_posts: int = 513) -> Iterator[TerrainTile]:
+    """Mesh a heightfield as tiles of at most ``max_tile_posts**2`` vertices each, one tile at
+    a time (south-west first), so a caller that converts and drops each tile holds one tile's
+    arrays, not the whole mesh twice.
+
+    Arrays are filled straight into float32 buffers (no float64 meshgrid temporaries, no
+    whole-grid normal array: each tile's normals come from its window); tiles of the same shape
+    share one read-only ``face_vertex_indices`` array.
+    """
     rows, cols = hf.shape
     xs, ys = hf.grid_xy()
-    normals = hf.grid_normals()
+    x32, y32 = xs.astype(np.float32), ys.astype(np.float32)
     s_all = ((xs - xs[0]) / (xs[-1] - xs[0])).astype(np.float32)
     t_all = ((ys - ys[0]) / (ys[-1] - ys[0])).astype(np.float32)
-    tiles = []
     faces: dict[tuple[int, int], NDArray[np.int32]] = {}  # most tiles share one shape
     for ti, (r0, r1) in enumerate(tile_ranges(rows, max_tile_posts)):
         for tj, (c0, c1) in enumerate(tile_ranges(cols, max_tile_posts)):
@@ -74,16 +88,22 @@ def heightfield_tiles(hf: Heightfield, *, max_tile_posts: int = 513) -> list[Ter
             if (nr, nc) not in faces:
                 faces[nr, nc] = grid_faces(nr, nc)
                 faces[nr, nc].flags.writeable = False
-            gx, gy = np.meshgrid(xs[c0:c1], ys[r0:r1])
-            pts = np.stack([gx, gy, hf.z_m[r0:r1, c0:c1]], axis=-1).reshape(-1, 3)
-            ss, tt = np.meshgrid(s_all[c0:c1], t_all[r0:r1])
-            tiles.append(
-                TerrainTile(
-                    name=f"tile_{ti}_{tj}",
-                    points_m=pts.astype(np.float32),
-                    normals=normals[r0:r1, c0:c1].reshape(-1, 3),
-                    st=np.stack([ss, tt], axis=-1).reshape(-1, 2),
-                    face_vertex_indices=faces[nr, nc],
-                )
+            pts = np.zeros((nr, nc, 3), np.float32)
+            pts[..., 0] = x32[None, c0:c1]
+            pts[..., 1] = y32[r0:r1, None]
+            pts[..., 2] = hf.z_m[r0:r1, c0:c1]
+            st = np.zeros((nr, nc, 2), np.float32)
+            st[..., 0] = s_all[None, c0:c1]
+            st[..., 1] = t_all[r0:r1, None]
+            yield TerrainTile(
+                name=f"tile_{ti}_{tj}",
+                points_m=pts.reshape(-1, 3),
+                normals=hf.window_normals((r0, r1), (c0, c1)).reshape(-1, 3),
+                st=st.reshape(-1, 2),
+                face_vertex_indices=faces[nr, nc],
             )
-    return tiles
+
+
+def heightfield_tiles(hf: Heightfield, *, max_tile_posts: int = 513) -> list[TerrainTile]:
+    """Mesh a heightfield as tiles of at most ``max_tile_posts**2`` vertices each."""
+    return list(iter_heightfield_tiles(hf, max_tile_posts=max_tile_posts))

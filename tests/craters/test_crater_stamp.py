@@ -127,3 +127,24 @@ def test_elliptical_crater_is_elongated_along_azimuth() -> None:
     along_x = (out[80, :] < -0.5).sum()
     along_y = (out[:, 80] < -0.5).sum()
     assert along_x > 1.6 * along_y
+
+
+def test_only_the_profile_families_in_use_are_tabulated() -> None:
+    hf = _flat(81, 0.5)
+    profile_family.cache_clear()
+    stamp_craters(hf, _one(0.0, 0.0, 8.0))  # profile 0 only: one table, not one per model
+    assert profile_family.cache_info().currsize == 1
+    two = CraterTable(np.array([[-10.0, 0.0], [10.0, 0.0]]), [8.0, 8.0], [FLOOR * 8] * 2,
+                      [RIM * 8] * 2, [0.0, 0.0], [0, 2], [1.0, 1.0], [0.0, 0.0])
+    mixed = stamp_craters(hf, two)
+    assert profile_family.cache_info().currsize == 2  # + profile 2's table
+    left, right = mixed.z_m[:, :40], mixed.z_m[:, 41:][:, ::-1]  # mirror images if alike
+    assert np.abs(left - right).max() > 1e-3  # each crater got its own profile
+
+
+@pytest.mark.parametrize("shape", [(2, 2), (5, 7), (70, 66)])
+def test_edge_padding_equals_numpy_pad(shape: tuple[int, int]) -> None:
+    z = np.random.default_rng(3).normal(size=shape).astype(np.float32)
+    for pad in (1, 4, 64):
+        expected = np.pad(z.astype(np.float64), pad, mode="edge")
+        np.testing.assert_array_equal(stamp_mod._edge_padded(z, pad), expected)

@@ -22,7 +22,8 @@ from tests.mjcf_drop import drop_box  # noqa: E402
 #: at a test-sized post count.
 _BIG = {"terrain": {"source": "procedural", "size_m": [3600.0, 3600.0], "post_m": 8.0,
                     "lod": True, "focus_size_m": 200.0, "focus_post_m": 1.0,
-                    "landform": "crater", "landform_size_m": 1500.0, "rms_height_m": 2.0},
+                    "landform": "crater", "landform_size_m": 1500.0, "rms_height_m": 2.0,
+                    "tile_m": 100.0},
         "craters": {"d_min_m": 20.0, "d_max_m": 200.0},
         "rocks": {"d_min_m": 0.5, "outer_d_min_m": 2.0},
         "export": {"max_tile_posts": 129}}
@@ -71,6 +72,42 @@ def test_usd_holds_the_whole_footprint_as_lod_payloads(big: tuple[ms.Scene, Path
     man = json.loads((out / "manifest.json").read_text())
     assert man["summary"]["lod"]["footprint_bounds_xy_m"] == [-1800.0, -1800.0, 1800.0, 1800.0]
     assert man["summary"]["lod"]["outer_posts"] == 451 * 451
+
+
+def test_usd_rocks_are_payloads_per_focus_tile_and_outer(big: tuple[ms.Scene, Path]) -> None:
+    from pxr import Usd, UsdGeom
+
+    scene, out = big
+    assert scene.rocks is not None and scene.outer is not None
+    stage = Usd.Stage.Open(str(out / "scene.usda"))
+    group = stage.GetPrimAtPath("/World/Rocks")
+    assert Usd.ModelAPI(group).GetKind() == "group"
+    assert group.GetAttribute("marsscene:rockCount").Get() == len(scene.rocks)
+    lod = scene.provenance.extra["lod"]
+    # 200 m focus, tile_m 100 snapped to whole 8 m cells: 96 m tiles, 3 x 3
+    assert lod["focus_tiles"] == [3, 3] and lod["focus_tile_m"] == 96.0
+    names = sorted(p.GetName() for p in group.GetChildren())
+    assert names == ["outer"] + [f"tile_{r}_{c}" for r in range(3) for c in range(3)]
+    tile_m = 96.0
+    fx0, fy0 = scene.outer.focus_bounds_xy_m[:2]
+    total = 0
+    for prim in group.GetChildren():
+        assert prim.HasAuthoredPayloads() and Usd.ModelAPI(prim).GetKind() == "component"
+        inst = UsdGeom.PointInstancer(prim.GetChild("Instancer"))
+        pos = np.asarray(inst.GetPositionsAttr().Get())
+        assert len(pos) == prim.GetAttribute("marsscene:rockCount").Get() > 0
+        total += len(pos)
+        if prim.GetName() == "outer":
+            assert prim.GetAttribute(LOD_ATTR).Get() == 1
+            scale = np.asarray(inst.GetScalesAttr().Get())
+            assert float(scale[:, 0].min()) >= 2.0 - 1e-6  # outer_d_min_m: large rocks only
+            continue
+        assert prim.GetAttribute(LOD_ATTR).Get() == 0
+        row, col = map(int, prim.GetName().split("_")[1:])
+        x0, y0 = fx0 + tile_m * col, fy0 + tile_m * row
+        assert np.all((pos[:, 0] >= x0) & (pos[:, 0] <= x0 + tile_m))
+        assert np.all((pos[:, 1] >= y0) & (pos[:, 1] <= y0 + tile_m))
+    assert total == len(scene.rocks)
 
 
 @pytest.mark.parametrize("usd_format", ["usda", "usdz"])
@@ -175,3 +212,26 @@ def test_lod_outputs_are_byte_reproducible(tmp_path: Path) -> None:
     assert any("terrain_outer.bin" in str(f) for f in files)
     for rel in files:
         assert (outs[0] / rel).read_bytes() == (outs[1] / rel).read_bytes(), rel
+
+
+def test_streamed_asset_layers_equal_the_in_memory_ones(tmp_path: Path) -> None:
+    """write_usd exports each asset layer (terrain tiles, rock payloads) as soon as it is
+    authored; the files equal those of the in-memory stage exported afterwards."""
+    from marsscene.export.usd import to_stage
+
+    cfg = ms.SceneConfig.from_dict({**_GENTLE, "rocks": {"d_min_m": 0.3},
+                                    "terrain": {**_GENTLE["terrain"], "tile_m": 12.0}})
+    scene = ms.build_scene(cfg, seed=3)
+    _, kept = to_stage(scene)
+    _, streamed = to_stage(scene, stream_to=tmp_path / "streamed")
+    assert sorted(kept) == sorted(streamed) and any(r.startswith("assets/rocks/") for r in kept)
+    for rel, blob in kept.items():
+        path = streamed[rel]
+        assert path == tmp_path / "streamed" / rel and path.is_file()
+        if isinstance(blob, bytes):
+            assert path.read_bytes() == blob
+        else:
+            ref = tmp_path / "kept" / rel
+            ref.parent.mkdir(parents=True, exist_ok=True)
+            assert blob.GetRootLayer().Export(str(ref))
+            assert ref.read_bytes() == path.read_bytes()

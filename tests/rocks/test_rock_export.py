@@ -170,13 +170,29 @@ def test_rock_outputs_are_byte_reproducible(tmp_path: Path) -> None:
         assert (outs[0] / rel).read_bytes() == (outs[1] / rel).read_bytes(), rel
 
 
-def test_catalog_fixed_point_formatting() -> None:
-    from marsscene.export.catalog_rocks import _fixed
+def _formatted(values: np.ndarray, decimals: int) -> list[str]:
+    from marsscene.export.catalog_rocks import _Field, _text_rows
 
+    return _text_rows([_Field(values, decimals, "\n")], len(values)).decode().splitlines()
+
+
+def test_catalog_fixed_point_formatting() -> None:
     values = np.array([0.0, -0.00004, 1.23456, -12.5, 123.0001, -0.5, 9.99999, -40000.0001,
                        99.99999, 123456789.5])
-    text = [bytes(row[row != 0]).decode() for row in _fixed(values, 4)]
-    assert text == ["0.0000", "0.0000", "1.2346", "-12.5000", "123.0001", "-0.5000", "10.0000",
-                    "-40000.0001", "100.0000", "123456789.5000"]
-    ints = [bytes(row[row != 0]).decode() for row in _fixed(np.array([0.0, 7, 10, 9999]), 0)]
-    assert ints == ["0", "7", "10", "9999"]
+    assert _formatted(values, 4) == [
+        "0.0000", "0.0000", "1.2346", "-12.5000", "123.0001", "-0.5000", "10.0000",
+        "-40000.0001", "100.0000", "123456789.5000"]
+    assert _formatted(np.array([0.0, 7, 10, 9999]), 0) == ["0", "7", "10", "9999"]
+
+
+def test_catalog_formatting_across_chunks_matches_python() -> None:
+    from marsscene.export.catalog_rocks import _CHUNK_ROWS
+
+    rng = np.random.default_rng(4)
+    n = 2 * _CHUNK_ROWS + 123  # three chunks, the last one partial
+    values = rng.normal(0, 1, n) * 10.0 ** rng.integers(-5, 6, n)
+    text = _formatted(values, 4)
+    assert len(text) == n
+    assert text == [f"{v:.4f}".replace("-0.0000", "0.0000") for v in values]  # no signed 0
+    ints = rng.integers(0, 10**7, n).astype(np.float64)
+    assert _formatted(ints, 0) == [str(int(i)) for i in ints]

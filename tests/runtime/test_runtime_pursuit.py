@@ -92,6 +92,23 @@ def test_route_avoids_tall_rocks_only() -> None:
     assert through.length_m == pytest.approx(20.0)
 
 
+def test_route_leaves_a_waypoint_inside_a_rock_clearance_by_the_shortest_way() -> None:
+    """A start 1 m from a tall rock (inside its 1.5 m clearance + inflation) used to give
+    "no route": the start cell was opened but stayed walled in by blocked cells."""
+    hf = Heightfield.centered(np.zeros((161, 161)), 0.25)
+    rock = Obstacles(np.array([[0.0, 0.0]]), np.array([0.4]), np.array([0.8]))
+    start, goal = np.array([1.0, 0.0]), np.array([-15.0, 0.0])
+    route = author_route([start, goal], hf, obstacles=rock, max_obstacle_height_m=0.3,
+                         clearance_m=1.5)
+    xy = route.xy_m
+    np.testing.assert_allclose(xy[[0, -1]], [start, goal])
+    dist = np.hypot(*xy.T)
+    # it moves away from the rock first (never closer than the start), then goes around it
+    assert dist.min() >= 1.0 - 0.05
+    assert np.abs(xy[:, 1]).max() > 0.4 + 1.5 * 0.9
+    assert route.length_m < 30.0
+
+
 def test_route_outside_terrain_error() -> None:
     hf = Heightfield.centered(np.zeros((41, 41)), 0.25)
     with pytest.raises(RuntimeSimError, match=r"waypoint 1 .* outside the terrain"):

@@ -91,3 +91,19 @@ def test_grid_faces_are_counter_clockwise_from_above() -> None:
         p[:, 1, 1] - p[:, 0, 1]
     ) * (p[:, 2, 0] - p[:, 0, 0])
     assert (cross > 0).all()
+
+
+def test_window_normals_equal_the_grid_normals_and_float64_reference() -> None:
+    rng = np.random.default_rng(2)
+    z = np.cumsum(rng.normal(0, 0.05, (37, 29)), axis=0).astype(np.float32)
+    hf = Heightfield.centered(z, 0.25)
+    full = hf.grid_normals()
+    gx, gy = hf.grid_gradient()  # float64
+    ref = np.stack([-gx, -gy, np.ones_like(gx)], axis=-1)
+    ref /= np.linalg.norm(ref, axis=-1, keepdims=True)
+    np.testing.assert_allclose(full, ref, atol=1e-6)
+    np.testing.assert_allclose(np.linalg.norm(full, axis=-1), 1.0, atol=1e-6)
+    for rows, cols in (((0, 37), (0, 29)), ((0, 9), (0, 9)), ((8, 17), (20, 29)),
+                       ((36, 37), (5, 6)), ((30, 37), (0, 2))):
+        window = hf.window_normals(rows, cols)  # bit-identical: a mesh can be made per tile
+        np.testing.assert_array_equal(window, full[slice(*rows), slice(*cols)])

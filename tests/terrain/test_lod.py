@@ -25,31 +25,60 @@ def lod_pair() -> tuple[ms.Scene, ms.Scene]:
     return ms.build_scene(_cfg(200.0), seed=5), ms.build_scene(_cfg(320.0), seed=5)
 
 
-def test_focus_does_not_depend_on_the_outer_extent(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
-    small, large = lod_pair
-    assert small.outer is not None and large.outer is not None
-    assert small.outer.heightfield.shape == (201, 201)
-    assert large.outer.heightfield.shape == (321, 321)
-    assert small.heightfield.bounds_xy_m == large.heightfield.bounds_xy_m == (-20, -36, 40, 24)
-    assert small.heightfield.shape == (241, 241)  # 60 m at 0.25 m
-    np.testing.assert_array_equal(small.heightfield.z_m, large.heightfield.z_m)
-    assert float(small.heightfield.z_m.std()) > 0.1  # real relief, not a flat focus
+def test_a_tile_built_alone_equals_the_same_tile_of_the_full_build() -> None:
+    from marsscene.pipeline_lod import build_tile
 
-    def focus_rows(scene: ms.Scene) -> np.ndarray:
-        assert scene.rocks is not None and scene.craters is not None
-        r = scene.rocks
-        inside = scene.heightfield.contains(r.position_xyz_m[:, 0], r.position_xyz_m[:, 1])
-        return np.column_stack([r.position_xyz_m[inside], r.diameter_m[inside]])
+    cfg = _cfg(200.0, tile_m=20.0)  # a 60 m focus in 3 x 3 tiles of 80 x 80 cells
+    full = ms.build_scene(cfg, seed=5)
+    hf = full.heightfield
+    assert full.rocks is not None and full.craters is not None
+    # craters straddle tile borders (the halo case)
+    edges = np.array([-20.0, 0.0, 20.0, 40.0])
+    cx = full.craters.center_xy_m[:, 0]
+    r = full.craters.diameter_m / 2
+    assert np.any((np.abs(cx[:, None] - edges[None, 1:3]) < r[:, None]).any(axis=1))
+    for row, col in [(0, 0), (1, 1), (1, 2), (2, 2)]:
+        tile, rocks = build_tile(cfg, seed=5, row=row, col=col)
+        rs, cs = slice(row * 80, row * 80 + 81), slice(col * 80, col * 80 + 81)
+        assert tile.origin_xy_m == (hf.origin_xy_m[0] + col * 20, hf.origin_xy_m[1] + row * 20)
+        np.testing.assert_array_equal(tile.z_m, hf.z_m[rs, cs])  # border posts included
+        assert rocks is not None and len(rocks) > 10
+        p = full.rocks.position_xyz_m
+        inside = tile.contains(p[:, 0], p[:, 1])
+        np.testing.assert_array_equal(rocks.position_xyz_m, p[inside])
+        np.testing.assert_array_equal(rocks.diameter_m, full.rocks.diameter_m[inside])
+    with pytest.raises(ConfigError, match="outside the 3 x 3 focus tiles"):
+        build_tile(cfg, seed=5, row=3, col=0)
 
-    a, b = focus_rows(small), focus_rows(large)
-    assert len(a) > 200 and a.shape == b.shape
-    np.testing.assert_array_equal(a, b)
-    # the focus rocks have the full size-frequency distribution, the outer ones only >= 1 m
+
+def test_focus_rocks_have_the_full_sfd_and_outer_rocks_only_large(
+        lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
+    small = lod_pair[0]
     r = small.rocks
     assert r is not None
     outside = ~small.heightfield.contains(r.position_xyz_m[:, 0], r.position_xyz_m[:, 1])
     assert r.diameter_m[~outside].min() < 0.35
     assert outside.sum() > 5 and r.diameter_m[outside].min() >= 1.0
+
+
+def test_stitching_barely_bends_the_outer_terrain(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
+    """The coarse grid carries the long wavelengths and the focus is built on it, so the focus
+    border differs from the unstitched coarse terrain only by the sub-post detail and the fine
+    crater shapes (the first design drew the focus independently: ~2 m RMS, bent away over the
+    blend band, which steepened its slopes)."""
+    from marsscene.pipeline_lod import lod_craters, lod_world
+
+    for scene in lod_pair:
+        assert scene.outer is not None
+        cfg = scene.config
+        world = lod_world(cfg.terrain, scene.seed)
+        before, _, _ = lod_craters(world, cfg.craters, scene.seed)
+        bend = scene.outer.heightfield.z_m - before.z_m
+        relief = float(before.z_m.std())
+        assert relief > 0.5
+        assert float(np.sqrt(np.mean(bend[bend != 0] ** 2))) < 0.05 * relief
+        slope_before, slope_after = before.slope_deg(), scene.outer.heightfield.slope_deg()
+        assert abs(np.percentile(slope_after, 99) - np.percentile(slope_before, 99)) < 0.5
 
 
 def test_seam_has_no_height_jump(lod_pair: tuple[ms.Scene, ms.Scene]) -> None:
@@ -129,15 +158,6 @@ def test_impossible_plans_are_one_line_errors(terrain: dict[str, object], match:
         ms.build_scene(_cfg(200.0, **terrain), seed=1)
 
 
-def test_lod_is_ignored_with_a_dem_and_noted(synthetic_dem_path) -> None:  # type: ignore[no-untyped-def]
-    cfg = ms.SceneConfig.from_dict({
-        "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path), "lod": True},
-        "craters": {"enabled": False}, "rocks": {"enabled": False}})
-    scene = ms.build_scene(cfg, seed=1)
-    assert scene.outer is None
-    assert any("terrain.lod is ignored with a DEM" in n for n in scene.provenance.notes)
-
-
 def test_cli_focus_options(runner, tmp_path) -> None:  # type: ignore[no-untyped-def]
     from marsscene.cli import main
 
@@ -149,10 +169,94 @@ def test_cli_focus_options(runner, tmp_path) -> None:  # type: ignore[no-untyped
     assert "must lie inside the footprint" in res.output and "Traceback" not in res.output
     assert not (tmp_path / "bad" / "manifest.json").exists()
     res = runner.invoke(main, [*base, "--focus-xy", "30", "-20", "--focus-size-m", "40",
-                               "--out", str(tmp_path / "ok")])
+                               "--tile-m", "20", "--out", str(tmp_path / "ok")])
     assert res.exit_code == 0, res.output
     import json
 
     lod = json.loads((tmp_path / "ok" / "manifest.json").read_text())["summary"]["lod"]
     assert lod["focus_bounds_xy_m"] == [10.0, -40.0, 50.0, 0.0]
     assert (lod["focus_post_m"], lod["outer_post_m"]) == (0.25, 1.0)
+    assert lod["focus_tiles"] == [2, 2] and lod["focus_tile_m"] == 20.0
+
+
+def test_lod_with_a_dem_keeps_the_dem_posts_outside_and_details_the_focus(
+        synthetic_dem_path, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import mujoco
+
+    from marsscene.pipeline_terrain import lod_inputs
+
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path), "lod": True,
+                    "lod_blend_m": 5.0},
+        "craters": {"enabled": False}, "rocks": {"enabled": False},
+        "export": {"formats": ["mjcf"]}})
+    scene = ms.build_scene(cfg, seed=1)
+    assert scene.outer is not None
+    coarse, fine = scene.outer.heightfield, scene.heightfield
+    assert coarse.cell_size_m == 1.0 and coarse.shape == (48, 64)  # the DEM's own posts
+    assert fine.cell_size_m == 0.25
+    assert any("focus square does not fit" in n for n in scene.provenance.notes)
+    # the focus is the DEM (cubic between its posts) plus sub-metre detail of the continued
+    # spectrum: at the DEM posts it differs from the DEM by the detail alone
+    world, _ = lod_inputs(cfg, 1)
+    x0, y0, x1, y1 = fine.bounds_xy_m
+    xs, ys = coarse.grid_xy()
+    cols = np.flatnonzero((xs >= x0) & (xs <= x1))
+    rows = np.flatnonzero((ys >= y0) & (ys <= y1))
+    dem_posts = world.coarse.z_m[np.ix_(rows, cols)]
+    diff = fine.z_m[::4, ::4] - dem_posts
+    assert 0 < world.detail.rms_m < 0.05
+    assert float(np.sqrt(np.mean(diff**2))) < 3 * world.detail.rms_m
+    assert float(np.abs(fine.z_m - fine.z_m.mean()).max()) > 0.5  # the bowl is there
+    ms.write_scene(scene, tmp_path / "dem_lod")
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "dem_lod" / "mjcf" / "scene.xml"))
+    assert model.nhfield == 2  # focus + outer
+
+
+def test_a_focus_square_too_large_to_hold_is_a_one_line_error(runner, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from marsscene.cli import main
+
+    res = runner.invoke(main, ["build", "--procedural", "--size-m", "3600", "3600", "--post-m",
+                               "1", "--focus-size-m", "3000", "--format", "mjcf", "--seed", "1",
+                               "--out", str(tmp_path / "big")])
+    assert res.exit_code != 0 and "Traceback" not in res.output
+    assert "3000 m focus square at 0.25 m posts has 144,024,001 posts" in res.output
+    assert not (tmp_path / "big").exists()
+
+
+def test_dem_focus_keeps_the_dem_posts_under_a_coarser_outer_level(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """--dem X --lod --post-m 4: the outer level averages the DTM to 4 m, but the focus is
+    interpolated from the DTM's own 1 m posts, so relief finer than 4 m survives there."""
+    import rasterio
+    from affine import Affine
+
+    from marsscene.pipeline_terrain import lod_inputs
+
+    rows = cols = 200
+    yy, xx = np.mgrid[0:rows, 0:cols].astype(np.float64)
+    ripple = 0.5 * np.sin(2 * np.pi * xx / 3.0) * np.cos(2 * np.pi * yy / 5.0)  # < 4 m
+    z = -2000.0 + 0.02 * xx + ripple
+    path = tmp_path / "ripple.tif"
+    with rasterio.open(path, "w", driver="GTiff", height=rows, width=cols, count=1,
+                       dtype="float32", crs="+proj=eqc +R=3396190 +units=m +no_defs",
+                       transform=Affine(1.0, 0.0, 0.0, 0.0, -1.0, 0.0)) as ds:
+        ds.write(z.astype(np.float32), 1)
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "dem", "dem_path": str(path), "lod": True, "post_m": 4.0,
+                    "focus_size_m": 120.0, "lod_blend_m": 8.0},
+        "craters": {"enabled": False}, "rocks": {"enabled": False}})
+    scene = ms.build_scene(cfg, seed=2)
+    assert scene.outer is not None
+    assert scene.outer.heightfield.cell_size_m == 4.0
+    assert any("averaged to 4 m" in n for n in scene.provenance.notes)
+    world, _ = lod_inputs(cfg, 2)
+    assert world.base.cell_size_m == 1.0 and world.coarse.cell_size_m == 4.0
+    fine = scene.heightfield
+    xs, ys = fine.grid_xy()
+    inner = slice(34, -34)  # past the taper (8 outer posts = 32 m) at the focus border
+    at_posts = fine.z_m[::4, ::4][inner, inner]
+    dem = world.base.sample(*np.meshgrid(xs[::4], ys[::4]))[inner, inner]
+    assert float(np.sqrt(np.mean((at_posts - dem) ** 2))) < 3 * world.detail.rms_m + 1e-3
+    # the 3 m ripple is there (the 4 m outer level cannot hold it)
+    detrended = at_posts - at_posts.mean(axis=1, keepdims=True)
+    assert float(detrended.std()) > 0.2

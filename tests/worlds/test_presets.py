@@ -82,9 +82,14 @@ def test_preset_with_a_dem_uses_the_dtm(synthetic_dem_path: Path) -> None:
                     "post_m": 1.0},
         "craters": {"enabled": False}, "rocks": {"enabled": False}})
     scene = ms.build_scene(cfg, seed=1)
-    assert scene.heightfield.shape == (31, 41)
+    # the preset's level-of-detail terrain on the DTM: the DTM crop at its own 1 m posts
+    # outside, a 0.25 m focus square (shrunk to fit the small crop) inside
+    assert scene.outer is not None and scene.outer.heightfield.shape == (31, 41)
+    assert scene.heightfield.cell_size_m == 0.25
+    assert any("focus square does not fit" in n for n in scene.provenance.notes)
     assert scene.provenance.frame.crs_wkt  # geo-referenced: it came from the DTM
-    assert float(scene.heightfield.z_m.min()) > -5.0  # no 200 m deep procedural crater
+    for hf in (scene.heightfield, scene.outer.heightfield):
+        assert float(hf.z_m.min()) > -5.0  # no 200 m deep procedural crater
     assert "dem" in scene.provenance.inputs
 
 

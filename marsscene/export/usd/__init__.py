@@ -38,8 +38,34 @@ def _pxr() -> None:
         raise missing_dependency("usd-core", "usd") from err
 
 
-def to_stage(scene: Any) -> tuple[Any, dict[str, Any]]:
+class _StreamedAssets(dict[str, Any]):
+    """Asset files by relative path; each in-memory asset stage is exported to ``out_dir`` as
+    soon as it is authored and then dropped, so a scene's tile layers (terrain tiles, rock
+    payloads) never sit in memory together: the peak is one layer, not the scene."""
+
+    def __init__(self, out_dir: Path) -> None:
+        super().__init__()
+        self.out_dir = out_dir
+
+    def __setitem__(self, rel: str, blob: Any) -> None:
+        p = self.out_dir / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        if isinstance(blob, bytes):
+            p.write_bytes(blob)
+        elif not blob.GetRootLayer().Export(str(p)):
+            raise OSError(f"could not write {p}")
+        super().__setitem__(rel, p)
+
+
+def to_stage(scene: Any, *, stream_to: str | Path | None = None) -> tuple[Any, dict[str, Any]]:
     """Build the scene's USD stage in memory.
+
+    Parameters
+    ----------
+    scene : Scene
+    stream_to : path-like, optional
+        Write each asset file into this folder as soon as it is authored (the returned dict
+        then maps relative paths to the written paths).
 
     Returns
     -------
@@ -60,7 +86,7 @@ def to_stage(scene: Any) -> tuple[Any, dict[str, Any]]:
     from marsscene.export.usd.terrain_lod import author_outer_terrain
 
     stage = create_stage(scene)
-    assets: dict[str, Any] = {}
+    assets: dict[str, Any] = _StreamedAssets(Path(stream_to)) if stream_to is not None else {}
     for author in (author_terrain, author_outer_terrain, author_craters, author_rocks,
                    author_lighting, author_cameras, author_assets):
         author(stage, scene, assets)
@@ -79,26 +105,17 @@ def validate_stage(stage: Any) -> list[str]:
 
 def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda") -> list[Path]:
     """Write ``out_dir/scene.<usd_format>`` and its assets; return the written paths."""
-    stage, assets = to_stage(scene)
     out = Path(out_dir)
-    written = []
-    for rel, blob in sorted(assets.items()):
-        p = out / rel
-        p.parent.mkdir(parents=True, exist_ok=True)
-        if isinstance(blob, bytes):
-            p.write_bytes(blob)
-        elif not blob.GetRootLayer().Export(str(p)):
-            raise OSError(f"could not write {p}")
-        written.append(p)
+    stage, assets = to_stage(scene, stream_to=out)  # asset layers go to disk one at a time
+    written = [p for _, p in sorted(assets.items())]
     layer = stage.GetRootLayer()
     if usd_format == "usdz":
-        from pxr import UsdUtils
+        from marsscene.export.usd.usdz import package_usdz
 
         tmp = out / "scene.usdc"
         layer.Export(str(tmp))
         target = out / "scene.usdz"
-        if not UsdUtils.CreateNewUsdzPackage(str(tmp), str(target)):
-            raise OSError(f"could not package {target}")
+        package_usdz(tmp, target)  # reproducible bytes: fixed zip header dates
         tmp.unlink()
         for p in written:  # packaged inside the .usdz
             p.unlink()

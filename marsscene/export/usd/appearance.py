@@ -45,7 +45,9 @@ def _png(rgb: np.ndarray) -> bytes:
     from PIL import Image
 
     buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8)).save(buf, format="PNG")
+    # zlib level 1: 5x faster than the default 6 on these noisy tiles, ~3 % larger
+    Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8)).save(buf, format="PNG",
+                                                                    compress_level=1)
     return buf.getvalue()
 
 

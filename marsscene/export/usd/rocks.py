@@ -15,6 +15,13 @@ Layout (the instancer lives in the binary crate layer ``assets/rocks.usdc``, pay
 
 ``/World/Rocks`` is a ``component`` model (``kind``).
 
+Level-of-detail scenes (:attr:`Scene.outer <marsscene.Scene.outer>`) split the rocks by where
+they matter: ``/World/Rocks`` is a ``group`` of one payload per focus tile
+(``assets/rocks/tile_i_j.usdc``, ``marsscene:lod = 0``, the full size-frequency distribution)
+and ``outer`` (``assets/rocks/outer.usdc``, ``marsscene:lod = 1``, rocks of at least
+``rocks.outer_d_min_m``), each with the layout above under its own root, so a client loads
+the rocks of the tiles it shows.
+
 Orientations are authored as ``quath`` (``orientations``, read by every USD version); the
 half-precision error is < 0.1 deg.
 """
@@ -101,9 +108,54 @@ def author_instancer(stage: Any, root: Sdf.Path, rocks: Any, prototypes: tuple[A
         ]))
 
 
+def _tile_of_rocks(scene: Any) -> tuple[Any, int]:
+    """Focus tile index (row * n + col, or -1 outside the focus) of every rock, and n."""
+    lod = scene.provenance.extra.get("lod", {})
+    n = int(lod.get("focus_tiles", [1, 1])[0])
+    x0, y0, x1, y1 = scene.outer.focus_bounds_xy_m
+    tile_m = float(lod.get("focus_tile_m", x1 - x0))
+    xy = np.asarray(scene.rocks.position_xyz_m)[:, :2]
+    inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+    col = np.clip(np.floor((xy[:, 0] - x0) / tile_m), 0, n - 1).astype(np.int64)
+    row = np.clip(np.floor((xy[:, 1] - y0) / tile_m), 0, n - 1).astype(np.int64)
+    return np.where(inside, row * n + col, -1), n
+
+
+def _rock_payloads(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
+    """Level-of-detail scenes: one rock payload per focus tile, and one for the outer rocks."""
+    from marsscene.export.usd.terrain_lod import LOD_ATTR
+
+    group = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Rocks")).GetPrim()
+    set_kind(group, "group")
+    tile, n = _tile_of_rocks(scene)
+    protos = tuple(scene.rock_prototypes or ())
+    parts = [(f"tile_{i // n}_{i % n}", i, 0) for i in range(n * n)] + [("outer", -1, 1)]
+    for name, index, level in parts:  # a few tiles, each one vectorised instancer
+        rocks = scene.rocks.take(np.flatnonzero(tile == index))
+        if len(rocks) == 0:
+            continue
+        rel = f"assets/rocks/{name}.usdc"
+        asset = create_asset_stage("Rocks")
+        author_instancer(asset, Sdf.Path("/Rocks"), rocks, protos)
+        assets[rel] = asset
+        prim = UsdGeom.Xform.Define(stage, group.GetPath().AppendChild(name)).GetPrim()
+        set_kind(prim, "component")
+        prim.GetPayloads().AddPayload(f"./{rel}")
+        prim.CreateAttribute(LOD_ATTR, Sdf.ValueTypeNames.Int, custom=True).Set(level)
+        prim.CreateAttribute("marsscene:rockCount", Sdf.ValueTypeNames.Int).Set(len(rocks))
+
+
 def author_rocks(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
-    """Author ``/World/Rocks`` (a payload of ``assets/rocks.usdc``); nothing when disabled."""
+    """Author ``/World/Rocks`` (a payload of ``assets/rocks.usdc``, or per tile in
+    level-of-detail scenes); nothing when disabled."""
     if scene.rocks is None:
+        return
+    if scene.outer is not None:
+        _rock_payloads(stage, scene, assets)
+        prim = stage.GetPrimAtPath(f"{WORLD}/Rocks")
+        prim.CreateAttribute("marsscene:rockCount", Sdf.ValueTypeNames.Int).Set(len(scene.rocks))
+        prim.CreateAttribute("marsscene:rockPrototypes", Sdf.ValueTypeNames.Int).Set(
+            len(scene.rock_prototypes or ()))
         return
     asset = create_asset_stage("Rocks")
     author_instancer(asset, Sdf.Path("/Rocks"), scene.rocks, tuple(scene.rock_prototypes or ()))

@@ -15,7 +15,7 @@ from marsscene.export.usd.physics import (
     bind_physics_material,
 )
 from marsscene.export.usd.stage import WORLD, create_asset_stage, set_kind
-from marsscene.terrain.mesh import heightfield_tiles
+from marsscene.terrain.mesh import iter_heightfield_tiles
 
 __all__ = ["REGOLITH_ALBEDO_RGB", "author_terrain"]
 
@@ -88,12 +88,20 @@ def _author_tiles(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     terrain = UsdGeom.Xform.Get(stage, Sdf.Path("/Terrain"))
     material = _material(stage, scene, assets)
     physics = author_physics_material(stage, Sdf.Path("/Terrain/Looks"), REGOLITH_PHYSICS)
-    for tile in heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts):
+    # tiles of one shape share one face-index array: convert it to Vt once (VtArrays are
+    # copy-on-write, so every tile's attribute holds the same buffer)
+    topology: dict[int, tuple[Vt.IntArray, Vt.IntArray]] = {}
+    tiles = iter_heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts)
+    for tile in tiles:  # one tile's numpy arrays alive at a time
         mesh = UsdGeom.Mesh.Define(stage, terrain.GetPath().AppendChild(tile.name))
         faces = tile.face_vertex_indices
+        if id(faces) not in topology:  # the generator keeps each shared array alive
+            topology[id(faces)] = (Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)),
+                                   Vt.IntArray.FromNumpy(faces.ravel()))
+        counts, indices = topology[id(faces)]
         mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(tile.points_m))
-        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)))
-        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.ravel()))
+        mesh.CreateFaceVertexCountsAttr(counts)
+        mesh.CreateFaceVertexIndicesAttr(indices)
         mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(tile.normals))
         mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
         mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
