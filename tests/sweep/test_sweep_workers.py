@@ -1,0 +1,71 @@
+"""The LocalCluster that run_sweep starts: worker processes whose malloc keeps numpy temporaries."""
+
+from __future__ import annotations
+
+import os
+import platform
+import subprocess
+import sys
+
+import pytest
+
+from marsscene.sweep.run import WORKER_ENV, local_cluster
+
+pytestmark = pytest.mark.skipif(platform.libc_ver()[0] != "glibc",
+                                reason="glibc malloc tunables")
+
+# A cell's hot loop in miniature: a 4 MiB numpy temporary made and freed 50 times. Where glibc
+# serves it from the heap it faults its pages in once; where every temporary is a fresh mmap
+# (Dask's default MALLOC_TRIM_THRESHOLD_ pins the mmap threshold at 128 KiB) the kernel
+# faults its pages in again each time (~500 faults per turn here, huge pages helping).
+PROBE = """
+import resource
+import numpy as np
+x = np.ones(1 << 19)
+before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+for _ in range(50):
+    y = x * 2.0
+    del y
+print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+"""
+
+
+def _faults() -> int:
+    scope: dict[str, object] = {}
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(PROBE, scope)
+    return int(out.getvalue())
+
+
+def _probe_in_process(env: dict[str, str]) -> int:
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("MALLOC_")}
+    res = subprocess.run([sys.executable, "-c", PROBE], env={**clean, **env},
+                         capture_output=True, text=True, check=True)
+    return int(res.stdout)
+
+
+def test_dask_default_worker_env_refaults_every_temporary() -> None:
+    """The cost the sweep's worker environment removes, shown in plain processes."""
+    dask_default = _probe_in_process({"MALLOC_TRIM_THRESHOLD_": "65536"})
+    ours = _probe_in_process(WORKER_ENV)
+    assert dask_default > 10_000  # ~50 x 500
+    assert ours < 2_000
+
+
+def test_local_cluster_workers_run_with_the_sweep_malloc_settings() -> None:
+    from distributed import Client
+
+    with local_cluster(1) as cluster, Client(cluster) as client:
+        (env,) = client.run(lambda: {k: os.environ.get(k) for k in WORKER_ENV}).values()
+        (faults,) = client.run(_faults).values()
+        (nthreads,) = client.nthreads().values()
+        (profile,) = client.run(
+            lambda: __import__("dask").config.get("distributed.worker.profile.enabled")
+        ).values()
+    assert env == WORKER_ENV
+    assert faults < 2_000
+    assert nthreads == 1 and profile is False
