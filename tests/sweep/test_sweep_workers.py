@@ -69,3 +69,24 @@ def test_local_cluster_workers_run_with_the_sweep_malloc_settings() -> None:
     assert env == WORKER_ENV
     assert faults < 2_000
     assert nthreads == 1 and profile is False
+
+
+def test_local_cluster_leaves_this_process_environment_alone() -> None:
+    before = {k: os.environ.get(k) for k in (*WORKER_ENV, "OMP_NUM_THREADS")}
+    with local_cluster(1):
+        assert {k: os.environ.get(k) for k in before} == before
+
+
+def test_remote_workers_with_dask_default_malloc_get_a_warning(
+        scheduler_address: str, tmp_path, caplog: pytest.LogCaptureFixture) -> None:
+    from sweep_util import write_sweep
+
+    from marsscene.sweep import load_sweep, run_sweep
+
+    spec = load_sweep(write_sweep(tmp_path / "s.toml", "seed = [3]\n"))
+    with caplog.at_level("WARNING", logger="marsscene"):
+        res = run_sweep(spec, tmp_path / "out", scheduler=scheduler_address)
+    assert res.count("ok") == 1
+    (msg,) = [r.getMessage() for r in caplog.records if "MALLOC_TRIM_THRESHOLD_" in r.getMessage()]
+    assert msg.startswith("2 Dask worker(s)") and "MALLOC_TRIM_THRESHOLD_=65536" in msg
+    assert "MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=67108864" in msg
