@@ -14,16 +14,16 @@ from marsscene.sweep.run import WORKER_ENV, local_cluster
 pytestmark = pytest.mark.skipif(platform.libc_ver()[0] != "glibc",
                                 reason="glibc malloc tunables")
 
-# A cell's hot loop in miniature: a 4 MiB numpy temporary made and freed 50 times. Where glibc
-# serves it from the heap it faults its pages in once; where every temporary is a fresh mmap
-# (Dask's default MALLOC_TRIM_THRESHOLD_ pins the mmap threshold at 128 KiB) the kernel
-# faults its pages in again each time (~500 faults per turn here, huge pages helping).
+# A cell's hot loop in miniature: a 1 MiB numpy temporary (too small for a transparent huge
+# page) made and freed 100 times. Where glibc serves it from the heap its 256 pages fault in
+# once; where every temporary is a fresh mmap (Dask's default MALLOC_TRIM_THRESHOLD_ pins the
+# mmap threshold at 128 KiB) the kernel faults them in again each time: ~25 600 faults.
 PROBE = """
 import resource
 import numpy as np
-x = np.ones(1 << 19)
+x = np.ones(1 << 17)
 before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
-for _ in range(50):
+for _ in range(100):
     y = x * 2.0
     del y
 print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
@@ -52,7 +52,7 @@ def test_dask_default_worker_env_refaults_every_temporary() -> None:
     """The cost the sweep's worker environment removes, shown in plain processes."""
     dask_default = _probe_in_process({"MALLOC_TRIM_THRESHOLD_": "65536"})
     ours = _probe_in_process(WORKER_ENV)
-    assert dask_default > 10_000  # ~50 x 500
+    assert dask_default > 20_000  # ~100 x 256
     assert ours < 2_000
 
 
