@@ -84,9 +84,10 @@ def _fresh(name: str) -> Path:
 
 
 def _timed(run: Callable[[], Any]) -> dict[str, float]:
-    c0, t0 = _own_cpu_s(), time.perf_counter()
+    b0, c0, t0 = _busy_s(), _own_cpu_s(), time.perf_counter()
     run()
-    return {"wall": time.perf_counter() - t0, "cpu": _own_cpu_s() - c0}
+    wall, cpu = time.perf_counter() - t0, _own_cpu_s() - c0
+    return {"wall": wall, "cpu": cpu, "others": _busy_s() - b0 - cpu}
 
 
 def _serial() -> dict[str, float]:
@@ -153,15 +154,16 @@ def _warm() -> dict[str, float]:
     with local_cluster(WORKERS) as lc, Client(lc) as client:
         client.run(_warm_up)
         address = lc.scheduler_address
-        c0, t0 = _workers_cpu_s(client), time.perf_counter()
+        b0, c0, t0 = _busy_s(), _workers_cpu_s(client), time.perf_counter()
         res = run_sweep(_spec(), out, scheduler=address)
         wall = time.perf_counter() - t0
         cpu = _workers_cpu_s(client) - c0
+        others = _busy_s() - b0 - cpu
         t0 = time.perf_counter()
         again = run_sweep(_spec(), out, scheduler=address)
         rerun = time.perf_counter() - t0
     assert res.count("ok") == CELLS and again.count("skipped") == CELLS
-    return {"wall": wall, "cpu": cpu, "rerun": rerun}
+    return {"wall": wall, "cpu": cpu, "others": others, "rerun": rerun}
 
 
 def _spin() -> None:
@@ -184,9 +186,10 @@ def _copies(n: int) -> float:
 
 
 def _ceiling() -> dict[str, float]:
-    c0 = _own_cpu_s()
+    b0, c0 = _busy_s(), _own_cpu_s()
     t1, t2 = _copies(1), _copies(2)
-    return {"wall": t1 + t2, "cpu": _own_cpu_s() - c0, "ratio": 2 * t1 / t2}
+    cpu = _own_cpu_s() - c0
+    return {"wall": t1 + t2, "cpu": cpu, "others": _busy_s() - b0 - cpu, "ratio": 2 * t1 / t2}
 
 
 _MODES: dict[str, Callable[[], dict[str, float]]] = {
@@ -206,9 +209,7 @@ def _wait_for_quiet(limit_s: float) -> float:
 
 
 def _one(name: str) -> dict[str, float]:
-    b0 = _busy_s()
     got: dict[str, float] = measure(_MODES[name])[2]
-    got["others"] = _busy_s() - b0 - got["cpu"]
     got["load"] = os.getloadavg()[0]
     return got
 
