@@ -22,7 +22,7 @@ from marsscene.sweep.grid import Cell, expand_grid
 from marsscene.sweep.spec import SweepSpec
 from marsscene.sweep.table import write_results
 
-__all__ = ["Progress", "SweepResult", "run_sweep"]
+__all__ = ["WORKER_ENV", "Progress", "SweepResult", "local_cluster", "run_sweep"]
 
 log = logging.getLogger("marsscene")
 
@@ -56,9 +56,56 @@ def _failed_row(cell: Cell, err: BaseException) -> dict[str, Any]:
             "error": " ".join(f"{type(err).__name__}: {err}".split())}
 
 
+#: Environment of LocalCluster worker processes (glibc reads it when a process starts). Dask's
+#: default ``MALLOC_TRIM_THRESHOLD_=65536`` also pins glibc's mmap threshold at 128 KiB, so every
+#: numpy temporary above it is a fresh ``mmap`` that the kernel zero-fills page by page: in
+#: ``bench_sweep`` a 200 m cell then took ~185 000 page faults and +0.35-0.45 s of kernel time,
+#: ~50 % more CPU time than in a plain process. These two values are the limits glibc's own
+#: adaptive thresholds reach in a plain Python process (mmap above 32 MiB, trim above 64 MiB),
+#: fixed from the first cell on. Variables already in this process's environment win (Dask's
+#: rule), and the environment is left as it was found.
+WORKER_ENV = {"MALLOC_MMAP_THRESHOLD_": str(32 << 20), "MALLOC_TRIM_THRESHOLD_": str(64 << 20)}
+
+
+def local_cluster(n_workers: int) -> Any:
+    """A ``distributed.LocalCluster`` set up for sweep cells (what ``run_sweep`` starts).
+
+    One single-threaded worker process per core, :data:`WORKER_ENV` in the workers'
+    environment, Dask's statistical profiler off (its 10 ms stack sampling cost ~8 % of cell
+    time in ``bench_sweep``) and one task per worker at a time, so that the last cells go to
+    whichever worker frees first instead of queueing behind a busy one.
+    """
+    try:
+        import dask
+        from distributed import LocalCluster
+    except ImportError:
+        raise missing_dependency("distributed", "sweep") from None
+    env = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}), **WORKER_ENV}
+    settings = {"distributed.worker.profile.enabled": False,
+                "distributed.nanny.pre-spawn-environ": env,
+                "distributed.scheduler.worker-saturation": 1.0}
+    before = {k: os.environ.get(k) for k in env}
+    try:
+        with dask.config.set(settings):
+            return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                                dashboard_address=None, silence_logs=logging.ERROR)
+    except RuntimeError as err:
+        raise SweepError(
+            f"cannot start a LocalCluster of {n_workers} worker processes ({err}); a script "
+            "that calls run_sweep needs an `if __name__ == \"__main__\":` guard (workers are "
+            "spawned)"
+        ) from None
+    finally:  # the nannies set the workers' variables in this process's environment: undo
+        for key, value in before.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
 def _client(workers: int | None, scheduler: str | None, timeout_s: float) -> tuple[Any, Any]:
     try:
-        from distributed import Client, LocalCluster
+        from distributed import Client
     except ImportError:
         raise missing_dependency("distributed", "sweep") from None
     if scheduler is not None:
@@ -66,31 +113,30 @@ def _client(workers: int | None, scheduler: str | None, timeout_s: float) -> tup
             return Client(scheduler, timeout=f"{timeout_s}s"), None
         except (OSError, TimeoutError) as err:
             raise SweepError(f"cannot reach Dask scheduler {scheduler!r}: {err}") from None
-    import dask
-
-    n = workers if workers is not None else max(1, os.cpu_count() or 1)
-    # Cells are CPU-bound Python + numpy: the statistical profiler's 10 ms stack sampling cost
-    # ~8% of cell time in bench_sweep, and nobody reads it here.
-    try:
-        with dask.config.set({"distributed.worker.profile.enabled": False}):
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
-    except RuntimeError as err:
-        raise SweepError(
-            f"cannot start a LocalCluster of {n} worker processes ({err}); a script that calls "
-            "run_sweep needs an `if __name__ == \"__main__\":` guard (workers are spawned)"
-        ) from None
+    cluster = local_cluster(workers if workers is not None else max(1, os.cpu_count() or 1))
     return Client(cluster), cluster
 
 
-def _check_shared(client: Any, root: Path) -> None:
-    seen = client.run(os.path.isdir, str(root))
-    blind = sorted(w for w, ok in seen.items() if not ok)
+def _worker_facts(root: str) -> tuple[bool, str | None]:
+    return os.path.isdir(root), os.environ.get("MALLOC_TRIM_THRESHOLD_")
+
+
+def _check_workers(client: Any, root: Path) -> None:
+    facts = client.run(_worker_facts, str(root))
+    blind = sorted(w for w, (seen, _) in facts.items() if not seen)
     if blind:
         raise SweepError(
             f"{len(blind)} Dask worker(s) (e.g. {blind[0]}) cannot see {root}; remote workers "
             "need the output folder on a shared filesystem at the same path"
         )
+    small = sorted(w for w, (_, trim) in facts.items()
+                   if trim is not None and trim.isdigit() and int(trim) < 1 << 20)
+    if small:
+        env = " ".join(f"{k}={v}" for k, v in WORKER_ENV.items())
+        log.warning("%d Dask worker(s) (e.g. %s) run with MALLOC_TRIM_THRESHOLD_=%s (Dask's "
+                    "default): numpy temporaries are re-faulted every time and cells take up "
+                    "to ~50%% more CPU; start the workers with %s (docs/sweep.md)",
+                    len(small), small[0], facts[small[0]][1], env)
 
 
 def _run_dask(cells: list[Cell], root: Path, spec: SweepSpec, force: bool,
@@ -102,7 +148,7 @@ def _run_dask(cells: list[Cell], root: Path, spec: SweepSpec, force: bool,
     client, cluster = _client(workers, scheduler, timeout_s)
     rows: dict[str, dict[str, Any]] = {}
     try:
-        _check_shared(client, root)
+        _check_workers(client, root)
         counts["capacity"] = max(1, sum(client.nthreads().values()))
         futures = {
             client.submit(run_cell, c, str(root), spec.drive, force=force, pure=False,

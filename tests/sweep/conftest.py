@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -21,6 +22,8 @@ def scheduler_address(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]
     dask = str(Path(sys.executable).with_name("dask"))
     sched_file = tmp / "scheduler.json"
     common = ["--no-dashboard"]
+    # workers with Dask's own environment, as a remote cluster started by hand would have
+    plain_env = {k: v for k, v in os.environ.items() if not k.startswith("MALLOC_")}
     procs = [subprocess.Popen(
         [dask, "scheduler", "--host", "127.0.0.1", "--port", "0",
          "--scheduler-file", str(sched_file), *common],
@@ -32,7 +35,7 @@ def scheduler_address(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]
         procs.append(subprocess.Popen(
             [dask, "worker", "--scheduler-file", str(sched_file), "--nworkers", "2",
              "--nthreads", "1", "--local-directory", str(tmp), *common],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=plain_env))
         address = json.loads(sched_file.read_text())["address"]
         with Client(address, timeout="30s") as client:
             client.wait_for_workers(2, timeout=60)
