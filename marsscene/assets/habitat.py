@@ -8,10 +8,14 @@ its own collision part (each is convex).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import trimesh
 
 from marsscene.assets.model import AssetModel, normalise_parts
+
+if TYPE_CHECKING:
+    import trimesh
 
 __all__ = ["habitat_model"]
 
@@ -30,6 +34,8 @@ def habitat_model(name: str = "habitat") -> AssetModel:
     >>> len(h.parts), round(h.height_m, 2), round(h.radius_m, 1)
     (5, 6.0, 11.0)
     """
+    import trimesh  # imported on use: keeps ``import marsscene`` light
+
     main = _at(trimesh.creation.cylinder(radius=4.0, height=3.0, sections=32), (0, 0, 1.5))
     dome = trimesh.creation.icosphere(subdivisions=2, radius=4.0)
     dome.apply_scale((1.0, 1.0, 0.5))

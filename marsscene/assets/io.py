@@ -12,7 +12,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
 from marsscene.assets.config import USD_SUFFIXES, AssetConfig
 from marsscene.assets.habitat import habitat_model
@@ -38,6 +37,8 @@ def _y_up(path: Path, cfg: AssetConfig) -> bool:
 
 
 def _mesh_asset(path: Path, name: str, cfg: AssetConfig) -> AssetModel:
+    import trimesh  # imported on use: keeps ``import marsscene`` light
+
     try:
         mesh = trimesh.load(str(path), force="mesh")
     except Exception as err:  # trimesh raises many types for bad files
@@ -51,6 +52,8 @@ def _mesh_asset(path: Path, name: str, cfg: AssetConfig) -> AssetModel:
 
 
 def _usd_asset(path: Path, name: str, cfg: AssetConfig) -> AssetModel:
+    import trimesh
+
     from marsscene.export.usd.assets import read_usd_asset
 
     info = read_usd_asset(path)

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
+
+if TYPE_CHECKING:
+    import trimesh  # imported on use: keeps ``import marsscene`` light
 
 __all__ = ["AssetModel", "PlacedAsset", "normalise_parts"]
 

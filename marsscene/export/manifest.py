@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import platform
+from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -28,13 +29,19 @@ def sha256_file(path: str | Path) -> str:
 
 def package_versions() -> dict[str, str | None]:
     """Installed versions of marsscene's dependencies (``None`` if not installed)."""
+    return dict(_package_versions())
+
+
+@lru_cache(maxsize=1)
+def _package_versions() -> tuple[tuple[str, str | None], ...]:
+    """Looked up once per process (a sweep writes many manifests)."""
     out: dict[str, str | None] = {"marsscene": __version__, "python": platform.python_version()}
     for name in PACKAGES:
         try:
             out[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             out[name] = None
-    return out
+    return tuple(out.items())
 
 
 def _input_files(paths: dict[str, str]) -> dict[str, dict[str, str]]:

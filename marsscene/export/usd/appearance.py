@@ -22,6 +22,8 @@ runtime camera draws 2048 px from the same generator: USD and MuJoCo share the s
 from __future__ import annotations
 
 import io
+from functools import lru_cache
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -81,6 +83,24 @@ def large_scale_albedo(heightfield: Any, mean_albedo_rgb: np.ndarray, seed: int
     return out
 
 
+@lru_cache(maxsize=4)
+def _detail_normal_png(seed: int) -> tuple[bytes, tuple[float, float, float]]:
+    """The detail normal map (PNG) and the tile's mean albedo: a function of the seed alone,
+    so a sweep over lighting or rocks encodes it once per process."""
+    tile = regolith_tile(size_px=DETAIL_PX, tile_m=DETAIL_TILE_M,
+                         rng=stage_rng(seed, "texture"))
+    mean = tile.albedo_rgb.reshape(-1, 3).mean(axis=0)
+    return _png(normal_map_rgb(tile)), (float(mean[0]), float(mean[1]), float(mean[2]))
+
+
+@lru_cache(maxsize=4)
+def _large_albedo_png(seed: int, size_m: tuple[float, float], sw_xy_m: tuple[float, float],
+                      mean_rgb: tuple[float, float, float]) -> bytes:
+    """The large-scale albedo PNG of a footprint (cached like the normal map)."""
+    hf = SimpleNamespace(size_m=size_m, xy_of=lambda r, c: sw_xy_m)
+    return _png(_srgb_u8(large_scale_albedo(hf, np.asarray(mean_rgb), seed)))
+
+
 def _texture(stage: Any, path: str, file: str, st: Any, color_space: str,
              wrap: str = "repeat") -> Any:
     tex = UsdShade.Shader.Define(stage, Sdf.Path(path))
@@ -101,10 +121,8 @@ def author_regolith_detail(
     ``surface`` is the material's UsdPreviewSurface shader; the terrain's ``st`` spans the
     whole terrain in [0, 1], so the detail coordinates are ``st * size / DETAIL_TILE_M``.
     """
-    tile = regolith_tile(size_px=DETAIL_PX, tile_m=DETAIL_TILE_M,
-                         rng=stage_rng(scene.seed, "texture"))
     # image files store the top row first; the tile's row 0 is at v = 0 (the bottom)
-    assets[NORMAL_TEXTURE] = _png(normal_map_rgb(tile))
+    assets[NORMAL_TEXTURE], mean = _detail_normal_png(int(scene.seed))
     reader = UsdShade.Shader.Define(stage, Sdf.Path(f"{material_path}/DetailStReader"))
     reader.CreateIdAttr("UsdPrimvarReader_float2")
     reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
@@ -123,9 +141,10 @@ def author_regolith_detail(
     surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(
         normal.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
     if scene.texture_rgb is None:
-        mean = tile.albedo_rgb.reshape(-1, 3).mean(axis=0)
-        assets[LARGE_ALBEDO_TEXTURE] = _png(_srgb_u8(large_scale_albedo(
-            scene.heightfield, mean, scene.seed)))
+        hf = scene.heightfield
+        x0, y0 = hf.xy_of(0, 0)
+        assets[LARGE_ALBEDO_TEXTURE] = _large_albedo_png(
+            int(scene.seed), tuple(hf.size_m), (float(x0), float(y0)), mean)
         albedo = _texture(stage, f"{material_path}/LargeAlbedo", LARGE_ALBEDO_TEXTURE,
                           reader.ConnectableAPI(), "sRGB", wrap="clamp")
         surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
