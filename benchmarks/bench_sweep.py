@@ -170,7 +170,7 @@ def _spin() -> None:
     import numpy as np
 
     x = np.ones(4096)
-    for _ in range(60_000):  # ~1 s of in-cache numpy + interpreter work, no memory traffic
+    for _ in range(600_000):  # ~1 s of in-cache numpy + interpreter work, no memory traffic
         x = x * 1.000001 + 1e-9
 
 
