@@ -139,6 +139,16 @@ def _check_workers(client: Any, root: Path) -> None:
                     len(small), small[0], facts[small[0]][1], env)
 
 
+def _seed_affinity(cells: list[Cell], addresses: list[str]) -> dict[str, list[str]]:
+    """A preferred worker per cell: cells of one seed go to one worker (seed groups dealt out
+    in turn), so the work that depends on the seed alone (the regolith textures) is done once
+    per worker and seed, not by every worker. Loose: Dask still balances the load."""
+    if not addresses:
+        return {c.cell_id: [] for c in cells}
+    groups = {seed: i for i, seed in enumerate(dict.fromkeys(c.seed for c in cells))}
+    return {c.cell_id: [addresses[groups[c.seed] % len(addresses)]] for c in cells}
+
+
 def _run_dask(cells: list[Cell], root: Path, spec: SweepSpec, force: bool,
               workers: int | None, scheduler: str | None, timeout_s: float,
               report: Callable[[dict[str, Any]], None], counts: dict[str, int]
@@ -150,9 +160,11 @@ def _run_dask(cells: list[Cell], root: Path, spec: SweepSpec, force: bool,
     try:
         _check_workers(client, root)
         counts["capacity"] = max(1, sum(client.nthreads().values()))
+        prefer = _seed_affinity(cells, sorted(client.nthreads()))
         futures = {
             client.submit(run_cell, c, str(root), spec.drive, force=force, pure=False,
-                          key=f"marsscene-cell-{c.cell_id}-{os.urandom(4).hex()}"): c
+                          key=f"marsscene-cell-{c.cell_id}-{os.urandom(4).hex()}",
+                          workers=prefer[c.cell_id], allow_other_workers=True): c
             for c in cells
         }
         for fut in as_completed(futures):

@@ -116,3 +116,21 @@ def test_example_sweep_file_is_valid() -> None:
     assert len(cells) == 12 and spec.drive is not None and spec.drive.seconds == 40.0
     cfg = resolve_config(cells[-1])
     assert (cfg.seed, cfg.lighting.tau, cfg.lighting.sun_elevation_deg) == (2, 3.0, 45.0)
+
+
+def test_cells_of_one_seed_prefer_one_worker() -> None:
+    """Seed groups are dealt out to the workers in turn (the seed-only textures are then made
+    once per worker and seed); every cell gets exactly one preferred worker."""
+    from marsscene.sweep.grid import Cell
+    from marsscene.sweep.run import _seed_affinity
+
+    cells = [Cell(f"s{s}_t{t}", {"seed": s, "lighting.tau": t}, {}, s)
+             for s in (7, 3, 9, 5) for t in (0.3, 1.0, 3.0)]
+    prefer = _seed_affinity(cells, ["tcp://a", "tcp://b"])
+    by_seed: dict[int | None, set[str]] = {}
+    for c in cells:
+        assert len(prefer[c.cell_id]) == 1
+        by_seed.setdefault(c.seed, set()).update(prefer[c.cell_id])
+    assert all(len(w) == 1 for w in by_seed.values())
+    assert [by_seed[s].pop() for s in (7, 3, 9, 5)] == ["tcp://a", "tcp://b", "tcp://a", "tcp://b"]
+    assert _seed_affinity(cells, []) == {c.cell_id: [] for c in cells}
