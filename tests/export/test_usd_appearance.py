@@ -13,7 +13,7 @@ import marsscene as ms
 pytest.importorskip("pxr")
 from pxr import Sdf, Usd, UsdShade
 
-from marsscene.export.usd.appearance import DETAIL_TILE_M
+from marsscene.export.usd.appearance import DETAIL_TILE_M, LARGE_TEXEL_MIN_M
 from marsscene.seeding import stage_rng
 from marsscene.terrain.albedo_field import albedo_field
 from marsscene.terrain.appearance import regolith_tile
@@ -59,16 +59,18 @@ def test_material_textures_exist_and_resolve_from_elsewhere(written, tmp_path, m
     assert shaders["DetailNormal"].GetInput("sourceColorSpace").Get() == "raw"
     assert shaders["LargeAlbedo"].GetInput("wrapS").Get() == "clamp"
     # the albedo file is the detail tile's mean albedo times the seeded large-scale field at
-    # 0.5 m texel centres (sRGB-encoded, row 0 = north)
+    # texel centres (LARGE_TEXEL_MIN_M = 1 m on this 24 m x 16 m scene; sRGB, row 0 = north)
     from PIL import Image
 
     img = np.asarray(Image.open(files["LargeAlbedo"])).astype(np.float64) / 255
     lin = np.where(img <= 0.04045, img / 12.92, ((img + 0.055) / 1.055) ** 2.4)
-    assert img.shape == (32, 48, 3)
+    t = LARGE_TEXEL_MIN_M
+    rows, cols = round(16 / t), round(24 / t)
+    assert img.shape == (rows, cols, 3)
     tile = regolith_tile(size_px=1024, tile_m=DETAIL_TILE_M, rng=stage_rng(scene.seed, "texture"))
     field = albedo_field(rng=stage_rng(scene.seed, "albedo"))
     x0, y0 = scene.heightfield.xy_of(0, 0)
-    xx, yy = np.meshgrid(x0 + 0.25 + 0.5 * np.arange(48), y0 + 0.25 + 0.5 * np.arange(32)[::-1])
+    xx, yy = np.meshgrid(x0 + t / 2 + t * np.arange(cols), y0 + t / 2 + t * np.arange(rows)[::-1])
     expect = np.exp(field.log_gain(xx, yy))[..., None] * tile.albedo_rgb.mean(axis=(0, 1))
     np.testing.assert_allclose(lin, expect, atol=0.006)
     assert lin[..., 0].std() / lin[..., 0].mean() > 0.05  # metre-scale variation is there

@@ -7,7 +7,7 @@ large-scale gain" cannot be authored; USD gets its two halves on two inputs:
 
 * ``diffuseColor``: without an orthoimage, ``textures/regolith_albedo_large.png`` (sRGB) over
   the whole terrain: the detail tile's mean albedo times the seeded large-scale gain (metre
-  and decametre bands), texels of ``max(0.5 m, size / 4096)``; with an orthoimage, the
+  and decametre bands), texels of ``max(1 m, size / 4096)``; with an orthoimage, the
   orthoimage (as before; its brightness is the large-scale pattern);
 * ``normal``: ``textures/regolith_detail_normal.png`` (raw, tangent space, ``scale 2 /
   bias -1``), the seamless detail tile of ``DETAIL_TILE_M`` metres repeated through a
@@ -39,7 +39,7 @@ DETAIL_TILE_M = 8.0
 DETAIL_PX = 1024
 LARGE_ALBEDO_TEXTURE = "textures/regolith_albedo_large.png"
 NORMAL_TEXTURE = "textures/regolith_detail_normal.png"
-LARGE_TEXEL_MIN_M = 0.5
+LARGE_TEXEL_MIN_M = 1.0
 LARGE_MAX_PX = 4096
 
 
