@@ -26,7 +26,7 @@ import numpy as np
 
 from marsscene.config import SceneConfig
 from marsscene.dem.model import DEM
-from marsscene.terrain.from_dem import GeoFrame, plan_crop, prepare_dem
+from marsscene.terrain.from_dem import GeoFrame, fill_nearest, plan_crop, prepare_dem
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.lod import FocusPlan
 
@@ -95,8 +95,7 @@ def _read_focus_window(src: AveragedDEM, config: SceneConfig, frame: GeoFrame,
     window = read_dem(src.path, band=tcfg.band, crop=Crop(bounds_xy_m=bounds))
     window, _, _, _ = prepare_dem(window, dataclasses.replace(tcfg, post_m=None),
                                   default_post_m=None)
-    z = window.elevation_m.astype(np.float64)
-    z = np.where(np.isfinite(z), z, np.nanmedian(z))  # leftovers after the fill policy
+    z = fill_nearest(window.elevation_m.astype(np.float64))  # as heightfield_from_dem does
     a, _, c, _, e, f = window.transform
     rows = z.shape[0]
     # south-west post centre, in the scene frame of the outer level

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
 __all__ = [
     "AUTO_CROP_M",
     "GeoFrame",
+    "fill_nearest",
     "footprint_projected_m",
     "heightfield_from_dem",
     "plan_crop",
@@ -46,7 +47,7 @@ class GeoFrame:
     grid_convergence_deg: float = 0.0
 
 
-def _fill_nearest(z: np.ndarray) -> np.ndarray:
+def fill_nearest(z: np.ndarray) -> np.ndarray:
     missing = ~np.isfinite(z)
     if not missing.any():
         return z
@@ -68,7 +69,7 @@ def heightfield_from_dem(dem: DEM, *, z_scale: float = 1.0) -> tuple[Heightfield
     if not valid.any():
         raise ConfigError(f"DEM {dem.source_path or '<memory>'} has no valid posts")
     datum_m = round(float(np.median(z[valid])), 2)
-    z = _fill_nearest(z)
+    z = fill_nearest(z)
     z_scene = ((z - datum_m) * z_scale)[::-1, :]
     hf = Heightfield.centered(z_scene.astype(np.float32), dem.post_m)
     convergence = 0.0

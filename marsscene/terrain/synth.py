@@ -25,7 +25,8 @@ from scipy.interpolate import make_interp_spline
 from marsscene.errors import MemoryBudgetError
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["add_detail", "fbm_surface", "measure_hurst", "resample", "synthesize"]
+__all__ = ["add_detail", "continued_detail_rms", "fbm_surface", "measure_hurst", "resample",
+           "synthesize"]
 
 #: Posts above which a grid is refused (about 2 GB of float32 work arrays per 10^8 posts).
 MAX_POSTS = 120_000_000
@@ -132,7 +133,7 @@ def _band_variance(z: NDArray[np.float32], post_m: float, k_lo: float, k_hi: flo
 REFERENCE_OCTAVE = 3
 
 
-def _continued_detail_rms(hf: Heightfield, post_m: float, hurst: float) -> float:
+def continued_detail_rms(hf: Heightfield, post_m: float, hurst: float) -> float:
     """RMS of the band ``(k_c, k_f]`` that continues the DEM's spectrum with exponent ``H``.
 
     Stereo DEMs are smoothed over their top octaves (HiRISE DTMs resolve features of ~3-5 posts,
@@ -209,7 +210,7 @@ def add_detail(
     z = _spline_resample(hf, cols, rows, post_m)
     k_c = 0.5 / hf.cell_size_m  # coarse Nyquist (cycles/m)
     if detail_rms_m is None:
-        detail_rms_m = _continued_detail_rms(hf, post_m, hurst)
+        detail_rms_m = continued_detail_rms(hf, post_m, hurst)
     if detail_rms_m > 0:
         noise = fbm_surface((rows, cols), post_m, hurst=hurst, rng=rng, k_min_cyc_m=k_c)
         z += noise * np.float32(detail_rms_m)

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.lattice import fractal_detail, octave_cells_m
 from marsscene.terrain.lod import FocusPlan, reaches_box, taper_detail
+from marsscene.terrain.synth import continued_detail_rms
 
 __all__ = ["FocusTiling", "TileDetail", "cubic_upsample", "tile_terrain"]
 
@@ -180,11 +181,9 @@ def tile_terrain(coarse: Heightfield, tiling: FocusTiling, row: int, col: int, *
 def detail_rms_m(base: Heightfield, plan: FocusPlan, hurst: float) -> float:
     """RMS of the detail below the base grid's posts that continues its spectrum, measured on
     its posts over the focus square."""
-    from marsscene.terrain.synth import _continued_detail_rms
-
     (bx0, by0), pb = base.origin_xy_m, base.cell_size_m
     x0, y0, x1, y1 = plan.bounds_xy_m
     c0, c1 = (round((v - bx0) / pb) for v in (x0, x1))
     r0, r1 = (round((v - by0) / pb) for v in (y0, y1))
     window = Heightfield(base.z_m[r0:r1 + 1, c0:c1 + 1], pb, (x0, y0))
-    return _continued_detail_rms(window, plan.fine_post_m, hurst)
+    return continued_detail_rms(window, plan.fine_post_m, hurst)
