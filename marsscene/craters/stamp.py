@@ -171,7 +171,7 @@ def stamp_craters(
                 rr = br0[chunk, None] + _PAD + np.arange(_SIZES[k])[None, :]
                 cc2 = bc0[chunk, None] + _PAD + np.arange(_SIZES[k])[None, :]
                 _stamp_boxes(zpad, xpad, ypad, valid_r, valid_c, p, chunk, rr, cc2)
-    return heightfield.with_z(z.astype(np.float32))
+    return heightfield._with_owned_z(z.astype(np.float32))
 
 
 class _Params:

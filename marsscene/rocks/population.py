@@ -261,20 +261,16 @@ def orientations(
     sin_phi = np.divide(ty, tilt, out=np.zeros_like(tilt), where=tilt > 0)
     half = 0.5 * np.minimum(tilt, max_tilt_rad)
     sin_half = np.sin(half)
-    # rotation taking +z to (sin t cos p, sin t sin p, cos t): axis (-sin p, cos p, 0)
-    qt = np.column_stack([np.cos(half), -sin_phi * sin_half, cos_phi * sin_half,
-                          np.zeros_like(half)])
-    hy = 0.5 * yaw_rad
-    qy = np.column_stack([np.cos(hy), np.zeros_like(hy), np.zeros_like(hy), np.sin(hy)])
-    return _qmul(qt, qy)
-
-
-def _qmul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    aw, ax, ay, az = a.T
-    bw, bx, by, bz = b.T
-    return np.column_stack([
-        aw * bw - ax * bx - ay * by - az * bz,
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-    ])
+    # q_tilt * q_yaw with q_tilt = (cos h, -sin p sin h, cos p sin h, 0) (the rotation taking
+    # +z to (sin t cos p, sin t sin p, cos t), axis (-sin p, cos p, 0)) and
+    # q_yaw = (cos y/2, 0, 0, sin y/2): the Hamilton product without its zero terms, written
+    # column by column into one (n, 4) array
+    cw, tx, ty = np.cos(half), -sin_phi * sin_half, cos_phi * sin_half
+    hy = 0.5 * np.asarray(yaw_rad, dtype=np.float64)
+    yw, yz = np.cos(hy), np.sin(hy)
+    q = np.zeros((cw.size, 4))
+    np.multiply(cw, yw, out=q[:, 0])
+    np.add(tx * yw, ty * yz, out=q[:, 1])
+    np.subtract(ty * yw, tx * yz, out=q[:, 2])
+    np.multiply(cw, yz, out=q[:, 3])
+    return q

@@ -42,6 +42,21 @@ class Heightfield:
 
     def __post_init__(self) -> None:
         z = np.array(self.z_m, dtype=np.float32, copy=True)  # never freeze the caller's array
+        self._adopt(z)
+
+    @classmethod
+    def _owning(cls, z_m: NDArray[np.float32], cell_size_m: float,
+                origin_xy_m: tuple[float, float] = (0.0, 0.0)) -> Heightfield:
+        """A heightfield that takes ``z_m`` itself (no defensive copy): for arrays made fresh
+        by the caller and not used after, as the pipeline's stages do with 10^7-post grids.
+        The array is made read-only."""
+        hf = object.__new__(cls)
+        object.__setattr__(hf, "cell_size_m", cell_size_m)
+        object.__setattr__(hf, "origin_xy_m", origin_xy_m)
+        hf._adopt(np.ascontiguousarray(z_m, dtype=np.float32))
+        return hf
+
+    def _adopt(self, z: NDArray[np.float32]) -> None:
         if z.ndim != 2 or min(z.shape) < 2:
             raise ConfigError(f"z_m must be a 2-D grid of at least 2x2 posts; got shape {z.shape}")
         if not np.isfinite(z).all():
@@ -115,24 +130,28 @@ class Heightfield:
         c0 = np.minimum(np.floor(c).astype(np.int64), cols - 2)
         return r0, c0, r - r0, c - c0
 
+    def _corners(self, r0: Any, c0: Any) -> tuple[Any, Any, Any, Any]:
+        """Posts ``[r0, c0]``, ``[r0, c0+1]``, ``[r0+1, c0]``, ``[r0+1, c0+1]`` as float64
+        (flat-index gathers: one index array, four ``take``s)."""
+        cols = self.shape[1]
+        flat = self.z_m.ravel()
+        i = r0 * cols
+        i += c0
+        out = []
+        for step in (0, 1, cols, cols + 1):
+            out.append(flat.take(i + step if step else i).astype(np.float64))
+        return out[0], out[1], out[2], out[3]
+
     def sample(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
         """Bilinear elevation at world points (clamped to the footprint) (in m)."""
         r0, c0, fr, fc = self._cell(x, y)
-        z = self.z_m
-        z00 = z[r0, c0].astype(np.float64)
-        z01 = z[r0, c0 + 1].astype(np.float64)
-        z10 = z[r0 + 1, c0].astype(np.float64)
-        z11 = z[r0 + 1, c0 + 1].astype(np.float64)
+        z00, z01, z10, z11 = self._corners(r0, c0)
         return (z00 * (1 - fc) + z01 * fc) * (1 - fr) + (z10 * (1 - fc) + z11 * fc) * fr
 
     def gradient(self, x: ArrayLike, y: ArrayLike) -> XY:
         """Surface gradient ``(dz/dx, dz/dy)`` of the bilinear surface at world points."""
         r0, c0, fr, fc = self._cell(x, y)
-        z = self.z_m
-        z00 = z[r0, c0].astype(np.float64)
-        z01 = z[r0, c0 + 1].astype(np.float64)
-        z10 = z[r0 + 1, c0].astype(np.float64)
-        z11 = z[r0 + 1, c0 + 1].astype(np.float64)
+        z00, z01, z10, z11 = self._corners(r0, c0)
         dzdx = ((z01 - z00) * (1 - fr) + (z11 - z10) * fr) / self.cell_size_m
         dzdy = ((z10 - z00) * (1 - fc) + (z11 - z01) * fc) / self.cell_size_m
         return dzdx, dzdy
@@ -197,10 +216,22 @@ class Heightfield:
         """A new heightfield on the same grid with other elevations."""
         return Heightfield(np.asarray(z_m, dtype=np.float32), self.cell_size_m, self.origin_xy_m)
 
+    def _with_owned_z(self, z_m: NDArray[np.float32]) -> Heightfield:
+        """:meth:`with_z` for a fresh array the caller hands over (no defensive copy)."""
+        return Heightfield._owning(z_m, self.cell_size_m, self.origin_xy_m)
+
     @classmethod
     def centered(cls, z_m: ArrayLike, cell_size_m: float) -> Heightfield:
         """A heightfield whose footprint is centred on the world origin."""
         z = np.asarray(z_m, dtype=np.float32)
-        rows, cols = z.shape
-        origin = (-(cols - 1) * cell_size_m / 2.0, -(rows - 1) * cell_size_m / 2.0)
-        return cls(z, cell_size_m, origin)
+        return cls(z, cell_size_m, _centred_origin(z.shape, cell_size_m))
+
+    @classmethod
+    def _centered_owning(cls, z_m: NDArray[np.float32], cell_size_m: float) -> Heightfield:
+        """:meth:`centered` for a fresh array the caller hands over (no defensive copy)."""
+        return cls._owning(z_m, cell_size_m, _centred_origin(z_m.shape, cell_size_m))
+
+
+def _centred_origin(shape: tuple[int, ...], cell_size_m: float) -> tuple[float, float]:
+    rows, cols = shape
+    return (-(cols - 1) * cell_size_m / 2.0, -(rows - 1) * cell_size_m / 2.0)

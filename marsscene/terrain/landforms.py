@@ -111,4 +111,4 @@ def add_landform(
                             wall_width_m=400.0)
     else:
         raise ValueError(f"unknown landform {landform!r}; choose one of {list(LANDFORMS)}")
-    return hf.with_z(hf.z_m + h.astype(np.float32))
+    return hf._with_owned_z(hf.z_m + h.astype(np.float32))

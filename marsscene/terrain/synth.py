@@ -41,9 +41,10 @@ def _check_posts(rows: int, cols: int) -> None:
         )
 
 
-def _radial_k(shape: tuple[int, int], post_m: float) -> NDArray[np.float64]:
-    ky = sfft.fftfreq(shape[0], d=post_m)
-    kx = sfft.rfftfreq(shape[1], d=post_m)
+def _radial_k(shape: tuple[int, int], post_m: float) -> NDArray[np.float32]:
+    """|k| (in cycles/m) of an ``rfft2`` spectrum, float32 (the spectrum's own precision)."""
+    ky = sfft.fftfreq(shape[0], d=post_m).astype(np.float32)
+    kx = sfft.rfftfreq(shape[1], d=post_m).astype(np.float32)
     return np.hypot(ky[:, None], kx[None, :])
 
 
@@ -73,15 +74,21 @@ def fbm_surface(
     fshape = (sfft.next_fast_len(rows, real=True), sfft.next_fast_len(cols, real=True))
     white = rng.standard_normal(fshape, dtype=np.float32)
     spec = sfft.rfft2(white, workers=-1)
-    k = _radial_k(fshape, post_m).astype(np.float32)
-    keep = k > k_min_cyc_m
-    amp = np.zeros_like(k)
-    amp[keep] = k[keep] ** np.float32(-(hurst + 1.0))
+    del white
+    k = _radial_k(fshape, post_m)
+    amp = np.zeros_like(k)  # |k|^-(H+1) above the high-pass, 0 at and below it and at k = 0
+    np.power(k, np.float32(-(hurst + 1.0)), out=amp, where=k > k_min_cyc_m)
     amp[0, 0] = 0.0
-    z = sfft.irfft2(spec * amp, s=fshape, workers=-1)[:rows, :cols]
-    z -= z.mean()
-    std = float(z.std())
-    return (z / std if std > 0 else z).astype(np.float32)
+    spec *= amp
+    del k, amp
+    z = np.ascontiguousarray(sfft.irfft2(spec, s=fshape, workers=-1)[:rows, :cols],
+                             dtype=np.float32)
+    del spec
+    z -= z.mean(dtype=np.float64)
+    std = float(np.sqrt(np.mean(np.square(z), dtype=np.float64)))
+    if std > 0:
+        z /= np.float32(std)
+    return z
 
 
 def synthesize(
@@ -107,7 +114,8 @@ def synthesize(
         scale = np.tan(np.radians(rms_slope_deg)) / rms_grad
     else:
         scale = rms_height_m
-    return Heightfield.centered(z * np.float32(scale), post_m)
+    z *= np.float32(scale)
+    return Heightfield._centered_owning(z, post_m)
 
 
 def _band_variance(z: NDArray[np.float32], post_m: float, k_lo: float, k_hi: float) -> float:

@@ -83,7 +83,8 @@ def test_dropped_box_rests_at_the_predicted_height(
     assets = {"assets/terrain.bin": (xml.parent / "assets/terrain.bin").read_bytes()}
     model = mujoco.MjModel.from_xml_string(text, assets)
     data = mujoco.MjData(model)
-    for _ in range(int(1.5 / model.opt.timestep)):  # 0.37 s fall, then settling
+    # 0.37 s fall, then settling: a box that lands on a 20 degree slope slides a little first
+    for _ in range(int(3.0 / model.opt.timestep)):
         mujoco.mj_step(model, data)
     assert not any(w.number for w in data.warning)
     assert np.linalg.norm(data.qvel[:3]) < 0.03  # came to rest (soft-contact creep only)

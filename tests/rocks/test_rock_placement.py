@@ -178,3 +178,29 @@ def test_deterministic() -> None:
     b = place_rocks(hf, NO_CRATERS, RockConfig(), rng=np.random.default_rng(3))
     for name in ("position_xyz_m", "diameter_m", "orientation_wxyz", "prototype", "scale_xyz_m"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+def test_orientation_is_the_tilt_after_the_yaw_as_rotations_compose() -> None:
+    from scipy.spatial.transform import Rotation
+
+    from marsscene.rocks.population import orientations
+
+    rng = np.random.default_rng(11)
+    n = 400
+    gx, gy = rng.normal(0, 0.4, (2, n))
+    gx[:10] = gy[:10] = 0.0  # flat ground: yaw only
+    yaw = rng.uniform(0, 2 * np.pi, n)
+    jitter = rng.normal(0, 0.05, (n, 2))
+    jitter[:5] = 0.0
+    q = orientations(gx, gy, yaw, jitter, max_tilt_rad=np.radians(25.0))
+    tx = -gx * np.arctan(np.hypot(gx, gy)) / np.where(np.hypot(gx, gy) > 0, np.hypot(gx, gy), 1)
+    ty = -gy * np.arctan(np.hypot(gx, gy)) / np.where(np.hypot(gx, gy) > 0, np.hypot(gx, gy), 1)
+    tx, ty = tx + jitter[:, 0], ty + jitter[:, 1]
+    tilt = np.hypot(tx, ty)
+    phi = np.arctan2(ty, tx)
+    axis = np.column_stack([-np.sin(phi), np.cos(phi), np.zeros(n)])
+    ref = (Rotation.from_rotvec(axis * np.minimum(tilt, np.radians(25.0))[:, None])
+           * Rotation.from_rotvec(np.column_stack([np.zeros((n, 2)), yaw])))
+    ref_wxyz = np.roll(ref.as_quat(), 1, axis=1)
+    same_sign = np.sign(np.sum(ref_wxyz * q, axis=1))[:, None]  # q and -q are one rotation
+    np.testing.assert_allclose(q, ref_wxyz * same_sign, atol=1e-12)

@@ -107,3 +107,37 @@ def test_window_normals_equal_the_grid_normals_and_float64_reference() -> None:
                        ((36, 37), (5, 6)), ((30, 37), (0, 2))):
         window = hf.window_normals(rows, cols)  # bit-identical: a mesh can be made per tile
         np.testing.assert_array_equal(window, full[slice(*rows), slice(*cols)])
+
+
+def test_owning_constructor_takes_the_array_and_validates_it() -> None:
+    z = np.arange(12, dtype=np.float32).reshape(3, 4)
+    hf = Heightfield._owning(z, 0.5, (1.0, 2.0))
+    assert np.shares_memory(hf.z_m, z) and not hf.z_m.flags.writeable
+    assert hf.cell_size_m == 0.5 and hf.origin_xy_m == (1.0, 2.0)
+    public = Heightfield(z.copy(), 0.5, (1.0, 2.0))
+    xs, ys = np.random.default_rng(0).uniform(0.5, 3.0, (2, 50))
+    assert np.array_equal(hf.sample(xs + 1, ys + 2), public.sample(xs + 1, ys + 2))
+    bad = z.copy()
+    bad[1, 1] = np.nan
+    with pytest.raises(ConfigError, match="NaN"):
+        Heightfield._owning(bad, 0.5)
+
+
+def test_sample_and_gradient_equal_the_bilinear_formula_at_random_points() -> None:
+    rng = np.random.default_rng(3)
+    hf = Heightfield(rng.normal(size=(37, 53)).astype(np.float32), 0.25, (-3.0, 7.0))
+    r, c = rng.uniform(0, 36, 500), rng.uniform(0, 52, 500)
+    x, y = hf.xy_of(r, c)
+    r0, c0 = np.floor(r).astype(int), np.floor(c).astype(int)
+    fr, fc = r - r0, c - c0
+    z = hf.z_m.astype(np.float64)
+    ref = ((z[r0, c0] * (1 - fc) + z[r0, c0 + 1] * fc) * (1 - fr)
+           + (z[r0 + 1, c0] * (1 - fc) + z[r0 + 1, c0 + 1] * fc) * fr)
+    np.testing.assert_allclose(hf.sample(x, y), ref, rtol=0, atol=1e-12)
+    gx, gy = hf.gradient(x, y)
+    np.testing.assert_allclose(
+        gx, ((z[r0, c0 + 1] - z[r0, c0]) * (1 - fr) + (z[r0 + 1, c0 + 1] - z[r0 + 1, c0]) * fr)
+        / 0.25, atol=1e-10)
+    np.testing.assert_allclose(
+        gy, ((z[r0 + 1, c0] - z[r0, c0]) * (1 - fc) + (z[r0 + 1, c0 + 1] - z[r0, c0 + 1]) * fc)
+        / 0.25, atol=1e-10)

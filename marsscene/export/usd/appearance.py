@@ -22,6 +22,7 @@ runtime camera draws 2048 px from the same generator: USD and MuJoCo share the s
 from __future__ import annotations
 
 import io
+from dataclasses import dataclass
 from functools import lru_cache
 from types import SimpleNamespace
 from typing import Any
@@ -32,8 +33,8 @@ from pxr import Gf, Sdf, UsdShade
 from marsscene.seeding import stage_rng
 from marsscene.terrain.appearance import normal_map_rgb, regolith_tile
 
-__all__ = ["DETAIL_TILE_M", "LARGE_ALBEDO_TEXTURE", "NORMAL_TEXTURE", "author_regolith_detail",
-           "large_scale_albedo"]
+__all__ = ["DETAIL_TILE_M", "LARGE_ALBEDO_TEXTURE", "NORMAL_TEXTURE", "RegolithTextures",
+           "author_regolith_detail", "large_scale_albedo", "regolith_textures"]
 
 DETAIL_TILE_M = 8.0
 DETAIL_PX = 1024
@@ -43,13 +44,14 @@ LARGE_TEXEL_MIN_M = 1.0
 LARGE_MAX_PX = 4096
 
 
-def _png(rgb: np.ndarray) -> bytes:
+def _png(rgb: np.ndarray, *, compress_level: int = 1) -> bytes:
     from PIL import Image
 
     buf = io.BytesIO()
-    # zlib level 1: 5x faster than the default 6 on these noisy tiles, ~3 % larger
-    Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8)).save(buf, format="PNG",
-                                                                    compress_level=1)
+    # zlib level 1 for the generated tiles: 5x faster than the default 6 on these noisy
+    # tiles, ~3 % larger
+    Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8), mode="RGB").save(
+        buf, format="PNG", compress_level=compress_level)
     return buf.getvalue()
 
 
@@ -101,6 +103,32 @@ def _large_albedo_png(seed: int, size_m: tuple[float, float], sw_xy_m: tuple[flo
     return _png(_srgb_u8(large_scale_albedo(hf, np.asarray(mean_rgb), seed)))
 
 
+@dataclass(frozen=True)
+class RegolithTextures:
+    """The terrain material's image files (PNG bytes), made without pxr so that
+    :func:`regolith_textures` can run on a background thread while tiles are authored."""
+
+    normal_png: bytes
+    mean_albedo_rgb: tuple[float, float, float]
+    large_albedo_png: bytes | None  # None where an orthoimage is the diffuse colour
+    ortho_png: bytes | None  # the draped orthoimage, where there is one
+
+
+def regolith_textures(scene: Any) -> RegolithTextures:
+    """Encode the detail normal map, the large-scale albedo (without an orthoimage) and the
+    orthoimage (with one) of ``scene``. numpy and Pillow only: safe off the main thread."""
+    normal, mean = _detail_normal_png(int(scene.seed))
+    large = ortho = None
+    if scene.texture_rgb is None:
+        hf = scene.heightfield
+        x0, y0 = hf.xy_of(0, 0)
+        large = _large_albedo_png(int(scene.seed), tuple(hf.size_m), (float(x0), float(y0)),
+                                  mean)
+    else:
+        ortho = _png(scene.texture_rgb, compress_level=6)
+    return RegolithTextures(normal, mean, large, ortho)
+
+
 def _texture(stage: Any, path: str, file: str, st: Any, color_space: str,
              wrap: str = "repeat") -> Any:
     tex = UsdShade.Shader.Define(stage, Sdf.Path(path))
@@ -114,7 +142,8 @@ def _texture(stage: Any, path: str, file: str, st: Any, color_space: str,
 
 
 def author_regolith_detail(
-    stage: Any, material_path: str, surface: Any, scene: Any, assets: dict[str, bytes]
+    stage: Any, material_path: str, surface: Any, scene: Any, assets: dict[str, bytes],
+    textures: RegolithTextures,
 ) -> None:
     """Add the detail normal map (and large-scale albedo, without an orthoimage) to ``surface``.
 
@@ -122,7 +151,7 @@ def author_regolith_detail(
     whole terrain in [0, 1], so the detail coordinates are ``st * size / DETAIL_TILE_M``.
     """
     # image files store the top row first; the tile's row 0 is at v = 0 (the bottom)
-    assets[NORMAL_TEXTURE], mean = _detail_normal_png(int(scene.seed))
+    assets[NORMAL_TEXTURE] = textures.normal_png
     reader = UsdShade.Shader.Define(stage, Sdf.Path(f"{material_path}/DetailStReader"))
     reader.CreateIdAttr("UsdPrimvarReader_float2")
     reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
@@ -140,11 +169,8 @@ def author_regolith_detail(
     # UsdUVTexture's outputs are float3 (the validator checks the declared type)
     surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(
         normal.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
-    if scene.texture_rgb is None:
-        hf = scene.heightfield
-        x0, y0 = hf.xy_of(0, 0)
-        assets[LARGE_ALBEDO_TEXTURE] = _large_albedo_png(
-            int(scene.seed), tuple(hf.size_m), (float(x0), float(y0)), mean)
+    if textures.large_albedo_png is not None:
+        assets[LARGE_ALBEDO_TEXTURE] = textures.large_albedo_png
         albedo = _texture(stage, f"{material_path}/LargeAlbedo", LARGE_ALBEDO_TEXTURE,
                           reader.ConnectableAPI(), "sRGB", wrap="clamp")
         surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(

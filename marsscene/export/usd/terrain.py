@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
-import io
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
-from marsscene.export.usd.appearance import author_regolith_detail
+from marsscene._threads import prefetch
+from marsscene.export.usd.appearance import (
+    RegolithTextures,
+    author_regolith_detail,
+    regolith_textures,
+)
 from marsscene.export.usd.physics import (
     REGOLITH_PHYSICS,
     author_physics_material,
@@ -28,29 +33,20 @@ TEXTURE_PATH = "textures/terrain_albedo.png"
 TERRAIN_ASSET = "assets/terrain.usdc"
 
 
-def _png_bytes(rgb: np.ndarray) -> bytes:
-    from PIL import Image
-
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(rgb), mode="RGB").save(buf, format="PNG", optimize=False)
-    return buf.getvalue()
-
-
-def _material(stage: Any, scene: Any, assets: dict[str, bytes]) -> UsdShade.Material:
-    looks = "/Terrain/Looks"
-    UsdGeom.Scope.Define(stage, Sdf.Path(looks))
-    mat = UsdShade.Material.Define(stage, Sdf.Path(f"{looks}/Regolith"))
-    shader = UsdShade.Shader.Define(stage, Sdf.Path(f"{looks}/Regolith/PreviewSurface"))
+def _material(stage: Any, material: Any, scene: Any, assets: dict[str, bytes],
+              textures: RegolithTextures) -> None:
+    looks = material.GetPath().GetParentPath()
+    shader = UsdShade.Shader.Define(stage, looks.AppendPath("Regolith/PreviewSurface"))
     shader.CreateIdAttr("UsdPreviewSurface")
     shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.95)
     shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(0.0)
     diffuse = shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f)
-    if scene.texture_rgb is not None:
-        assets[TEXTURE_PATH] = _png_bytes(scene.texture_rgb)
-        reader = UsdShade.Shader.Define(stage, Sdf.Path(f"{looks}/Regolith/StReader"))
+    if textures.ortho_png is not None:
+        assets[TEXTURE_PATH] = textures.ortho_png
+        reader = UsdShade.Shader.Define(stage, looks.AppendPath("Regolith/StReader"))
         reader.CreateIdAttr("UsdPrimvarReader_float2")
         reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
-        tex = UsdShade.Shader.Define(stage, Sdf.Path(f"{looks}/Regolith/Albedo"))
+        tex = UsdShade.Shader.Define(stage, looks.AppendPath("Regolith/Albedo"))
         tex.CreateIdAttr("UsdUVTexture")
         tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(f"../{TEXTURE_PATH}")
         tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("sRGB")
@@ -62,9 +58,8 @@ def _material(stage: Any, scene: Any, assets: dict[str, bytes]) -> UsdShade.Mate
         diffuse.ConnectToSource(tex.ConnectableAPI(), "rgb")
     else:
         diffuse.Set(Gf.Vec3f(*REGOLITH_ALBEDO_RGB))
-    author_regolith_detail(stage, f"{looks}/Regolith", shader, scene, assets)
-    mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
-    return mat
+    author_regolith_detail(stage, str(material.GetPath()), shader, scene, assets, textures)
+    material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
 
 
 def author_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
@@ -86,40 +81,47 @@ def author_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
 def _author_tiles(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     cfg = scene.config.export
     terrain = UsdGeom.Xform.Get(stage, Sdf.Path("/Terrain"))
-    material = _material(stage, scene, assets)
-    physics = author_physics_material(stage, Sdf.Path("/Terrain/Looks"), REGOLITH_PHYSICS)
+    looks = Sdf.Path("/Terrain/Looks")
+    UsdGeom.Scope.Define(stage, looks)
+    material = UsdShade.Material.Define(stage, looks.AppendChild("Regolith"))
+    physics = author_physics_material(stage, looks, REGOLITH_PHYSICS)
     # tiles of one shape share one face-index array: convert it to Vt once (VtArrays are
     # copy-on-write, so every tile's attribute holds the same buffer)
     topology: dict[int, tuple[Vt.IntArray, Vt.IntArray]] = {}
-    tiles = iter_heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts)
-    for tile in tiles:  # one tile's numpy arrays alive at a time
-        mesh = UsdGeom.Mesh.Define(stage, terrain.GetPath().AppendChild(tile.name))
-        faces = tile.face_vertex_indices
-        if id(faces) not in topology:  # the generator keeps each shared array alive
-            topology[id(faces)] = (Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)),
-                                   Vt.IntArray.FromNumpy(faces.ravel()))
-        counts, indices = topology[id(faces)]
-        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(tile.points_m))
-        mesh.CreateFaceVertexCountsAttr(counts)
-        mesh.CreateFaceVertexIndicesAttr(indices)
-        mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(tile.normals))
-        mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
-        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-        mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
-        mesh.CreateDoubleSidedAttr(False)
-        pts = tile.points_m  # a regular grid: x, y bounds are its first and last posts
-        z = pts[:, 2]
-        lo = (min(pts[0, 0], pts[-1, 0]), min(pts[0, 1], pts[-1, 1]), z.min())
-        hi = (max(pts[0, 0], pts[-1, 0]), max(pts[0, 1], pts[-1, 1]), z.max())
-        mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)),
-                                             Gf.Vec3f(*map(float, hi))]))
-        st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
-            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex
-        )
-        st.Set(Vt.Vec2fArray.FromNumpy(tile.st))
-        UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
-        UsdPhysics.CollisionAPI.Apply(mesh.GetPrim())
-        UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(
-            UsdPhysics.Tokens.none
-        )
-        bind_physics_material(mesh.GetPrim(), physics)
+    # Two background threads (numpy and Pillow only, never pxr; see marsscene._threads)
+    # encode the textures and mesh the next tiles while this thread hands arrays to pxr.
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="marsscene-textures") as pool:
+        textures = pool.submit(regolith_textures, scene)
+        tiles = iter_heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts)
+        for tile in prefetch(tiles, depth=2, name="marsscene-tiles"):
+            mesh = UsdGeom.Mesh.Define(stage, terrain.GetPath().AppendChild(tile.name))
+            faces = tile.face_vertex_indices
+            if id(faces) not in topology:  # the generator keeps each shared array alive
+                topology[id(faces)] = (Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)),
+                                       Vt.IntArray.FromNumpy(faces.ravel()))
+            counts, indices = topology[id(faces)]
+            mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(tile.points_m))
+            mesh.CreateFaceVertexCountsAttr(counts)
+            mesh.CreateFaceVertexIndicesAttr(indices)
+            mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(tile.normals))
+            mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+            mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+            mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
+            mesh.CreateDoubleSidedAttr(False)
+            pts = tile.points_m  # a regular grid: x, y bounds are its first and last posts
+            z = pts[:, 2]
+            lo = (min(pts[0, 0], pts[-1, 0]), min(pts[0, 1], pts[-1, 1]), z.min())
+            hi = (max(pts[0, 0], pts[-1, 0]), max(pts[0, 1], pts[-1, 1]), z.max())
+            mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)),
+                                                 Gf.Vec3f(*map(float, hi))]))
+            st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
+                "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex
+            )
+            st.Set(Vt.Vec2fArray.FromNumpy(tile.st))
+            UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+            UsdPhysics.CollisionAPI.Apply(mesh.GetPrim())
+            UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(
+                UsdPhysics.Tokens.none
+            )
+            bind_physics_material(mesh.GetPrim(), physics)
+        _material(stage, material, scene, assets, textures.result())

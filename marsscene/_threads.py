@@ -1,0 +1,79 @@
+"""Overlap numpy work with pxr calls: a bounded background producer for an iterator.
+
+pxr's Python bindings hold the GIL while they copy arrays and write layers, but numpy and
+Pillow release it for their large operations, so a second thread that only runs numpy/Pillow
+(never pxr) keeps the second core busy while the main thread authors USD.
+
+One rule keeps this safe: **every pxr module is imported before such a thread starts.**
+Importing a pxr extension module runs its static initialisers inside ``dlopen`` (holding the
+dynamic loader's lock) and those wait for the GIL; a numpy call in another thread that holds
+the GIL can meanwhile ask for the loader's lock (numpy's temporary elision walks the stack with
+``backtrace``), and the two wait for each other forever. The USD writer imports all of its pxr
+modules before it starts a producer (:func:`marsscene.export.usd.to_stage`).
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+from collections.abc import Iterable, Iterator
+from typing import TypeVar
+
+__all__ = ["prefetch"]
+
+T = TypeVar("T")
+
+_DONE = object()
+
+
+def prefetch(items: Iterable[T], *, depth: int = 2, name: str = "marsscene-prefetch"
+             ) -> Iterator[T]:
+    """Yield ``items`` in order, produced by a background thread up to ``depth`` items ahead.
+
+    An exception raised while producing an item is re-raised here, at that item. Closing the
+    returned generator early (``break``, an exception in the consumer) stops the producer and
+    joins it, so no thread outlives the loop.
+    """
+    buf: queue.Queue[object] = queue.Queue(maxsize=max(1, depth))
+    stop = threading.Event()
+
+    def produce() -> None:
+        try:
+            for item in items:
+                while not stop.is_set():
+                    try:
+                        buf.put(item, timeout=0.05)
+                        break
+                    except queue.Full:
+                        continue
+                if stop.is_set():
+                    return
+        except BaseException as err:  # handed to the consumer, raised there
+            buf.put(_Raised(err))
+            return
+        buf.put(_DONE)
+
+    worker = threading.Thread(target=produce, name=name, daemon=True)
+    worker.start()
+    try:
+        while True:
+            got = buf.get()
+            if got is _DONE:
+                return
+            if isinstance(got, _Raised):
+                raise got.err
+            yield got  # type: ignore[misc]
+    finally:
+        stop.set()
+        while worker.is_alive():  # unblock a producer waiting on a full queue
+            try:
+                buf.get_nowait()
+            except queue.Empty:
+                worker.join(0.05)
+
+
+class _Raised:
+    __slots__ = ("err",)
+
+    def __init__(self, err: BaseException) -> None:
+        self.err = err
