@@ -9,19 +9,22 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterable
+from concurrent.futures import Future, ThreadPoolExecutor
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from marsscene._atomic import probe_writable, replacing_dir
+from marsscene._threads import worth_a_thread
 from marsscene.errors import ExportError, MarsSceneError
 
 __all__ = ["WRITERS", "check_export_dependencies", "check_output_dir", "write_scene"]
 
 
-def _write_usd(scene: Any, out: Path) -> list[Path]:
+def _write_usd(scene: Any, out: Path, textures: Future[Any] | None = None) -> list[Path]:
     from marsscene.export.usd import write_usd
 
-    return write_usd(scene, out, usd_format=scene.config.export.usd_format)
+    return write_usd(scene, out, usd_format=scene.config.export.usd_format, textures=textures)
 
 
 def _write_mjcf(scene: Any, out: Path) -> list[Path]:
@@ -99,13 +102,22 @@ def write_scene(
     final = Path(out_dir).resolve()
     written: dict[str, list[Path]] = {}
     try:
-        with replacing_dir(final, overwrite=overwrite) as tmp:
+        with (replacing_dir(final, overwrite=overwrite) as tmp,
+              ThreadPoolExecutor(max_workers=1, thread_name_prefix="marsscene-textures") as pool):
             timings = dict(scene.provenance.timings_s)
-            # Sequential on purpose: running the USD writer beside another thread deadlocked
-            # (usd-core 26.11: pxr's internal locks and the GIL), see docs/usd.md.
-            for fmt in fmts:
-                written[fmt], timings[f"export_{fmt}"] = _timed(WRITERS[fmt], scene, tmp)
-            written["catalogs"], _ = _timed(_write_catalogs, scene, tmp)
+            writers = {fmt: WRITERS[fmt] for fmt in fmts}
+            if writers.get("usd") is _write_usd and worth_a_thread(scene.heightfield.z_m.size):
+                # The USD material's textures (numpy + Pillow) are encoded on a background
+                # thread while the catalogues, the MJCF and the terrain tiles are written; the
+                # USD writer itself (pxr) runs on this thread, last (see docs/usd.md).
+                from marsscene.export.usd import start_textures
+
+                writers["usd"] = partial(_write_usd, textures=start_textures(scene, pool))
+            catalogs, _ = _timed(_write_catalogs, scene, tmp)
+            for fmt in sorted(fmts, key=lambda f: f == "usd"):
+                written[fmt], timings[f"export_{fmt}"] = _timed(writers[fmt], scene, tmp)
+            written = {fmt: written[fmt] for fmt in fmts}  # manifest order: formats as asked
+            written["catalogs"] = catalogs
             rel = [p.relative_to(tmp).as_posix() for paths in written.values() for p in paths]
             (tmp / "manifest.json").write_bytes(manifest_bytes(scene, rel, timings_s=timings))
             written["manifest"] = [tmp / "manifest.json"]

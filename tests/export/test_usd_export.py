@@ -94,40 +94,32 @@ def test_binary_and_packaged_formats_open(tmp_path: Path, usd_format: str) -> No
     assert validate_stage(stage) == []
 
 
-class _InlineExecutor:
-    """A ThreadPoolExecutor stand-in that runs each task at once, on the calling thread."""
-
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        pass
-
-    def __enter__(self) -> _InlineExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def submit(self, fn, *args):  # type: ignore[no-untyped-def]
-        from concurrent.futures import Future
-
-        fut: Future[object] = Future()
-        fut.set_result(fn(*args))
-        return fut
-
-
-def test_background_threads_do_not_change_the_terrain_files(
+def test_background_threads_do_not_change_the_written_files(
     written: tuple[ms.Scene, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The terrain layer and its textures are the same bytes whether the tiles and textures
-    are made on background threads (the default) or inline on one thread."""
-    from marsscene.export.usd import terrain
+    """Every file but the manifest (which holds timings) is the same bytes whether the tiles
+    and textures are made on background threads (big terrains) or on one thread (small ones,
+    as the fixture's)."""
+    import threading
+
+    import marsscene._threads as threads
 
     scene, out = written
-    monkeypatch.setattr(terrain, "prefetch", lambda items, **kwargs: iter(items))
-    monkeypatch.setattr(terrain, "ThreadPoolExecutor", _InlineExecutor)
-    ms.write_scene(scene, tmp_path / "inline", formats=("usd",))
+    assert not threads.worth_a_thread(scene.heightfield.z_m.size)
+    monkeypatch.setattr(threads, "THREADED_MIN_POSTS", 1)
+    seen: set[str] = set()
+    start = threading.Thread.start
+
+    def spy(self: threading.Thread) -> None:
+        seen.add(self.name.rsplit("_", 1)[0])
+        start(self)
+
+    monkeypatch.setattr(threading.Thread, "start", spy)
+    ms.write_scene(scene, tmp_path / "threaded", formats=("usd",))
+    assert {"marsscene-tiles", "marsscene-textures"} <= seen  # the threaded path ran
     files = [p.relative_to(out) for p in sorted(out.rglob("*")) if p.is_file()
              and p.name != "manifest.json"]
     assert Path("assets/terrain.usdc") in files
     assert Path("textures/regolith_detail_normal.png") in files
     for rel in files:
-        assert (tmp_path / "inline" / rel).read_bytes() == (out / rel).read_bytes(), rel
+        assert (tmp_path / "threaded" / rel).read_bytes() == (out / rel).read_bytes(), rel

@@ -23,12 +23,13 @@ and ``.usdz`` outputs (tested).
 
 from __future__ import annotations
 
+from concurrent.futures import Executor, Future
 from pathlib import Path
 from typing import Any
 
 from marsscene.errors import missing_dependency
 
-__all__ = ["to_stage", "validate_stage", "write_usd"]
+__all__ = ["start_textures", "to_stage", "validate_stage", "write_usd"]
 
 
 def _pxr() -> None:
@@ -57,7 +58,37 @@ class _StreamedAssets(dict[str, Any]):
         super().__setitem__(rel, p)
 
 
-def to_stage(scene: Any, *, stream_to: str | Path | None = None) -> tuple[Any, dict[str, Any]]:
+def _import_authors() -> None:
+    """Import every module of the USD writer, and with them every pxr module it uses.
+
+    Call before starting a background thread: a pxr module imported while another thread runs
+    numpy can deadlock (see :mod:`marsscene._threads`).
+    """
+    _pxr()
+    from pxr import UsdUtils  # noqa: F401  (usdz packaging)
+
+    import marsscene.export.usd.assets
+    import marsscene.export.usd.cameras
+    import marsscene.export.usd.craters
+    import marsscene.export.usd.lighting
+    import marsscene.export.usd.rocks
+    import marsscene.export.usd.stage
+    import marsscene.export.usd.terrain
+    import marsscene.export.usd.terrain_lod
+    import marsscene.export.usd.usdz  # noqa: F401
+
+
+def start_textures(scene: Any, executor: Executor) -> Future[Any]:
+    """Start encoding the terrain material's textures on ``executor`` (numpy and Pillow, no
+    pxr); pass the future to :func:`write_usd` so other work runs meanwhile."""
+    _import_authors()
+    from marsscene.export.usd.appearance import regolith_textures
+
+    return executor.submit(regolith_textures, scene)
+
+
+def to_stage(scene: Any, *, stream_to: str | Path | None = None,
+             textures: Future[Any] | None = None) -> tuple[Any, dict[str, Any]]:
     """Build the scene's USD stage in memory.
 
     Parameters
@@ -66,6 +97,9 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None) -> tuple[Any, d
     stream_to : path-like, optional
         Write each asset file into this folder as soon as it is authored (the returned dict
         then maps relative paths to the written paths).
+    textures : Future, optional
+        From :func:`start_textures`; by default the textures are made while the terrain tiles
+        are authored.
 
     Returns
     -------
@@ -75,7 +109,7 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None) -> tuple[Any, d
         in-memory asset stages (terrain, rocks, craters) whose root layers :func:`write_usd`
         exports directly to their ``.usdc`` files (no serialise-read-write round trip).
     """
-    _pxr()
+    _import_authors()
     from marsscene.export.usd.assets import author_assets
     from marsscene.export.usd.cameras import author_cameras
     from marsscene.export.usd.craters import author_craters
@@ -87,8 +121,9 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None) -> tuple[Any, d
 
     stage = create_stage(scene)
     assets: dict[str, Any] = _StreamedAssets(Path(stream_to)) if stream_to is not None else {}
-    for author in (author_terrain, author_outer_terrain, author_craters, author_rocks,
-                   author_lighting, author_cameras, author_assets):
+    author_terrain(stage, scene, assets, textures=textures)
+    for author in (author_outer_terrain, author_craters, author_rocks, author_lighting,
+                   author_cameras, author_assets):
         author(stage, scene, assets)
     return stage, assets
 
@@ -103,10 +138,13 @@ def validate_stage(stage: Any) -> list[str]:
     return [err.GetMessage() for err in context.Validate(stage)]
 
 
-def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda") -> list[Path]:
-    """Write ``out_dir/scene.<usd_format>`` and its assets; return the written paths."""
+def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda",
+              textures: Future[Any] | None = None) -> list[Path]:
+    """Write ``out_dir/scene.<usd_format>`` and its assets; return the written paths.
+    ``textures``: see :func:`to_stage`."""
     out = Path(out_dir)
-    stage, assets = to_stage(scene, stream_to=out)  # asset layers go to disk one at a time
+    # asset layers go to disk one at a time
+    stage, assets = to_stage(scene, stream_to=out, textures=textures)
     written = [p for _, p in sorted(assets.items())]
     layer = stage.GetRootLayer()
     if usd_format == "usdz":

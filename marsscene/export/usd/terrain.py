@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
-from marsscene._threads import prefetch
+from marsscene._threads import prefetch, worth_a_thread
 from marsscene.export.usd.appearance import (
     RegolithTextures,
     author_regolith_detail,
@@ -62,23 +62,33 @@ def _material(stage: Any, material: Any, scene: Any, assets: dict[str, bytes],
     material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
 
 
-def author_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
+def author_terrain(stage: Any, scene: Any, assets: dict[str, Any], *,
+                   textures: Future[RegolithTextures] | None = None) -> None:
     """Author ``/World/Terrain`` (a ``component``): a payload of ``assets/terrain.usdc`` holding
     the ``tile_i_j`` meshes, the regolith material, static triangle-mesh collision
     (approximation ``none``) and the regolith physics material (``physics`` purpose).
 
     The heavy geometry lives in a binary crate layer so that ``scene.usda`` stays small and
-    readable; a ``.usdz`` package carries both.
+    readable; a ``.usdz`` package carries both. ``textures``: the material's images, if
+    already started (:func:`marsscene.export.usd.start_textures`).
     """
     asset_stage = create_asset_stage("Terrain")
-    _author_tiles(asset_stage, scene, assets)
+    _author_tiles(asset_stage, scene, assets, textures)
     assets[TERRAIN_ASSET] = asset_stage  # a stage: its root layer is exported straight to its file
     prim = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Terrain")).GetPrim()
     set_kind(prim, "component")
     prim.GetPayloads().AddPayload(f"./{TERRAIN_ASSET}")
 
 
-def _author_tiles(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
+def _done(fn: Any, *args: Any) -> Future[Any]:
+    """``fn(*args)`` run now, as a finished future."""
+    fut: Future[Any] = Future()
+    fut.set_result(fn(*args))
+    return fut
+
+
+def _author_tiles(stage: Any, scene: Any, assets: dict[str, Any],
+                  textures: Future[RegolithTextures] | None) -> None:
     cfg = scene.config.export
     terrain = UsdGeom.Xform.Get(stage, Sdf.Path("/Terrain"))
     looks = Sdf.Path("/Terrain/Looks")
@@ -88,12 +98,15 @@ def _author_tiles(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     # tiles of one shape share one face-index array: convert it to Vt once (VtArrays are
     # copy-on-write, so every tile's attribute holds the same buffer)
     topology: dict[int, tuple[Vt.IntArray, Vt.IntArray]] = {}
-    # Two background threads (numpy and Pillow only, never pxr; see marsscene._threads)
-    # encode the textures and mesh the next tiles while this thread hands arrays to pxr.
+    # Background threads (numpy and Pillow only, never pxr; see marsscene._threads) encode
+    # the textures (unless the caller started them) and mesh the next tiles while this thread
+    # hands arrays to pxr.
+    threaded = worth_a_thread(scene.heightfield.z_m.size)
     with ThreadPoolExecutor(max_workers=1, thread_name_prefix="marsscene-textures") as pool:
-        textures = pool.submit(regolith_textures, scene)
+        if textures is None:
+            textures = (pool.submit if threaded else _done)(regolith_textures, scene)
         tiles = iter_heightfield_tiles(scene.heightfield, max_tile_posts=cfg.max_tile_posts)
-        for tile in prefetch(tiles, depth=2, name="marsscene-tiles"):
+        for tile in prefetch(tiles, depth=2, name="marsscene-tiles") if threaded else tiles:
             mesh = UsdGeom.Mesh.Define(stage, terrain.GetPath().AppendChild(tile.name))
             faces = tile.face_vertex_indices
             if id(faces) not in topology:  # the generator keeps each shared array alive
