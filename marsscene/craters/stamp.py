@@ -21,9 +21,12 @@ are stamped together as ``(m, S, S)`` arrays of equal padded box size ``S``; lar
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 from scipy.ndimage import uniform_filter
 
+from marsscene._threads import worth_a_thread
 from marsscene.craters.morphology import PROFILE_MODELS, ProfileFamily, profile_family
 from marsscene.craters.table import CraterTable
 from marsscene.terrain.heightfield import Heightfield
@@ -36,6 +39,7 @@ _SIZES = np.array([4, 6, 8, 12, 16, 24, 32, 48, 64])  # padded box sides of batc
 _PAD = int(_SIZES[-1])
 _WAVE_CELL = 16  # posts per cell of the coarse occupancy grid used to find overlaps
 _BATCH_POSTS = 1_000_000
+_STAMP_THREADS = 2  # threads for a wave's batches of small craters
 #: Width of the box low-pass (in crater radii, >= 3 posts): inside the rim only the old surface's
 #: low-pass is replaced by the plane, so roughness finer than ~0.2 R survives in young craters.
 _LOWPASS_RADII = 0.2
@@ -158,19 +162,33 @@ def stamp_craters(
     by_wave = np.argsort(wave, kind="stable")
     wave_order = order[by_wave]
     bounds = np.searchsorted(wave[by_wave], np.arange(int(wave.max(initial=-1)) + 2))
-    for w in range(bounds.size - 1):
-        members = wave_order[bounds[w]:bounds[w + 1]]
-        for i in members[~small[members]]:
-            _stamp_slice(z, xs, ys, p, int(i), (r0[i], r1[i], c0[i], c1[i]))
-        sm = members[small[members]]
-        for k in np.unique(size_class[sm]):
-            ids = sm[size_class[sm] == k]
-            step = min(4096, max(1, _BATCH_POSTS // int(_SIZES[k]) ** 2))
-            for a in range(0, ids.size, step):
-                chunk = ids[a:a + step]
-                rr = br0[chunk, None] + _PAD + np.arange(_SIZES[k])[None, :]
-                cc2 = bc0[chunk, None] + _PAD + np.arange(_SIZES[k])[None, :]
-                _stamp_boxes(zpad, xpad, ypad, valid_r, valid_c, p, chunk, rr, cc2)
+    def boxes(chunk: np.ndarray, k: int) -> None:
+        rr = br0[chunk, None] + _PAD + np.arange(_SIZES[k])[None, :]
+        cc2 = bc0[chunk, None] + _PAD + np.arange(_SIZES[k])[None, :]
+        _stamp_boxes(zpad, xpad, ypad, valid_r, valid_c, p, chunk, rr, cc2)
+
+    # A wave's batches of small craters read and write only their own disjoint boxes, so two
+    # threads stamp them (numpy releases the GIL in these (m, S, S) array operations) with the
+    # same result as one; large craters read a low-pass halo around their box and stay serial.
+    threaded = worth_a_thread(rows * cols)
+    with ThreadPoolExecutor(max_workers=_STAMP_THREADS,
+                            thread_name_prefix="marsscene-craters") as pool:
+        for w in range(bounds.size - 1):
+            members = wave_order[bounds[w]:bounds[w + 1]]
+            for i in members[~small[members]]:
+                _stamp_slice(z, xs, ys, p, int(i), (r0[i], r1[i], c0[i], c1[i]))
+            sm = members[small[members]]
+            batches = []
+            for k in np.unique(size_class[sm]).tolist():
+                ids = sm[size_class[sm] == k]
+                step = min(4096, max(1, _BATCH_POSTS // int(_SIZES[k]) ** 2))
+                batches += [(ids[a:a + step], k) for a in range(0, ids.size, step)]
+            if len(batches) > 1 and threaded:
+                for done in [pool.submit(boxes, *b) for b in batches]:
+                    done.result()
+            else:
+                for b in batches:
+                    boxes(*b)
     return heightfield._with_owned_z(z.astype(np.float32))
 
 

@@ -148,3 +148,31 @@ def test_edge_padding_equals_numpy_pad(shape: tuple[int, int]) -> None:
     for pad in (1, 4, 64):
         expected = np.pad(z.astype(np.float64), pad, mode="edge")
         np.testing.assert_array_equal(stamp_mod._edge_padded(z, pad), expected)
+
+
+def test_threaded_batches_give_the_same_bytes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A wave's batches of small craters stamped on two threads equal one thread, bit for bit
+    (their boxes are disjoint); the threads run on big terrains only."""
+    import threading
+
+    import marsscene._threads as threads
+
+    hf = _flat(n=401, slope=0.02)
+    cfg = CraterConfig(system="hartmann-daubar-2016", d_min_m=0.5, d_max_m=12.0, age_ga=3.5,
+                       axis_ratio_min=0.7)
+    table, _ = sample_craters(hf.bounds_xy_m, cfg, rng=np.random.default_rng(3))
+    monkeypatch.setattr(stamp_mod, "_BATCH_POSTS", 4096)  # many batches per wave
+    names: set[str] = set()
+    start = threading.Thread.start
+
+    def spy(self: threading.Thread) -> None:
+        names.add(self.name)
+        start(self)
+
+    monkeypatch.setattr(threading.Thread, "start", spy)
+    one = stamp_craters(hf, table, profile_kwargs=cfg.profile_kwargs()).z_m
+    assert not names  # a small terrain: one thread
+    monkeypatch.setattr(threads, "THREADED_MIN_POSTS", 1)
+    two = stamp_craters(hf, table, profile_kwargs=cfg.profile_kwargs()).z_m
+    assert sum(n.startswith("marsscene-craters") for n in names) == 2  # both workers ran
+    assert np.array_equal(one, two)
