@@ -20,8 +20,10 @@ from __future__ import annotations
 import dataclasses
 import logging
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+from marsscene._threads import worth_a_thread
 from marsscene.config import SceneConfig
 from marsscene.craters import sample_craters, stamp_craters
 from marsscene.craters.config import CraterConfig
@@ -44,6 +46,8 @@ __all__ = ["LodWorld", "build_tile", "focus_heightfield", "focus_rocks", "lod_cr
            "lod_world", "outer_rocks"]
 
 log = logging.getLogger("marsscene")
+
+_TILE_THREADS = 2  # focus tiles whose rocks are placed at a time
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,7 +188,7 @@ def focus_heightfield(world: LodWorld, craters: CraterTable | None,
                                 craters=craters, ccfg=ccfg, base=world.base)
             z[tiling.posts(row), tiling.posts(col)] = tile.z_m
             log.info("[terrain] tile %d/%d", row * tiling.count + col + 1, tiling.count ** 2)
-    return Heightfield(z, plan.fine_post_m, plan.bounds_xy_m[:2])
+    return Heightfield._owning(z, plan.fine_post_m, plan.bounds_xy_m[:2])
 
 
 def _tile_window(hf: Heightfield, tiling: FocusTiling, row: int, col: int) -> Heightfield:
@@ -199,8 +203,17 @@ def focus_rocks(hf: Heightfield, tiling: FocusTiling, craters: CraterTable, rcfg
     """Stage 4: rocks of the focus square, placed tile by tile from per-tile streams."""
     tiles = tiles if tiles is not None else [(r, c) for r in range(tiling.count)
                                              for c in range(tiling.count)]
-    parts = [place_rocks(_tile_window(hf, tiling, r, c), craters, rcfg,
-                         rng=tile_rng(seed, "rocks_tile", r, c)) for r, c in tiles]
+
+    def one(cell: tuple[int, int]) -> RockTable:
+        r, c = cell
+        return place_rocks(_tile_window(hf, tiling, r, c), craters, rcfg,
+                           rng=tile_rng(seed, "rocks_tile", r, c))
+
+    # per-tile streams: the same rocks on any number of threads
+    threads = _TILE_THREADS if len(tiles) > 1 and worth_a_thread(hf.z_m.size) else 1
+    with ThreadPoolExecutor(max_workers=threads,
+                            thread_name_prefix="marsscene-focus-rocks") as pool:
+        parts = list(pool.map(one, tiles))
     return parts[0] if len(parts) == 1 else concat_tables(*parts)
 
 

@@ -171,6 +171,8 @@ def stamp_craters(
     # threads stamp them (numpy releases the GIL in these (m, S, S) array operations) with the
     # same result as one; large craters read a low-pass halo around their box and stay serial.
     threaded = worth_a_thread(rows * cols)
+    # two batches in flight hold the temporaries of one batch of the single-threaded path
+    batch_posts = _BATCH_POSTS // _STAMP_THREADS if threaded else _BATCH_POSTS
     with ThreadPoolExecutor(max_workers=_STAMP_THREADS,
                             thread_name_prefix="marsscene-craters") as pool:
         for w in range(bounds.size - 1):
@@ -181,7 +183,7 @@ def stamp_craters(
             batches = []
             for k in np.unique(size_class[sm]).tolist():
                 ids = sm[size_class[sm] == k]
-                step = min(4096, max(1, _BATCH_POSTS // int(_SIZES[k]) ** 2))
+                step = min(4096, max(1, batch_posts // int(_SIZES[k]) ** 2))
                 batches += [(ids[a:a + step], k) for a in range(0, ids.size, step)]
             if len(batches) > 1 and threaded:
                 for done in [pool.submit(boxes, *b) for b in batches]:

@@ -199,13 +199,33 @@ def test_camera_hides_the_lowered_outer_hfield(gentle: tuple[ms.Scene, Path]) ->
         cam.close()
 
 
-def test_lod_outputs_are_byte_reproducible(tmp_path: Path) -> None:
+def test_lod_outputs_are_byte_reproducible(tmp_path: Path,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two builds give the same bytes; the second one runs every helper thread (focus rocks
+    per tile, crater batches, textures, tile meshing), which small scenes otherwise skip."""
+    import threading
+
+    import marsscene._threads as threads
+
     cfg = ms.SceneConfig.from_dict({**_GENTLE, "rocks": {"d_min_m": 0.3},
-                                    "craters": {"d_min_m": 2.0, "d_max_m": 20.0}})
+                                    "craters": {"d_min_m": 2.0, "d_max_m": 20.0},
+                                    "terrain": {**_GENTLE["terrain"], "tile_m": 12.0}})
     outs = []
+    names: set[str] = set()
+    start = threading.Thread.start
+
+    def spy(self: threading.Thread) -> None:
+        names.add(self.name.rsplit("_", 1)[0])
+        start(self)
+
     for name in ("a", "b"):
+        if name == "b":
+            monkeypatch.setattr(threads, "THREADED_MIN_POSTS", 1)
+            monkeypatch.setattr(threading.Thread, "start", spy)
         ms.write_scene(ms.build_scene(cfg, seed=6), tmp_path / name)
         outs.append(tmp_path / name)
+    assert {"marsscene-focus-rocks", "marsscene-textures", "marsscene-tiles",
+            "marsscene-outer-tiles"} <= names
     files = sorted(p.relative_to(outs[0]) for p in outs[0].rglob("*") if p.is_file()
                    and p.name != "manifest.json")
     assert any("terrain_lod1" in str(f) for f in files)

@@ -100,7 +100,11 @@ def _large_albedo_png(seed: int, size_m: tuple[float, float], sw_xy_m: tuple[flo
                       mean_rgb: tuple[float, float, float]) -> bytes:
     """The large-scale albedo PNG of a footprint (cached like the normal map)."""
     hf = SimpleNamespace(size_m=size_m, xy_of=lambda r, c: sw_xy_m)
-    return _png(_srgb_u8(large_scale_albedo(hf, np.asarray(mean_rgb), seed)))
+    linear = large_scale_albedo(hf, np.asarray(mean_rgb), seed)
+    srgb = np.zeros(linear.shape, dtype=np.uint8)
+    for a in range(0, len(linear), 256):  # float64 temporaries of 256 rows at a time
+        srgb[a:a + 256] = _srgb_u8(linear[a:a + 256])
+    return _png(srgb)
 
 
 @dataclass(frozen=True)

@@ -15,11 +15,13 @@ Scenes without level of detail are unchanged.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
 
+from marsscene._threads import prefetch, worth_a_thread
 from marsscene.export.usd.physics import (
     REGOLITH_PHYSICS,
     author_physics_material,
@@ -38,17 +40,13 @@ def _lod_attr(prim: Any, level: int) -> None:
     prim.CreateAttribute(LOD_ATTR, Sdf.ValueTypeNames.Int, custom=True).Set(level)
 
 
-def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
-    """Author ``/World/TerrainLod1`` tile payloads (nothing for scenes without an outer level)."""
-    outer = scene.outer
-    if outer is None:
-        return
-    from marsscene.export.usd.terrain import REGOLITH_ALBEDO_RGB
+_Arrays = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
-    _lod_attr(stage.GetPrimAtPath(f"{WORLD}/Terrain"), 0)
-    root = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/TerrainLod{outer.level}"))
-    set_kind(root.GetPrim(), "group")
-    _lod_attr(root.GetPrim(), outer.level)
+
+def _outer_tiles(outer: Any, max_posts: int) -> Iterator[tuple[str, _Arrays]]:
+    """``(name, (points, normals, st, faces))`` of every outer tile that is not wholly inside
+    the focus; numpy only, so it can run on a helper thread (:func:`marsscene._threads.prefetch`).
+    """
     hf = outer.heightfield
     rows, cols = hf.shape
     xs, ys = hf.grid_xy()
@@ -57,7 +55,6 @@ def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None
     t_all = ((ys - ys[0]) / (ys[-1] - ys[0])).astype(np.float32)
     fx0, fy0, fx1, fy1 = outer.focus_bounds_xy_m
     half = hf.cell_size_m / 2.0
-    max_posts = scene.config.export.max_tile_posts
     for ti, (r0, r1) in enumerate(tile_ranges(rows, max_posts)):
         for tj, (c0, c1) in enumerate(tile_ranges(cols, max_posts)):
             cx = xs[c0:c1 - 1] + half
@@ -74,16 +71,38 @@ def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None
             pts = np.stack([gx, gy, hf.z_m[r0:r1, c0:c1]], axis=-1).reshape(-1, 3)[used]
             ss, tt = np.meshgrid(s_all[c0:c1], t_all[r0:r1])
             st = np.stack([ss, tt], axis=-1).reshape(-1, 2)[used]
-            name = f"tile_{ti}_{tj}"
-            rel = f"{OUTER_DIR}/{name}.usdc"
-            layer = create_asset_stage("Tile")
-            _mesh(layer, pts.astype(np.float32), normals[r0:r1, c0:c1].reshape(-1, 3)[used],
-                  st, remap[faces].astype(np.int32), REGOLITH_ALBEDO_RGB)
-            assets[rel] = layer  # a stage: its root layer is exported straight to its file
-            prim = UsdGeom.Xform.Define(stage, root.GetPath().AppendChild(name)).GetPrim()
-            set_kind(prim, "component")
-            prim.GetPayloads().AddPayload(f"./{rel}")
-            _lod_attr(prim, outer.level)
+            yield f"tile_{ti}_{tj}", (pts.astype(np.float32),
+                                      normals[r0:r1, c0:c1].reshape(-1, 3)[used], st,
+                                      remap[faces].astype(np.int32))
+
+
+def author_outer_terrain(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
+    """Author ``/World/TerrainLod1`` tile payloads (nothing for scenes without an outer level).
+
+    The next tiles' arrays are made on a helper thread while pxr takes the current one (big
+    outer levels; see :mod:`marsscene._threads`)."""
+    outer = scene.outer
+    if outer is None:
+        return
+    from marsscene.export.usd.terrain import REGOLITH_ALBEDO_RGB
+
+    _lod_attr(stage.GetPrimAtPath(f"{WORLD}/Terrain"), 0)
+    root = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/TerrainLod{outer.level}"))
+    set_kind(root.GetPrim(), "group")
+    _lod_attr(root.GetPrim(), outer.level)
+    tiles = _outer_tiles(outer, scene.config.export.max_tile_posts)
+    if worth_a_thread(outer.heightfield.z_m.size):
+        tiles = prefetch(tiles, depth=2, name="marsscene-outer-tiles")
+    for name, arrays in tiles:
+        rel = f"{OUTER_DIR}/{name}.usdc"
+        layer = create_asset_stage("Tile")
+        pts, normals, st, faces = arrays
+        _mesh(layer, pts, normals, st, faces, REGOLITH_ALBEDO_RGB)
+        assets[rel] = layer  # a stage: its root layer is exported straight to its file
+        prim = UsdGeom.Xform.Define(stage, root.GetPath().AppendChild(name)).GetPrim()
+        set_kind(prim, "component")
+        prim.GetPayloads().AddPayload(f"./{rel}")
+        _lod_attr(prim, outer.level)
 
 
 def _mesh(stage: Any, pts: np.ndarray, normals: np.ndarray, st: np.ndarray, faces: np.ndarray,
