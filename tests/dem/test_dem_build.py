@@ -89,6 +89,10 @@ def test_usd_and_mjcf_carry_the_ortho(tmp_path: Path, dem_and_ortho: tuple[Path,
     assert validate_stage(stage) == []
     tex = stage.GetPrimAtPath("/World/Terrain/Looks/Regolith/Albedo")
     assert tex.IsValid() and (out / "textures/terrain_albedo.png").is_file()
+    from PIL import Image
+
+    with Image.open(out / "textures/terrain_albedo.png") as png:  # lossless, the same pixels
+        assert np.array_equal(np.asarray(png.convert("RGB")), scene.texture_rgb)
     # the vertex nearest the feature has st inside a bright texture pixel
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Terrain/tile_0_0"))
     pts = np.asarray(mesh.GetPointsAttr().Get())

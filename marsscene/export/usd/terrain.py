@@ -35,18 +35,18 @@ TERRAIN_ASSET = "assets/terrain.usdc"
 
 def _material(stage: Any, material: Any, scene: Any, assets: dict[str, bytes],
               textures: RegolithTextures) -> None:
-    looks = material.GetPath().GetParentPath()
-    shader = UsdShade.Shader.Define(stage, looks.AppendPath("Regolith/PreviewSurface"))
+    path = material.GetPath()
+    shader = UsdShade.Shader.Define(stage, path.AppendChild("PreviewSurface"))
     shader.CreateIdAttr("UsdPreviewSurface")
     shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.95)
     shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(0.0)
     diffuse = shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f)
     if textures.ortho_png is not None:
         assets[TEXTURE_PATH] = textures.ortho_png
-        reader = UsdShade.Shader.Define(stage, looks.AppendPath("Regolith/StReader"))
+        reader = UsdShade.Shader.Define(stage, path.AppendChild("StReader"))
         reader.CreateIdAttr("UsdPrimvarReader_float2")
         reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
-        tex = UsdShade.Shader.Define(stage, looks.AppendPath("Regolith/Albedo"))
+        tex = UsdShade.Shader.Define(stage, path.AppendChild("Albedo"))
         tex.CreateIdAttr("UsdUVTexture")
         tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(f"../{TEXTURE_PATH}")
         tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("sRGB")
@@ -58,7 +58,7 @@ def _material(stage: Any, material: Any, scene: Any, assets: dict[str, bytes],
         diffuse.ConnectToSource(tex.ConnectableAPI(), "rgb")
     else:
         diffuse.Set(Gf.Vec3f(*REGOLITH_ALBEDO_RGB))
-    author_regolith_detail(stage, str(material.GetPath()), shader, scene, assets, textures)
+    author_regolith_detail(stage, str(path), shader, scene, assets, textures)
     material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
 
 
