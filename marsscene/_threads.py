@@ -1,8 +1,10 @@
-"""Overlap numpy work with pxr calls: a bounded background producer for an iterator.
+"""Helper threads for big terrains: when to use them, and a bounded background producer.
 
 pxr's Python bindings hold the GIL while they copy arrays and write layers, but numpy and
 Pillow release it for their large operations, so a second thread that only runs numpy/Pillow
-(never pxr) keeps the second core busy while the main thread authors USD.
+(never pxr) keeps the second core busy while the main thread authors USD. The same test
+(:func:`worth_a_thread`) gates the other helpers: crater batches (``craters.stamp``) and the
+focus rocks of level-of-detail worlds (``pipeline_lod``).
 
 One rule keeps this safe: **every pxr module is imported before such a thread starts.**
 Importing a pxr extension module runs its static initialisers inside ``dlopen`` (holding the
@@ -32,7 +34,7 @@ _DONE = object()
 
 
 def worth_a_thread(n_posts: int) -> bool:
-    """Whether a terrain of ``n_posts`` posts is written with background helper threads."""
+    """Whether a terrain of ``n_posts`` posts is built and written with helper threads."""
     return n_posts >= THREADED_MIN_POSTS
 
 
