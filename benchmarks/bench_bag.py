@@ -36,9 +36,9 @@ def _build() -> None:
 
 def _drive() -> dict[str, float]:
     from marsscene.runtime import CameraConfig, LidarConfig, RunConfig
-    from marsscene.runtime.driver import drive
-    from marsscene.runtime.sim import RoverSim
     from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import drive
+    from marsscene.sim.rover_sim import RoverSim
 
     shutil.rmtree(_RUN, ignore_errors=True)
     run = RunConfig(camera=CameraConfig(width_px=640, height_px=480), lidar=LidarConfig())
@@ -53,7 +53,7 @@ def _size_mb(path: Path) -> float:
 
 
 def _bag(storage: str) -> dict[str, float]:
-    from marsscene.runtime.bag import write_bag
+    from marsscene.runs.export.bag import write_bag
 
     t0 = time.perf_counter()
     res = write_bag(_RUN, _ROOT / f"bag_{storage}", storage=storage, overwrite=True)
@@ -70,7 +70,7 @@ def _bag_sqlite() -> dict[str, float]:
 
 
 def _tum() -> dict[str, float]:
-    from marsscene.runtime.datasets import export_dataset
+    from marsscene.runs.export.datasets import export_dataset
 
     t0 = time.perf_counter()
     out = export_dataset(_RUN, "tum-rgbd", _ROOT / "tum", overwrite=True)

@@ -42,9 +42,9 @@ def _drive(shadows: bool, size: tuple[int, int]) -> dict[str, float]:
     import numpy as np
 
     from marsscene.runtime import CameraConfig, RunConfig
-    from marsscene.runtime.driver import drive
-    from marsscene.runtime.sim import RoverSim
     from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import drive
+    from marsscene.sim.rover_sim import RoverSim
 
     cam = CameraConfig(width_px=size[0], height_px=size[1], shadows=shadows)
     corridor = np.array([START_XY_M, (START_XY_M[0] + 12.0, START_XY_M[1])])

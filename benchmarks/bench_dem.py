@@ -6,7 +6,7 @@ then measures in a fresh process: windowed read, Laplace fill, bilinear resampli
 (64 M posts). Target (issue 3): < 5 s and < 2 GB.
 
 Then the whole DTM as a level-of-detail scene (issue 15): ``terrain.lod`` with a 4 m outer
-level (the DTM read averaged strip by strip, :mod:`marsscene.pipeline_dem_lod`) and a 1 km focus
+level (the DTM read averaged strip by strip, :mod:`marsscene.pipeline.dem_lod`) and a 1 km focus
 at 0.25 m read by window from the DTM's 1 m posts: wall time and peak RSS against the 480 MB
 of samples a full read would hold (and its float64 work copies).
 """

@@ -23,7 +23,7 @@ PRESETS = ("main-crater", "grand-canyon")
 
 def seams(name: str, seed: int = 7) -> dict[str, object]:
     import marsscene as ms
-    from marsscene.pipeline_lod import focus_heightfield, lod_craters, lod_world
+    from marsscene.pipeline.lod import focus_heightfield, lod_craters, lod_world
     from marsscene.terrain.lod import stitch
 
     cfg = ms.SceneConfig.from_dict({"preset": name})

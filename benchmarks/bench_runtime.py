@@ -30,9 +30,9 @@ def _drive(kind: str) -> dict[str, float]:
     import numpy as np
 
     from marsscene.runtime import CameraConfig, LidarConfig, RoverConfig, RunConfig
-    from marsscene.runtime.driver import drive
-    from marsscene.runtime.sim import RoverSim
     from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import drive
+    from marsscene.sim.rover_sim import RoverSim
 
     rover = RoverConfig(wheel_collision="sphere" if kind == "sphere" else "cylinder")
     # "corridor": as `marsscene drive` does with a route, simulate only the MJCF rocks the
@@ -81,7 +81,7 @@ def _camera() -> dict[str, float]:
 def _raw_steps() -> dict[str, float]:
     import mujoco
 
-    from marsscene.runtime.sim import RoverSim
+    from marsscene.sim.rover_sim import RoverSim
 
     sim = RoverSim(_SCENE)
     sim.apply(0.5, 0.05)

@@ -60,7 +60,7 @@ def _build() -> dict[str, object]:
 def _one_tile() -> dict[str, object]:
     """One focus tile of main-crater built alone (``pipeline_lod.build_tile``)."""
     import marsscene as ms
-    from marsscene.pipeline_lod import build_tile
+    from marsscene.pipeline.tile import build_tile
 
     cfg = ms.SceneConfig.from_dict({"preset": "main-crater"})
     t0 = time.perf_counter()

@@ -15,8 +15,8 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from marsscene.runtime import CameraConfig, RunConfig
-from marsscene.runtime.exposure import Exposure
-from marsscene.runtime.sim import RoverSim
+from marsscene.sensors.exposure import Exposure
+from marsscene.sim.rover_sim import RoverSim
 
 
 def main(scene: str) -> None:

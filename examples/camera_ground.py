@@ -16,7 +16,7 @@ import numpy as np
 from PIL import Image
 
 from marsscene.runtime import CameraConfig, RunConfig
-from marsscene.runtime.sim import RoverSim
+from marsscene.sim.rover_sim import RoverSim
 
 
 def main(scene: str, out: str, x_m: float = 0.0, y_m: float = 0.0) -> None:

@@ -1,9 +1,12 @@
 """marsscene: author seeded, reproducible Mars worlds for rover autonomy research.
 
-The pipeline, in the order of the package tree::
+The build side, in pipeline order (wired only by ``pipeline/``)::
 
     dem/ -> terrain/ -> craters/ -> rocks/ -> lighting/ -> scene.py -> export/ (USD, MJCF)
-                                                                   -> runtime/ (MuJoCo rover)
+
+and the run side: ``sim/`` (MuJoCo rover) with ``sensors/`` -> ``runs/`` (run folder, ATE/RPE)
+-> ``runs/export/`` (ROS 2 bags, SLAM datasets); ``marsscene.runtime`` re-exports it. The
+layers and which way imports run: ``docs/architecture.md``.
 
 Examples
 --------

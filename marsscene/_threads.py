@@ -4,7 +4,7 @@ pxr's Python bindings hold the GIL while they copy arrays and write layers, but 
 Pillow release it for their large operations, so a second thread that only runs numpy/Pillow
 (never pxr) keeps the second core busy while the main thread authors USD. The same test
 (:func:`worth_a_thread`) gates the other helpers: crater batches (``craters.stamp``) and the
-focus rocks of level-of-detail worlds (``pipeline_lod``).
+focus rocks of level-of-detail worlds (``pipeline.lod``).
 
 One rule keeps this safe: **every pxr module is imported before such a thread starts.**
 Importing a pxr extension module runs its static initialisers inside ``dlopen`` (holding the

@@ -45,7 +45,7 @@ def test_messages_print_plain_numbers_not_numpy_reprs() -> None:
     with pytest.raises(ConfigError) as err:
         check_range("terrain.post_m", np.float64(-1.5), 0.0, np.float32(10.0))
     assert str(err.value) == "terrain.post_m = -1.5 is out of range; allowed [0.0, 10.0]"
-    from marsscene.runtime.tum import Trajectory
+    from marsscene.runs.tum import Trajectory
 
     pose = np.tile([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (3, 1))
     with pytest.raises(RuntimeSimError) as terr:

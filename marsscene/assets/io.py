@@ -2,7 +2,7 @@
 
 Mesh formats load with trimesh (a glTF scene is flattened into one mesh; its convex hull is the
 collision shape). USD files are not opened here: their extent, up axis and units come from
-:func:`marsscene.export.usd.assets.read_usd_asset` (the export layer owns ``pxr``), and the
+:func:`marsscene.assets.usd.read_usd_asset` (the input side's ``pxr`` reader), and the
 file is referenced from the output stage; its collision shape is its bounding box.
 """
 
@@ -54,7 +54,7 @@ def _mesh_asset(path: Path, name: str, cfg: AssetConfig) -> AssetModel:
 def _usd_asset(path: Path, name: str, cfg: AssetConfig) -> AssetModel:
     import trimesh
 
-    from marsscene.export.usd.assets import read_usd_asset
+    from marsscene.assets.usd import read_usd_asset
 
     info = read_usd_asset(path)
     scale = cfg.scale * info.meters_per_unit

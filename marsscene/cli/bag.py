@@ -24,7 +24,7 @@ bag_options = compose(
 
 def write_run_bag(run_dir: Path, out: Path | None, *, overwrite: bool, **options: Any) -> None:
     """Write the bag with a progress bar and print a one-line summary (used by drive, too)."""
-    from marsscene.runtime.bag import write_bag
+    from marsscene.runs.export.bag import write_bag
 
     with ExitStack() as stack:
         bars: list[Any] = []

@@ -165,66 +165,15 @@ def drive(
         raise click.UsageError("give exactly one of --route or --waypoints")
     if write_bag and (out_dir / "bag").exists() and not overwrite:
         raise click.ClickException(f"{out_dir / 'bag'} exists; pass --overwrite to replace it")
-    from marsscene.runtime import (
-        CameraConfig,
-        LidarConfig,
-        NoiseConfig,
-        PursuitConfig,
-        Route,
-        RunConfig,
-        read_tum,
-        write_tum,
-    )
-    from marsscene.runtime.driver import drive as run_drive
-    from marsscene.runtime.mission import prepare_drive
-    from marsscene.seeding import stage_rng
-
     with user_errors():
-        noise = NoiseConfig.from_file(noise_config) if noise_config else NoiseConfig()
-        cam_cfg = None
-        if camera or stereo:
-            w, h = _size(camera_size)
-            cam_cfg = CameraConfig(width_px=w, height_px=h, rate_hz=camera_hz, stereo=stereo,
-                                   exposure=exposure, exposure_gain=exposure_gain,
-                                   sensor_noise=camera_noise, shadows=not no_shadows, tau=tau,
-                                   sun_elevation_deg=sun_elevation)
-        run = RunConfig(
-            noise=noise,
-            lidar=LidarConfig() if lidar else None,
-            camera=cam_cfg,
-        )
-        sim, route = prepare_drive(
-            scene_dir, run,
-            route=Route.from_trajectory(read_tum(route_path)) if route_path else None,
-            waypoints_xy_m=_read_waypoints(waypoints_path) if waypoints_path else None,
-            max_slope_deg=max_slope, corridor_m=corridor,
-        )
-        if sim.rocks_kept[1]:
-            click.echo(f"   rocks: {sim.rocks_kept[0]} of {sim.rocks_kept[1]} MJCF rocks lie "
-                       "near the route and are simulated", err=True)
-        out_dir.mkdir(parents=True, exist_ok=True)
-        write_tum(
-            out_dir / "route.tum",
-            route.to_trajectory(sim.heightfield),
-            header="authored route (x, y on the terrain; stamps at 0.5 m/s)",
-        )
-        if write_rover_xml:
-            click.echo(f"   rover: {sim.write_rover_xml()}")
-        limit = seconds if seconds is not None else 2.0 * route.length_m / 0.1 + 60.0
-        t0 = time.perf_counter()
-        with click.progressbar(
-            length=math.ceil(limit), label="driving (sim s)", file=sys.stderr
-        ) as bar:
-            res = run_drive(
-                sim,
-                route=route,
-                seconds=seconds,
-                out_dir=out_dir,
-                rng=stage_rng(seed, "sensors"),
-                pursuit=PursuitConfig(lookahead_m=lookahead),
-                progress=lambda t, lim: bar.update(1),
-            )
-        wall = time.perf_counter() - t0
+        run = _run_config(noise_config, lidar, camera or stereo, camera_size=camera_size,
+                          rate_hz=camera_hz, stereo=stereo, exposure=exposure,
+                          exposure_gain=exposure_gain, sensor_noise=camera_noise,
+                          shadows=not no_shadows, tau=tau, sun_elevation_deg=sun_elevation)
+        sim, route = _prepare(scene_dir, run, route_path, waypoints_path, out_dir,
+                              max_slope=max_slope, corridor=corridor,
+                              write_rover_xml=write_rover_xml)
+        res, wall = _drive(sim, route, seconds, out_dir, seed, lookahead)
     s = res.summary
     click.echo(
         f"   drove: {s['path_length_m']:.2f} m in {s['sim_time_s']:.2f} sim s "
@@ -238,3 +187,59 @@ def drive(
             write_run_bag(out_dir, None, overwrite=overwrite, **bag_opts)
         click.echo(f"          bag written in {time.perf_counter() - t0:.1f} s "
                    f"(drive: {wall:.1f} s)")
+
+
+def _run_config(noise_config: Path | None, lidar: bool, camera: bool, *, camera_size: str,
+                **camera_kw: Any) -> Any:
+    """The drive's :class:`~marsscene.rover.config.RunConfig` from the options."""
+    from marsscene.rover.config import CameraConfig, LidarConfig, NoiseConfig, RunConfig
+
+    noise = NoiseConfig.from_file(noise_config) if noise_config else NoiseConfig()
+    cam_cfg = None
+    if camera:
+        w, h = _size(camera_size)
+        cam_cfg = CameraConfig(width_px=w, height_px=h, **camera_kw)
+    return RunConfig(noise=noise, lidar=LidarConfig() if lidar else None, camera=cam_cfg)
+
+
+def _prepare(scene_dir: Path, run: Any, route_path: Path | None, waypoints_path: Path | None,
+             out_dir: Path, *, max_slope: float, corridor: float, write_rover_xml: bool
+             ) -> tuple[Any, Any]:
+    """Load the scene, author the route, write ``route.tum``: the simulator and the route."""
+    from marsscene.runs.tum import read_tum, write_tum
+    from marsscene.sim.mission import prepare_drive
+    from marsscene.sim.route import Route
+
+    sim, route = prepare_drive(
+        scene_dir, run,
+        route=Route.from_trajectory(read_tum(route_path)) if route_path else None,
+        waypoints_xy_m=_read_waypoints(waypoints_path) if waypoints_path else None,
+        max_slope_deg=max_slope, corridor_m=corridor,
+    )
+    if sim.rocks_kept[1]:
+        click.echo(f"   rocks: {sim.rocks_kept[0]} of {sim.rocks_kept[1]} MJCF rocks lie "
+                   "near the route and are simulated", err=True)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    write_tum(out_dir / "route.tum", route.to_trajectory(sim.heightfield),
+              header="authored route (x, y on the terrain; stamps at 0.5 m/s)")
+    if write_rover_xml:
+        click.echo(f"   rover: {sim.write_rover_xml()}")
+    return sim, route
+
+
+def _drive(sim: Any, route: Any, seconds: float | None, out_dir: Path, seed: int,
+           lookahead: float) -> tuple[Any, float]:
+    """Drive with a progress bar; the result and the wall time (s)."""
+    from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import drive as run_drive
+    from marsscene.sim.pursuit import PursuitConfig
+
+    limit = seconds if seconds is not None else 2.0 * route.length_m / 0.1 + 60.0
+    t0 = time.perf_counter()
+    with click.progressbar(length=math.ceil(limit), label="driving (sim s)",
+                           file=sys.stderr) as bar:
+        res = run_drive(sim, route=route, seconds=seconds, out_dir=out_dir,
+                        rng=stage_rng(seed, "sensors"),
+                        pursuit=PursuitConfig(lookahead_m=lookahead),
+                        progress=lambda t, lim: bar.update(1))
+    return res, time.perf_counter() - t0

@@ -28,7 +28,7 @@ def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool) -
       marsscene export runs/r1 --format tum-rgbd
       marsscene export runs/r1 --format euroc --out datasets/r1_euroc
     """
-    from marsscene.runtime.datasets import export_dataset
+    from marsscene.runs.export.datasets import export_dataset
 
     with user_errors(), ExitStack() as stack:
         bars: list[Any] = []

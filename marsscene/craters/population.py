@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -209,58 +210,20 @@ def sample_craters(
     x0, y0, x1, y1 = (float(v) for v in bounds_xy_m)
     width, height = x1 - x0, y1 - y0
     dist = size_distribution(config)
-    edges = dist.edges_m
-    mid = np.sqrt(edges[:-1] * edges[1:])
-    grow = config.ejecta_reach * mid / 2.0 / np.sqrt(config.axis_ratio_min)
-    box_km2 = (width + 2 * grow) * (height + 2 * grow) / 1e6
-    weight = dist.visible_mass_per_km2 * box_km2
-    total = float(weight.sum())
-    if total > MAX_CRATERS:
-        raise MemoryBudgetError(
-            f"the crater population would hold ~{total:.3g} craters (> {MAX_CRATERS:.0e}; "
-            f"~{total * 120 / 1e9:.3g} GB while sampling); raise craters.d_min_m "
-            f"(= {config.d_min_m!r}), enable craters.equilibrium or shrink the scene"
-        )
-    n = int(rng.poisson(total))
-    cdf = np.cumsum(weight) / total if total > 0 else np.ones(weight.size)
-    cell = np.minimum(np.searchsorted(cdf, rng.random(n), side="right"), mid.size - 1)
-    # exact local power law inside the cell: N(>=D) = N_i (D / D_i)^k
-    c_lo, c_hi = dist.production_cum_per_km2[cell], dist.production_cum_per_km2[cell + 1]
-    d_lo, d_hi = edges[cell], edges[cell + 1]
-    k = np.log(c_hi / c_lo) / np.log(d_hi / d_lo)
-    v = rng.random(n)
-    diameter = d_lo * ((c_lo - v * (c_lo - c_hi)) / c_lo) ** (1.0 / k)
-    diameter = np.clip(diameter, d_lo, d_hi)
-    n1_eq = dist.n1_eq_per_km2[cell]
-    n1_cap = np.minimum(n1_eq, n1_per_km2(config.age_ga, system=config.system))
-    age = age_from_n1_ga(rng.random(n) * n1_cap, system=config.system)
-    if config.axis_ratio_min < 1.0:
-        ratio = rng.uniform(config.axis_ratio_min, 1.0, n)
-        azimuth = rng.uniform(0.0, 180.0, n)
-    else:
-        ratio, azimuth = np.ones(n), np.zeros(n)
+    cell, diameter, age, ratio, azimuth = _draw_sizes_ages(dist, config, width, height, rng)
+    n = diameter.size
     g = config.ejecta_reach * diameter / 2.0 / np.sqrt(config.axis_ratio_min)
     cx = x0 - g + rng.random(n) * (width + 2 * g)
     cy = y0 - g + rng.random(n) * (height + 2 * g)
     ddx = np.maximum(np.maximum(x0 - cx, cx - x1), 0.0)
     ddy = np.maximum(np.maximum(y0 - cy, cy - y1), 0.0)
     keep = ddx**2 + ddy**2 <= g**2
+    sampled = int(keep.sum())
     centers = np.stack([cx, cy], axis=1)
-    expected = float((dist.visible_mass_per_km2 * width * height / 1e6).sum())
-
+    n1_eq = dist.n1_eq_per_km2[cell]
     fam = profile_family(**config.profile_kwargs())
-    if config.resurfacing:
-        weights = [
-            mask_weights(ev, centers, heightfield=heightfield, origin_lonlat_deg=origin_lonlat_deg,
-                         grid_convergence_deg=grid_convergence_deg)
-            for ev in config.resurfacing
-        ]
-        alive = erase_by_events(
-            diameter, age, weights, config.resurfacing,
-            relief_at=_relief_fn(config, fam, n1_eq), rng=rng,
-        )
-    else:
-        alive = np.ones(n, dtype=bool)
+    alive = _not_resurfaced(config, fam, centers, diameter, age, n1_eq, rng, heightfield,
+                            origin_lonlat_deg, grid_convergence_deg)
     n_resurfaced = int((keep & ~alive).sum())
     keep &= alive
     s = _s_of(config, diameter, n1_eq, age)
@@ -283,10 +246,62 @@ def sample_craters(
         azimuth[idx],
     )
     stats = PopulationStats(
-        expected_in_scene=expected,
-        sampled=int(keep.size - (~(ddx**2 + ddy**2 <= g**2)).sum()),
+        expected_in_scene=float((dist.visible_mass_per_km2 * width * height / 1e6).sum()),
+        sampled=sampled,
         resurfaced=n_resurfaced,
         degraded_away=n_degraded,
         kept=len(table),
     )
     return table, stats
+
+
+def _draw_sizes_ages(dist: Any, config: CraterConfig, width: float, height: float,
+                     rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+    """Poisson count over the footprint grown by each size bin's ejecta reach, then per crater
+    its size bin, diameter (exact local power law in the bin), age, axis ratio and azimuth."""
+    edges = dist.edges_m
+    mid = np.sqrt(edges[:-1] * edges[1:])
+    grow = config.ejecta_reach * mid / 2.0 / np.sqrt(config.axis_ratio_min)
+    box_km2 = (width + 2 * grow) * (height + 2 * grow) / 1e6
+    weight = dist.visible_mass_per_km2 * box_km2
+    total = float(weight.sum())
+    if total > MAX_CRATERS:
+        raise MemoryBudgetError(
+            f"the crater population would hold ~{total:.3g} craters (> {MAX_CRATERS:.0e}; "
+            f"~{total * 120 / 1e9:.3g} GB while sampling); raise craters.d_min_m "
+            f"(= {config.d_min_m!r}), enable craters.equilibrium or shrink the scene"
+        )
+    n = int(rng.poisson(total))
+    cdf = np.cumsum(weight) / total if total > 0 else np.ones(weight.size)
+    cell = np.minimum(np.searchsorted(cdf, rng.random(n), side="right"), mid.size - 1)
+    # exact local power law inside the cell: N(>=D) = N_i (D / D_i)^k
+    c_lo, c_hi = dist.production_cum_per_km2[cell], dist.production_cum_per_km2[cell + 1]
+    d_lo, d_hi = edges[cell], edges[cell + 1]
+    k = np.log(c_hi / c_lo) / np.log(d_hi / d_lo)
+    v = rng.random(n)
+    diameter = d_lo * ((c_lo - v * (c_lo - c_hi)) / c_lo) ** (1.0 / k)
+    diameter = np.clip(diameter, d_lo, d_hi)
+    n1_cap = np.minimum(dist.n1_eq_per_km2[cell], n1_per_km2(config.age_ga, system=config.system))
+    age = age_from_n1_ga(rng.random(n) * n1_cap, system=config.system)
+    if config.axis_ratio_min < 1.0:
+        ratio = rng.uniform(config.axis_ratio_min, 1.0, n)
+        azimuth = rng.uniform(0.0, 180.0, n)
+    else:
+        ratio, azimuth = np.ones(n), np.zeros(n)
+    return cell, diameter, age, ratio, azimuth
+
+
+def _not_resurfaced(config: CraterConfig, fam: Any, centers: np.ndarray, diameter: np.ndarray,
+                    age: np.ndarray, n1_eq: np.ndarray, rng: np.random.Generator,
+                    heightfield: Heightfield | None, origin_lonlat_deg: Any,
+                    grid_convergence_deg: float) -> np.ndarray:
+    """Craters no resurfacing event erased (all, without events)."""
+    if not config.resurfacing:
+        return np.ones(diameter.size, dtype=bool)
+    weights = [
+        mask_weights(ev, centers, heightfield=heightfield, origin_lonlat_deg=origin_lonlat_deg,
+                     grid_convergence_deg=grid_convergence_deg)
+        for ev in config.resurfacing
+    ]
+    return np.asarray(erase_by_events(diameter, age, weights, config.resurfacing,
+                                      relief_at=_relief_fn(config, fam, n1_eq), rng=rng))

@@ -65,7 +65,7 @@ def check_export_dependencies(export: Any) -> None:
     """Fail early (before a long build) when an optional writer the ``[export]`` config asks
     for is not installed (pyarrow for a Parquet rock catalogue)."""
     if export.rock_catalogue in ("parquet", "both"):
-        from marsscene.export.catalog_parquet import require_pyarrow
+        from marsscene._optional import require_pyarrow
 
         require_pyarrow()
 

@@ -81,7 +81,7 @@ def convex_decompose(
     """
     import trimesh
 
-    from marsscene.rocks.shapes import convex_hull
+    from marsscene.rocks.hull import convex_hull
 
     try:
         import coacd

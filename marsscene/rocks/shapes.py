@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from marsscene.errors import ExportError, missing_dependency
 from marsscene.rocks.config import RockConfig
+from marsscene.rocks.hull import convex_hull
 
 if TYPE_CHECKING:
     import trimesh
@@ -143,30 +144,3 @@ def make_prototypes(cfg: RockConfig, *, rng: np.random.Generator) -> tuple[RockP
             parts = (convex_hull(visual),)
         out.append(RockPrototype(f"rock_{p:02d}", size_class, visual, parts))
     return tuple(out)
-
-
-def convex_hull(mesh: trimesh.Trimesh, *, max_vertices: int = 64) -> trimesh.Trimesh:
-    """A convex hull of a mesh with at most ``max_vertices`` vertices.
-
-    The vertices are the mesh's support points in the 6 axis directions (the bounding box is
-    kept) and ``max_vertices - 6`` Fibonacci-sphere directions (an inscribed hull touching the
-    rock's extremes in every direction; ~95 % of the rock's volume); qhull via trimesh
-    then builds the outward-oriented hull. Small hulls keep MuJoCo compilation and PhysX
-    cooking fast (PhysX caps hulls at 64 vertices by default anyway).
-    """
-    import trimesh
-
-    m = max(max_vertices - 6, 4)
-    i = np.arange(m) + 0.5
-    polar = np.arccos(1.0 - 2.0 * i / m)
-    azim = np.pi * (1.0 + 5.0**0.5) * i
-    dirs = np.vstack([
-        np.column_stack([np.sin(polar) * np.cos(azim), np.sin(polar) * np.sin(azim),
-                         np.cos(polar)]),
-        np.vstack([np.eye(3), -np.eye(3)]),
-    ])
-    verts = np.asarray(mesh.vertices, dtype=np.float64)
-    support = np.unique(np.argmax(verts @ dirs.T, axis=0))
-    hull = trimesh.Trimesh(vertices=verts[support]).convex_hull
-    hull.fix_normals()
-    return hull

@@ -37,9 +37,9 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         read_tum,
         rpe,
     )
-    from marsscene.runtime.driver import drive
-    from marsscene.runtime.mission import prepare_drive
     from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import drive
+    from marsscene.sim.mission import prepare_drive
 
     run = RunConfig(
         lidar=LidarConfig() if spec.lidar else None,
@@ -63,7 +63,7 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
     wall_s = time.perf_counter() - t0
     bag_s = float("nan")
     if spec.bag:
-        from marsscene.runtime.bag import write_bag
+        from marsscene.runs.export.bag import write_bag
 
         t1 = time.perf_counter()
         write_bag(out_dir)

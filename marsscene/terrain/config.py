@@ -36,7 +36,7 @@ class TerrainConfig:
     """If set, scale procedural terrain to this RMS slope instead of ``rms_height_m`` (in deg)."""
     landform: str = "fbm"
     """Procedural landform: "fbm" (none), "plain", "crater" or "canyon"
-    (:mod:`marsscene.terrain.landforms`); ignored with a DEM."""
+    (:mod:`marsscene.landforms`); ignored with a DEM."""
     landform_size_m: float | None = None
     """Crater rim diameter or canyon floor width (in m); default scales with the footprint."""
     landform_depth_m: float | None = None

@@ -16,7 +16,7 @@ The focus square (:class:`~marsscene.terrain.lod.FocusPlan`) is cut into square 
   both sides); the halo is cropped away.
 
 A tile therefore does not depend on which other tiles are built: ``build_tile`` (in
-:mod:`marsscene.pipeline_lod`) of one tile equals the same window of a full build. Neighbouring
+:mod:`marsscene.pipeline.lod`) of one tile equals the same window of a full build. Neighbouring
 tiles share their border posts; they agree to float precision except where a chain of
 overlapping craters reaches past a halo (measured in the tests).
 """
@@ -24,6 +24,7 @@ overlapping craters reaches past a halo (measured in the tests).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -142,15 +143,18 @@ def _base_range(origin_m: float, post_m: float, n: int, lo_m: float, hi_m: float
 
 def tile_terrain(coarse: Heightfield, tiling: FocusTiling, row: int, col: int, *,
                  detail: TileDetail, craters: Any = None, ccfg: Any = None,
+                 stamp: Callable[..., Heightfield] | None = None,
                  base: Heightfield | None = None) -> Heightfield:
     """The full-resolution surface of focus tile ``(row, col)`` (see the module docstring).
 
     ``base`` is the grid the tile is interpolated from (default ``coarse``; a DEM at its own
     posts when the outer level is coarser): its posts lie on the fine lattice, a whole number of
-    fine posts apart.
+    fine posts apart. ``stamp`` stamps ``craters`` into a heightfield
+    (:func:`marsscene.craters.stamp_craters`, passed in by the pipeline: terrain does not import
+    the crater stage).
     """
-    from marsscene.craters import stamp_craters
-
+    if craters is not None and len(craters) and stamp is None:
+        raise ValueError("tile_terrain: craters given without a stamp function")
     plan, k = tiling.plan, tiling.plan.ratio
     pf = plan.fine_post_m
     base = base if base is not None else coarse
@@ -170,7 +174,8 @@ def tile_terrain(coarse: Heightfield, tiling: FocusTiling, row: int, col: int, *
                         rms_m=detail.rms_m, key=detail.key)
     hf = Heightfield(z.astype(np.float32), pf, (float(xs[0]), float(ys[0])))
     if craters is not None and len(craters):
-        hf = stamp_craters(hf, craters, profile_kwargs=ccfg.profile_kwargs())
+        assert stamp is not None
+        hf = stamp(hf, craters, profile_kwargs=ccfg.profile_kwargs())
     # crop the halo away, then fade the detail to the coarse surface at the focus border
     (r0, r1), (c0, c1) = tiling.cells(row), tiling.cells(col)
     rs, cs = slice(r0 * k - fr0, r1 * k - fr0 + 1), slice(c0 * k - fc0, c1 * k - fc0 + 1)

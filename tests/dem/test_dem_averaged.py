@@ -1,5 +1,5 @@
 """DTM read averaged strip by strip (marsscene.dem.decimate) and the level-of-detail terrain
-built on it (marsscene.pipeline_dem_lod): box means against a brute-force reference, missing
+built on it (marsscene.pipeline.dem_lod): box means against a brute-force reference, missing
 posts, geo-reference, and the scene's outer level and focus window."""
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ def test_lod_scene_on_a_dtm_read_averaged(tmp_path: Path) -> None:
     """post_m = 4 on a 1 m DTM: the outer level is the 4 m box average (away from the stitched
     band), the focus window comes from the DTM's own posts, and no full-resolution array of the
     whole DTM is made (the note says how it was read)."""
-    from marsscene.pipeline_terrain import lod_inputs
+    from marsscene.pipeline.terrain import lod_inputs
 
     rows, cols = 241, 321
     yy, xx = np.mgrid[0:rows, 0:cols].astype(np.float64)

@@ -181,7 +181,7 @@ def test_rover_drives_in_the_focus(runner, gentle: tuple[ms.Scene, Path],  # typ
 
 def test_camera_hides_the_lowered_outer_hfield(gentle: tuple[ms.Scene, Path]) -> None:
     from marsscene.runtime import CameraConfig, RunConfig
-    from marsscene.runtime.sim import RoverSim
+    from marsscene.sim.rover_sim import RoverSim
 
     sim = RoverSim(gentle[1], run=RunConfig(camera=CameraConfig(width_px=80, height_px=60)),
                    start_xy_m=(4.0, 0.0), settle_s=0.2)

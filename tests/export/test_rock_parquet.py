@@ -15,7 +15,7 @@ from click.testing import CliRunner
 import marsscene as ms
 from marsscene.errors import ConfigError, MissingDependencyError
 from marsscene.export.catalog_rocks import COLUMNS
-from marsscene.runtime.camera_world import read_rock_catalog
+from marsscene.sensors.camera_world import read_rock_catalog
 
 pq = pytest.importorskip("pyarrow.parquet")
 pytest.importorskip("pxr")

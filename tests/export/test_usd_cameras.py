@@ -35,7 +35,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> tuple[ms.Scene, Path]:
 def test_navcam_equals_the_runtime_camera(written: tuple[ms.Scene, Path]) -> None:
     pytest.importorskip("mujoco")
     os.environ.setdefault("MUJOCO_GL", "egl")
-    from marsscene.runtime.sim import RoverSim
+    from marsscene.sim.rover_sim import RoverSim
 
     _, out = written
     stage = Usd.Stage.Open(str(out / "scene.usda"))

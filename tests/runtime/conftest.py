@@ -65,9 +65,9 @@ def bag_run(gentle_scene: Path, tmp_path_factory: pytest.TempPathFactory) -> Pat
     """A 3 s run folder with noisy IMU/odometry, an 80 x 60 RGB-D camera and a 3-ring LiDAR."""
     from marsscene.errors import RuntimeSimError
     from marsscene.runtime import CameraConfig, LidarConfig, NoiseConfig, RunConfig
-    from marsscene.runtime.driver import drive
-    from marsscene.runtime.sim import RoverSim
     from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import drive
+    from marsscene.sim.rover_sim import RoverSim
 
     run = RunConfig(
         noise=NoiseConfig(wheel_rate_sigma_rad_s=0.05, accel_sigma_m_s2=0.05,
@@ -94,8 +94,8 @@ def stereo_run(bag_run: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     import json
     import shutil
 
-    from marsscene.runtime.logs import png_bytes
-    from marsscene.runtime.runlog import read_image
+    from marsscene.runs.logs import png_bytes
+    from marsscene.runs.runlog import read_image
 
     out = tmp_path_factory.mktemp("stereorun") / "run"
     shutil.copytree(bag_run, out)

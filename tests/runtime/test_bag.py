@@ -19,9 +19,9 @@ from rosbags.highlevel import AnyReader
 
 from marsscene.cli import main
 from marsscene.errors import ExportError, RuntimeSimError
+from marsscene.runs.export.bag import write_bag
+from marsscene.runs.runlog import RunLog, read_image, read_ply
 from marsscene.runtime import read_tum
-from marsscene.runtime.bag import write_bag
-from marsscene.runtime.runlog import RunLog, read_image, read_ply
 
 SENSOR_FRAMES = ("imu_link", "lidar_link", "navcam_optical_frame",
                  "stereo_left_optical_frame", "stereo_right_optical_frame")

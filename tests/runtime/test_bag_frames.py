@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from marsscene.rover.geometry import body_twist_from_wheels, wheel_commands
+from marsscene.runs.export.bag_data import body_twist_from_poses, joint_states, map_to_odom
+from marsscene.runs.export.frames import frame_in_base, static_transforms
 from marsscene.runtime import RoverConfig, Trajectory
-from marsscene.runtime.bag_data import body_twist_from_poses, joint_states, map_to_odom
-from marsscene.runtime.frames import frame_in_base, static_transforms
-from marsscene.runtime.rover import body_twist_from_wheels, wheel_commands
-from marsscene.runtime.sim import RoverSim
+from marsscene.sim.rover_sim import RoverSim
 
 
 def test_sensor_frames_match_the_mujoco_camera_and_lidar_site(flat_scene) -> None:

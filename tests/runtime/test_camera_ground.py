@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from marsscene.runtime.camera_ground import bake_ground
+from marsscene.sensors.camera_ground import bake_ground
 from marsscene.terrain.albedo_field import AlbedoField, albedo_field, ortho_gain
 from marsscene.terrain.appearance import regolith_tile
 

@@ -12,10 +12,10 @@ from scipy.spatial.transform import Rotation
 
 from marsscene.cli import main
 from marsscene.errors import ExportError, RuntimeSimError
+from marsscene.runs.export.datasets import TUM_DEPTH_PER_M, camera_trajectory, export_dataset
+from marsscene.runs.export.frames import frame_in_base, static_transforms
+from marsscene.runs.runlog import RunLog, read_image
 from marsscene.runtime import read_tum
-from marsscene.runtime.datasets import TUM_DEPTH_PER_M, camera_trajectory, export_dataset
-from marsscene.runtime.frames import frame_in_base, static_transforms
-from marsscene.runtime.runlog import RunLog, read_image
 
 
 def _table(path: Path) -> list[list[str]]:

@@ -12,9 +12,9 @@ cv2 = pytest.importorskip("cv2")
 import marsscene as ms  # noqa: E402
 from marsscene.errors import RuntimeSimError  # noqa: E402
 from marsscene.runtime import CameraConfig, RunConfig, read_tum  # noqa: E402
-from marsscene.runtime.driver import drive  # noqa: E402
-from marsscene.runtime.sim import RoverSim  # noqa: E402
 from marsscene.seeding import stage_rng  # noqa: E402
+from marsscene.sim.driver import drive  # noqa: E402
+from marsscene.sim.rover_sim import RoverSim  # noqa: E402
 from tests.runtime.vision import camera_poses, corners, rgbd_vo  # noqa: E402
 
 _ROCKY = {
@@ -145,7 +145,7 @@ def test_visual_rocks_render_but_never_collide(rocky_scene) -> None:
     vv, uu = np.mgrid[120:240:4, 0:320:4]
     rays = np.stack([(uu - intr["cx"]) / intr["fx"], -(vv - intr["cy"]) / intr["fy"],
                      -np.ones_like(uu, dtype=float)], axis=-1) @ rot.T
-    from marsscene.runtime.raycast import ray_heightfield
+    from marsscene.sensors.raycast import ray_heightfield
 
     dist, _ = ray_heightfield(hf, pos, (rays / np.linalg.norm(rays, axis=-1, keepdims=True))
                              .reshape(-1, 3), (0.1, 60.0))
@@ -168,7 +168,7 @@ def test_camera_images_are_deterministic_and_dust_darkens(rocky_scene) -> None:
     np.testing.assert_array_equal(out[(0.3, 0)], out[(0.3, 1)])  # same seed: same bytes
     clear, dusty = out[(0.3, 0)].astype(float), out[(3.0, 0)].astype(float)
     assert dusty.mean() < 0.8 * clear.mean()  # fixed exposure: tau = 3 is darker
-    from marsscene.runtime.camera import scene_lighting
+    from marsscene.sensors.camera import scene_lighting
 
     for tau, img in ((0.3, clear), (3.0, dusty)):  # sky colour is the lighting stage's
         lin = img[:10].reshape(-1, 3).mean(axis=0) / 255.0  # top rows: sky
@@ -216,7 +216,7 @@ def test_stereo_drive_becomes_stereo_bag_topics(drive_run, tmp_path) -> None:
     from PIL import Image
     from rosbags.highlevel import AnyReader
 
-    from marsscene.runtime.bag import write_bag
+    from marsscene.runs.export.bag import write_bag
 
     bag_dir = tmp_path / "bag"
     write_bag(drive_run, bag_dir, sensors=("camera", "stereo"))

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import marsscene as ms
-from marsscene.runtime.corridor import distance_to_polyline
+from marsscene.sim.corridor import distance_to_polyline
 
 mujoco = pytest.importorskip("mujoco")
-from marsscene.runtime.sim import RoverSim  # noqa: E402
+from marsscene.sim.rover_sim import RoverSim  # noqa: E402
 
 
 def test_distance_to_polyline_matches_geometry() -> None:

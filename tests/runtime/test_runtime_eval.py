@@ -10,7 +10,7 @@ import pytest
 
 from marsscene.errors import RuntimeSimError
 from marsscene.runtime import Trajectory, associate, ate, read_tum, rpe, umeyama, write_tum
-from marsscene.runtime.transforms import matrix_to_quat, quat_to_matrix
+from marsscene.transforms import matrix_to_quat, quat_to_matrix
 
 
 def _rot(axis: np.ndarray, angle: float) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from marsscene.runtime.exposure import Exposure, srgb_encode
+from marsscene.sensors.exposure import Exposure, srgb_encode
 
 
 def test_srgb_reference_values() -> None:

@@ -16,9 +16,9 @@ from marsscene.runtime import (
     author_route,
     cross_track_m,
 )
-from marsscene.runtime.driver import drive
-from marsscene.runtime.sim import RoverSim
 from marsscene.seeding import stage_rng
+from marsscene.sim.driver import drive
+from marsscene.sim.rover_sim import RoverSim
 from marsscene.terrain.heightfield import Heightfield
 
 SQUARE = np.array([[-10, -10], [10, -10], [10, 10], [-10, 10], [-10, -10]], dtype=float)

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from marsscene.errors import RuntimeSimError
+from marsscene.rover.geometry import body_twist_from_wheels
 from marsscene.runtime import RoverConfig, rover_mjcf, wheel_commands
-from marsscene.runtime.rover import body_twist_from_wheels
-from marsscene.runtime.sim import RoverSim
+from marsscene.sim.rover_sim import RoverSim
 
 
 def _no_warnings(sim: RoverSim) -> None:
@@ -152,7 +152,7 @@ def test_reset_with_rng_is_seeded(flat_scene) -> None:
 
 
 def test_scene_obstacles_from_rock_geoms(flat_scene) -> None:
-    from marsscene.runtime.sim import scene_obstacles
+    from marsscene.sim.rover_sim import scene_obstacles
 
     def add_rock(spec) -> None:  # type: ignore[no-untyped-def]
         g = spec.worldbody.add_geom()

@@ -17,11 +17,12 @@ from marsscene.runtime import (
     ate,
     read_tum,
 )
-from marsscene.runtime.driver import drive
-from marsscene.runtime.sensors import Lidar, WheelOdometry, measure_wheels
-from marsscene.runtime.sim import RoverSim
-from marsscene.runtime.transforms import quat_to_matrix
 from marsscene.seeding import stage_rng
+from marsscene.sensors.lidar import Lidar
+from marsscene.sensors.odometry import WheelOdometry, measure_wheels
+from marsscene.sim.driver import drive
+from marsscene.sim.rover_sim import RoverSim
+from marsscene.transforms import quat_to_matrix
 
 
 def _straight_then_turn(t: float) -> tuple[float, float]:
@@ -187,7 +188,7 @@ def test_logs_layout_and_determinism(gentle_scene, tmp_path) -> None:
 
 
 def test_quat_matrix_roundtrip() -> None:
-    from marsscene.runtime.transforms import matrix_to_quat
+    from marsscene.transforms import matrix_to_quat
 
     q = np.random.default_rng(3).normal(size=(50, 4))
     q /= np.linalg.norm(q, axis=1, keepdims=True)

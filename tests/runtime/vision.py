@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from marsscene.runtime.config import RoverConfig
-from marsscene.runtime.transforms import quat_to_matrix
+from marsscene.rover.config import RoverConfig
+from marsscene.transforms import quat_to_matrix
 
 
 def gray(rgb: np.ndarray) -> np.ndarray:

@@ -9,8 +9,8 @@ import pytest
 import marsscene as ms
 from marsscene.craters.morphometry import fresh_depth_to_diameter
 from marsscene.errors import ConfigError
+from marsscene.landforms import add_landform, crater_height_m
 from marsscene.terrain.heightfield import Heightfield
-from marsscene.terrain.landforms import add_landform, crater_height_m
 
 
 def _flat(size_m: float, cell_m: float) -> Heightfield:

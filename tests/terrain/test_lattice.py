@@ -43,7 +43,7 @@ def test_the_lattice_is_offset_from_the_posts() -> None:
 def test_focus_keeps_the_hurst_exponent(hurst: float) -> None:
     """Coarse fBm (1 m) + cubic + detail at 0.25 m: variogram slope over 0.25-4 m within 0.12
     of H (the FFT synthesis at 0.25 m measures 0.55 and 0.77 with the same estimator)."""
-    from marsscene.pipeline_lod import focus_heightfield, lod_world
+    from marsscene.pipeline.lod import focus_heightfield, lod_world
 
     cfg = ms.SceneConfig.from_dict({"terrain": {
         "source": "procedural", "size_m": [400, 400], "post_m": 1.0, "lod": True,

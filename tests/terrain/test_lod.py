@@ -26,7 +26,7 @@ def lod_pair() -> tuple[ms.Scene, ms.Scene]:
 
 
 def test_a_tile_built_alone_equals_the_same_tile_of_the_full_build() -> None:
-    from marsscene.pipeline_lod import build_tile
+    from marsscene.pipeline.tile import build_tile
 
     cfg = _cfg(200.0, tile_m=20.0)  # a 60 m focus in 3 x 3 tiles of 80 x 80 cells
     full = ms.build_scene(cfg, seed=5)
@@ -66,7 +66,7 @@ def test_stitching_barely_bends_the_outer_terrain(lod_pair: tuple[ms.Scene, ms.S
     border differs from the unstitched coarse terrain only by the sub-post detail and the fine
     crater shapes (the first design drew the focus independently: ~2 m RMS, bent away over the
     blend band, which steepened its slopes)."""
-    from marsscene.pipeline_lod import lod_craters, lod_world
+    from marsscene.pipeline.lod import lod_craters, lod_world
 
     for scene in lod_pair:
         assert scene.outer is not None
@@ -183,7 +183,7 @@ def test_lod_with_a_dem_keeps_the_dem_posts_outside_and_details_the_focus(
         synthetic_dem_path, tmp_path) -> None:  # type: ignore[no-untyped-def]
     import mujoco
 
-    from marsscene.pipeline_terrain import lod_inputs
+    from marsscene.pipeline.terrain import lod_inputs
 
     cfg = ms.SceneConfig.from_dict({
         "terrain": {"source": "dem", "dem_path": str(synthetic_dem_path), "lod": True,
@@ -230,7 +230,7 @@ def test_dem_focus_keeps_the_dem_posts_under_a_coarser_outer_level(tmp_path) -> 
     import rasterio
     from affine import Affine
 
-    from marsscene.pipeline_terrain import lod_inputs
+    from marsscene.pipeline.terrain import lod_inputs
 
     rows = cols = 200
     yy, xx = np.mgrid[0:rows, 0:cols].astype(np.float64)

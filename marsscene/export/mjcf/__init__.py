@@ -3,7 +3,7 @@
 :func:`to_mjcf` builds the XML text and a dict of assets in memory; :func:`write_mjcf` writes
 them. The XML is assembled with :mod:`xml.etree.ElementTree` and numbers are formatted with a
 fixed precision, so the same scene always gives the same bytes. :func:`validate_mjcf` (the only
-``mujoco`` import outside ``runtime/``) compiles the file and steps it.
+``mujoco`` import outside ``sim/`` and ``sensors/``) compiles the file and steps it.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ def add_assets(root: ET.Element, assets: dict[str, bytes], scene: Any) -> None:
     placed_assets = getattr(scene, "assets", None)
     if not placed_assets:
         return
-    from marsscene.export.mjcf.build import fmt
+    from marsscene.export.mjcf.common import fmt
 
     asset_el = root.find("asset")
     world = root.find("worldbody")

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable
 from typing import Any
 
+from marsscene._format import fmt
 from marsscene._version import __version__
 from marsscene.export.mjcf.assets import add_assets
+from marsscene.export.mjcf.common import HFIELD_ASSET, REGOLITH_FRICTION, TEXTURE_ASSET, png_bytes
 from marsscene.export.mjcf.hfield import hfield_spec
 from marsscene.export.mjcf.lighting import add_lighting
 from marsscene.export.mjcf.rocks import add_rocks
@@ -15,37 +16,6 @@ from marsscene.export.mjcf.terrain_lod import add_outer_terrain
 from marsscene.units import MARS_GRAVITY_M_S2
 
 __all__ = ["build_mjcf", "fmt"]
-
-#: Regolith friction (sliding, torsional, rolling). Sliding 0.8 ~ tan(38 deg), within the
-#: 30-40 deg internal friction angles measured for Martian soils (Sullivan et al. 2011,
-#: doi:10.1029/2010JE003625).
-REGOLITH_FRICTION = (0.8, 0.02, 0.002)
-HFIELD_ASSET = "assets/terrain.bin"
-TEXTURE_ASSET = "assets/terrain_albedo.png"
-
-
-def png_bytes(rgb: Any) -> bytes:
-    """Deterministic PNG bytes of an ``(rows, cols, 3)`` uint8 image (row 0 at the top)."""
-    import io
-
-    import numpy as np
-    from PIL import Image
-
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8), mode="RGB").save(
-        buf, format="PNG", optimize=False)
-    return buf.getvalue()
-
-
-def fmt(values: float | Iterable[float], digits: int = 6) -> str:
-    """Format numbers for MJCF deterministically (fixed significant digits, no ``-0``)."""
-    vals = [values] if isinstance(values, int | float) else list(values)
-    out = []
-    for v in vals:
-        s = f"{float(v):.{digits}g}"
-        out.append("0" if s in ("-0", "0") else s)
-    return " ".join(out)
-
 
 def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
     """Return the ``<mujoco>`` root element and the assets it references."""

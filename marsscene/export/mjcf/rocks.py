@@ -41,7 +41,7 @@ def add_rocks(root: ET.Element, assets: dict[str, bytes], scene: Any) -> None:
     """Add rock geoms (nothing when the stage is disabled)."""
     if scene.rocks is None:
         return
-    from marsscene.export.mjcf.build import fmt
+    from marsscene.export.mjcf.common import fmt
 
     rocks = scene.rocks
     cfg = scene.config.rocks
@@ -86,7 +86,7 @@ def add_rocks(root: ET.Element, assets: dict[str, bytes], scene: Any) -> None:
 
 
 def _bake(root: ET.Element, assets: dict[str, bytes], scene: Any, idx: np.ndarray) -> None:
-    from marsscene.export.mjcf.build import HFIELD_ASSET, fmt
+    from marsscene.export.mjcf.common import HFIELD_ASSET, fmt
     from marsscene.export.mjcf.hfield import hfield_spec
 
     hf = scene.heightfield

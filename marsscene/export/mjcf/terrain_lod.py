@@ -40,7 +40,7 @@ def add_outer_terrain(root: ET.Element, assets: dict[str, bytes], scene: Any) ->
     """Add the ``terrain_outer`` hfield and geom (nothing for scenes without an outer level)."""
     if scene.outer is None:
         return
-    from marsscene.export.mjcf.build import REGOLITH_FRICTION, fmt
+    from marsscene.export.mjcf.common import REGOLITH_FRICTION, fmt
 
     spec = hfield_spec(lowered_outer(scene))
     asset = root.find("asset")

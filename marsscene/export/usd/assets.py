@@ -1,5 +1,5 @@
-"""Assets in USD: ``/World/Assets/<name>`` (habitats, landers), and reading a USD asset's
-extent for placement (this module owns ``pxr`` for the asset stage).
+"""Assets in USD: ``/World/Assets/<name>`` (habitats, landers). Reading a user's USD asset for
+placement is :mod:`marsscene.assets.usd` (the input side).
 
 Each placed asset is an Xform at its base centre ``(x, y, base_z)``:
 
@@ -13,52 +13,17 @@ Each placed asset is an Xform at its base centre ``(x, y, base_z)``:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics, UsdShade
+from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade
 
-from marsscene.errors import ConfigError
 from marsscene.export.usd.stage import author_tri_mesh
 
-__all__ = ["UsdAssetInfo", "author_assets", "read_usd_asset"]
+__all__ = ["author_assets"]
 
 #: Painted-metal grey (linear sRGB).
 ASSET_ALBEDO_RGB = (0.7, 0.7, 0.68)
-
-
-@dataclass(frozen=True)
-class UsdAssetInfo:
-    """What placement needs from a USD asset file."""
-
-    extent_min: tuple[float, float, float]
-    extent_max: tuple[float, float, float]
-    up_axis: str
-    meters_per_unit: float
-    root_prim: str
-
-
-def read_usd_asset(path: str | Path) -> UsdAssetInfo:
-    """Open a USD file and return its root prim's world bounding box, up axis and units."""
-    stage = Usd.Stage.Open(str(path))
-    if stage is None:
-        raise ConfigError(f"{path}: not a readable USD file")
-    prim = stage.GetDefaultPrim()
-    if not prim or not prim.IsValid():
-        roots = list(stage.GetPseudoRoot().GetChildren())
-        if not roots:
-            raise ConfigError(f"{path}: the USD file has no root prim")
-        prim = roots[0]
-    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_,
-                                                       UsdGeom.Tokens.render])
-    box = cache.ComputeWorldBound(prim).ComputeAlignedRange()
-    if box.IsEmpty():
-        raise ConfigError(f"{path}: the USD asset has no geometry extent")
-    lo, hi = box.GetMin(), box.GetMax()
-    return UsdAssetInfo((lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2]),
-                        str(UsdGeom.GetStageUpAxis(stage)),
-                        float(UsdGeom.GetStageMetersPerUnit(stage)), str(prim.GetPath()))
 
 
 def _material(stage: Any, root: Sdf.Path) -> UsdShade.Material:

@@ -1,9 +1,9 @@
 """Cameras in USD: ``/World/Cameras`` (a ``group``) with ``Navcam`` and ``Overview``.
 
 * ``Navcam``: the runtime's mast camera. Its intrinsics (image size, vertical field of view)
-  come from :class:`marsscene.runtime.config.CameraConfig` and its mount (position and axes on
-  the rover body) from the rover MJCF text (:func:`marsscene.runtime.rover.rover_mjcf`, pure,
-  no MuJoCo), read by :func:`navcam_model`. It is placed at the nominal spawn pose: terrain
+  come from :class:`marsscene.rover.config.CameraConfig` and its mount (position and axes on
+  the rover body) from :func:`marsscene.rover.geometry.navcam_mount` (the numbers the rover
+  MJCF carries), read by :func:`navcam_model`. It is placed at the nominal spawn pose: terrain
   centre, yaw 0 (facing east), body z along the mean terrain normal under the footprint,
   ``ride_height_m`` above ground (the runtime then settles the rover by a few centimetres).
   MuJoCo and USD cameras both look along their local -Z with +Y up, so the MJCF ``xyaxes``
@@ -24,7 +24,6 @@ that scale shows a grey card of albedo 0.18 lying on the ground at linear 0.18 (
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from typing import Any
 
@@ -58,23 +57,20 @@ class CameraModel:
 def navcam_model(rover: Any = None, camera: Any = None) -> CameraModel:
     """The mast camera as the runtime builds it (defaults: ``RoverConfig()``,
     ``CameraConfig()``)."""
-    from marsscene.runtime.config import CameraConfig, RoverConfig
-    from marsscene.runtime.rover import rover_mjcf
+    from marsscene._format import fmt
+    from marsscene.rover.config import CameraConfig, RoverConfig
+    from marsscene.rover.geometry import navcam_mount
 
     cam = camera if camera is not None else CameraConfig()
-    xml = rover_mjcf(rover if rover is not None else RoverConfig(),
-                     camera_fovy_deg=cam.fovy_deg)
-    node = ET.fromstring(f"<r>{xml}</r>").find(".//camera[@name='navcam']")
-    if node is None:
-        raise ValueError("the rover MJCF has no 'navcam' camera")
-    pos = tuple(float(v) for v in node.attrib["pos"].split())
-    xy = np.array([float(v) for v in node.attrib["xyaxes"].split()]).reshape(2, 3)
+    mount, xyaxes = navcam_mount(rover if rover is not None else RoverConfig())
+    # the numbers the rover MJCF carries (fixed significant digits), so both agree exactly
+    pos = tuple(float(v) for v in fmt(mount).split())
+    xy = np.array([float(v) for v in fmt(xyaxes).split()]).reshape(2, 3)
     x = xy[0] / np.linalg.norm(xy[0])
     y = xy[1] - x * float(xy[1] @ x)
     y /= np.linalg.norm(y)
     axes = np.column_stack([x, y, np.cross(x, y)])
-    return CameraModel(int(cam.width_px), int(cam.height_px),
-                       float(node.attrib.get("fovy", cam.fovy_deg)),
+    return CameraModel(int(cam.width_px), int(cam.height_px), float(fmt(cam.fovy_deg)),
                        (pos[0], pos[1], pos[2]), axes)
 
 
@@ -126,8 +122,8 @@ def _look_at(eye: NDArray[np.float64], target: NDArray[np.float64]) -> NDArray[n
 
 def author_cameras(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Author ``/World/Cameras/Navcam`` and ``/World/Cameras/Overview``."""
-    from marsscene.runtime.config import RoverConfig
-    from marsscene.runtime.transforms import quat_from_yaw_normal, quat_to_matrix
+    from marsscene.rover.config import RoverConfig
+    from marsscene.transforms import quat_from_yaw_normal, quat_to_matrix
 
     hf = scene.heightfield
     x0, y0, x1, y1 = hf.bounds_xy_m

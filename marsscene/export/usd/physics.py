@@ -20,7 +20,7 @@ from typing import Any
 
 from pxr import Sdf, UsdPhysics, UsdShade
 
-from marsscene.export.mjcf.build import REGOLITH_FRICTION
+from marsscene.export.mjcf.common import REGOLITH_FRICTION
 from marsscene.export.mjcf.rocks import ROCK_FRICTION
 
 __all__ = ["REGOLITH_PHYSICS", "ROCK_PHYSICS", "PhysicsMaterial", "author_physics_material",

@@ -1,0 +1,31 @@
+"""Constants and helpers shared by the MJCF writer's modules (friction, asset names, PNG
+bytes), so ``build`` and its parts import this leaf instead of each other."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from marsscene._format import fmt
+from marsscene._layout import MJCF_HFIELD_ASSET, MJCF_TEXTURE_ASSET
+
+__all__ = ["HFIELD_ASSET", "REGOLITH_FRICTION", "TEXTURE_ASSET", "fmt", "png_bytes"]
+
+#: Regolith friction (sliding, torsional, rolling). Sliding 0.8 ~ tan(38 deg), within the
+#: 30-40 deg internal friction angles measured for Martian soils (Sullivan et al. 2011,
+#: doi:10.1029/2010JE003625).
+REGOLITH_FRICTION = (0.8, 0.02, 0.002)
+HFIELD_ASSET = MJCF_HFIELD_ASSET
+TEXTURE_ASSET = MJCF_TEXTURE_ASSET
+
+
+def png_bytes(rgb: Any) -> bytes:
+    """Deterministic PNG bytes of an ``(rows, cols, 3)`` uint8 image (row 0 at the top)."""
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(rgb, dtype=np.uint8), mode="RGB").save(
+        buf, format="PNG", optimize=False)
+    return buf.getvalue()

@@ -1,0 +1,159 @@
+"""The Perseverance-class rover's geometry and wheel kinematics (pure numpy, no MuJoCo).
+
+Layout (``base_link`` frame: x forward, y left, z up, REP-103): six wheels on a rocker-bogie
+suspension with a differential (a joint equality ``rocker_left = -rocker_right``, the role of
+the rover's differential bar), four steerable corner wheels (front and rear) and two fixed middle
+wheels, all six driven. With steering every wheel rolls without side slip about an instantaneous
+centre on the middle-axle line, so ``cmd_vel = (v, omega)`` maps exactly to wheel speeds and
+steering angles (:func:`wheel_commands`) and turning in place (v = 0) is possible.
+Numbers and sources: ``docs/runtime.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene.rover.config import RoverConfig
+
+__all__ = [
+    "DRIVE_JOINTS",
+    "STEER_JOINTS",
+    "body_twist_from_wheels",
+    "body_twists_from_wheels",
+    "navcam_mount",
+    "sensor_mounts",
+    "wheel_commands",
+    "wheel_positions_xy",
+]
+
+#: Drive joints in order: front, middle, rear; left before right.
+DRIVE_JOINTS = ("drive_fl", "drive_fr", "drive_ml", "drive_mr", "drive_rl", "drive_rr")
+#: Steering joints of the four corner wheels.
+STEER_JOINTS = ("steer_fl", "steer_fr", "steer_rl", "steer_rr")
+_STEERED = np.array([0, 1, 4, 5])  # indices into DRIVE_JOINTS
+
+ROCKER_Y_FRAC = 0.375  # rocker pivot |y| as a fraction of the track
+PIVOT_ABOVE_GROUND_M = 0.65
+BOGIE_ABOVE_GROUND_M = 0.45
+BOGIE_HALF_M = 0.5
+# Sensor mounts in base_link (m): LiDAR on the mast top, navcam at the mast height, tilted down.
+LIDAR_X_M, LIDAR_ABOVE_CAMERA_M = 0.7, 0.12
+CAMERA_X_M, CAMERA_TILT_DEG = 0.75, 20.0
+
+
+def wheel_positions_xy(cfg: RoverConfig) -> NDArray[np.float64]:
+    """Nominal wheel contact points in ``base_link`` (x, y), shape (6, 2), order of DRIVE_JOINTS."""
+    return _wheel_xy(cfg).copy()
+
+
+@lru_cache(maxsize=16)
+def _wheel_xy(cfg: RoverConfig) -> NDArray[np.float64]:
+    half = cfg.track_m / 2.0
+    xs = (
+        cfg.wheelbase_front_m,
+        cfg.wheelbase_front_m,
+        0.0,
+        0.0,
+        -cfg.wheelbase_rear_m,
+        -cfg.wheelbase_rear_m,
+    )
+    ys = (half, -half) * 3
+    return np.column_stack([xs, ys]).astype(np.float64)
+
+
+def wheel_commands(
+    v_m_s: float, omega_rad_s: float, cfg: RoverConfig
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Map ``cmd_vel`` to wheel rates and corner steering angles (no-side-slip kinematics).
+
+    Parameters
+    ----------
+    v_m_s : float
+        Forward speed of ``base_link`` (in m/s).
+    omega_rad_s : float
+        Yaw rate (in rad/s), positive counter-clockwise seen from above.
+    cfg : RoverConfig
+
+    Returns
+    -------
+    rates : ndarray of shape (6,)
+        Wheel angular speeds (in rad/s), positive = rolling forward (DRIVE_JOINTS order).
+    steer : ndarray of shape (4,)
+        Steering angles of the corner wheels (in rad), STEER_JOINTS order, within +-pi/2.
+    """
+    xy = _wheel_xy(cfg)
+    vx = v_m_s - omega_rad_s * xy[:, 1]
+    vy = omega_rad_s * xy[:, 0]
+    delta = np.arctan2(vy, vx)
+    speed = np.hypot(vx, vy)
+    flip = np.abs(delta) > math.pi / 2 + 1e-12
+    delta = np.where(flip, delta - math.pi * np.sign(delta), delta)
+    speed = np.where(flip, -speed, speed)
+    delta = np.where(speed == 0.0, 0.0, delta)
+    steer = delta[_STEERED]
+    return speed / cfg.wheel_radius_m, steer
+
+
+def body_twist_from_wheels(
+    rates_rad_s: NDArray[np.float64], steer_rad: NDArray[np.float64], cfg: RoverConfig
+) -> tuple[float, float]:
+    """Least-squares ``(v, omega)`` of ``base_link`` from wheel rates and steering (odometry).
+
+    Inverse of :func:`wheel_commands`: every wheel's ground velocity
+    ``r * rate * (cos d, sin d) = (v - omega * y, omega * x)`` gives two linear equations.
+    """
+    delta = np.zeros(6)
+    delta[_STEERED] = steer_rad
+    u = cfg.wheel_radius_m * np.asarray(rates_rad_s, dtype=np.float64)
+    b = np.concatenate([u * np.cos(delta), u * np.sin(delta)])
+    sol = _odometry_pinv(cfg) @ b
+    return float(sol[0]), float(sol[1])
+
+
+def body_twists_from_wheels(
+    rates_rad_s: NDArray[np.float64], steer_rad: NDArray[np.float64], cfg: RoverConfig
+) -> NDArray[np.float64]:
+    """Vectorised :func:`body_twist_from_wheels`: (N, 6) rates, (N, 4) steering -> (N, 2)."""
+    rates = np.asarray(rates_rad_s, dtype=np.float64).reshape(-1, 6)
+    delta = np.zeros_like(rates)
+    delta[:, _STEERED] = np.asarray(steer_rad, dtype=np.float64).reshape(-1, 4)
+    u = cfg.wheel_radius_m * rates
+    b = np.concatenate([u * np.cos(delta), u * np.sin(delta)], axis=1)
+    return np.asarray(b @ _odometry_pinv(cfg).T, dtype=np.float64)
+
+
+def sensor_mounts(cfg: RoverConfig) -> dict[str, tuple[tuple[float, float, float], float]]:
+    """Sensor mounts in ``base_link``: ``{name: ((x, y, z) in m, pitch in rad)}``.
+
+    ``lidar`` and ``camera`` (the navcam body: x forward, y left, z up, pitched down by
+    ``pitch``); the IMU sits at the ``base_link`` origin. The MJCF below uses the same numbers.
+    """
+    mast = cfg.mast_height_m - cfg.ride_height_m
+    return {
+        "imu": ((0.0, 0.0, 0.0), 0.0),
+        "lidar": ((LIDAR_X_M, 0.0, mast + LIDAR_ABOVE_CAMERA_M), 0.0),
+        "camera": ((CAMERA_X_M, 0.0, mast), math.radians(CAMERA_TILT_DEG)),
+    }
+
+
+def navcam_mount(cfg: RoverConfig) -> tuple[tuple[float, float, float], tuple[float, ...]]:
+    """The mast camera's position in the chassis body frame (m) and its MJCF ``xyaxes`` (the
+    camera's x and y axes in that frame; it looks along its -z, tilted down by
+    ``CAMERA_TILT_DEG``)."""
+    tilt = math.radians(CAMERA_TILT_DEG)
+    mast = cfg.mast_height_m - cfg.ride_height_m
+    return (CAMERA_X_M, 0.0, mast), (0.0, -1.0, 0.0, math.sin(tilt), 0.0, math.cos(tilt))
+
+
+@lru_cache(maxsize=16)
+def _odometry_pinv(cfg: RoverConfig) -> NDArray[np.float64]:
+    xy = _wheel_xy(cfg)
+    a = np.zeros((12, 2))
+    a[:6, 0] = 1.0
+    a[:6, 1] = -xy[:, 1]
+    a[6:, 1] = xy[:, 0]
+    return np.asarray(np.linalg.pinv(a), dtype=np.float64)

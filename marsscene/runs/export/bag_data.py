@@ -1,0 +1,128 @@
+"""Array content of the bag's messages, computed from a run folder (numpy + scipy, vectorised).
+
+Kept apart from :mod:`marsscene.runs.export.bag` (the only rosbags importer) so each step can be
+tested on its own: ``map -> odom`` from ground truth and odometry, body twists, joint states,
+one LaserScan ring, depth images to metres and to organised point clouds.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from marsscene.errors import RuntimeSimError
+from marsscene.rover.config import RoverConfig
+from marsscene.rover.geometry import body_twists_from_wheels
+from marsscene.runs.tum import Trajectory
+
+__all__ = [
+    "body_twist_from_poses",
+    "depth_m",
+    "depth_points",
+    "joint_states",
+    "laser_scan",
+    "map_to_odom",
+]
+
+
+def map_to_odom(
+    gt: Trajectory, odom: Trajectory
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``T_map_odom = T_map_base (GT) * T_odom_base^-1 (odometry)`` at the shared stamps.
+
+    Returns translations (N, 3) and quaternions (N, 4, x y z w). The drive logs both at the
+    control rate on the same clock; other stamps are an error.
+    """
+    if len(gt) != len(odom) or not np.allclose(gt.timestamps_s, odom.timestamps_s, atol=1e-6):
+        raise RuntimeSimError("gt.tum and odom.tum must have the same stamps (one control clock)")
+    r_gt, r_od = Rotation.from_quat(gt.quat_xyzw), Rotation.from_quat(odom.quat_xyzw)
+    rot = r_gt * r_od.inv()
+    xyz = gt.xyz_m - rot.apply(odom.xyz_m)
+    return xyz, rot.as_quat()
+
+
+def body_twist_from_poses(traj: Trajectory) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Body-frame linear (m/s) and angular (rad/s) velocity by central differences, (N, 3) each."""
+    t = traj.timestamps_s
+    if len(t) < 2:
+        return np.zeros((len(t), 3)), np.zeros((len(t), 3))
+    rot = Rotation.from_quat(traj.quat_xyzw)
+    v_world = np.gradient(traj.xyz_m, t, axis=0)
+    rotvec = np.zeros((len(t), 3))
+    step = (rot[:-1].inv() * rot[1:]).as_rotvec() / np.diff(t)[:, None]  # body rates per interval
+    rotvec[1:-1] = 0.5 * (step[:-1] + step[1:])
+    rotvec[0], rotvec[-1] = step[0], step[-1]
+    return rot.inv().apply(v_world), rotvec
+
+
+def joint_states(
+    wheels: NDArray[np.float64], rover: RoverConfig
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Joint positions and velocities from ``wheels.csv`` rows, plus the odometry twist.
+
+    Drive-joint angles integrate the measured rates (rectangle rule, from 0); steering angles
+    are the measured ones, their rates central differences. Returns ``position`` (N, 10),
+    ``velocity`` (N, 10) in DRIVE_JOINTS + STEER_JOINTS order and ``twist`` (N, 2) = (v, omega)
+    solved from the wheels as the odometry does.
+    """
+    t, rates, steer = wheels[:, 0], wheels[:, 1:7], wheels[:, 7:11]
+    dt = np.diff(t, prepend=t[0])
+    angle = np.cumsum(rates * dt[:, None], axis=0)
+    steer_rate = np.gradient(steer, t, axis=0) if len(t) > 1 else np.zeros_like(steer)
+    return (
+        np.hstack([angle, steer]),
+        np.hstack([rates, steer_rate]),
+        body_twists_from_wheels(rates, steer, rover),
+    )
+
+
+def laser_scan(scan: NDArray[Any], lidar: dict[str, Any]) -> dict[str, Any]:
+    """One LaserScan from the ring nearest to horizontal (REP-117: +inf = no return).
+
+    Ranges are the 3-D beam ranges of that ring, binned by azimuth over [0, 2 pi).
+    """
+    channels, n = int(lidar["channels"]), int(lidar["horizontal_samples"])
+    lo, hi = lidar["vertical_fov_deg"]
+    elev = np.linspace(lo, hi, channels) if channels > 1 else np.array([lo])
+    ring = int(np.argmin(np.abs(elev)))
+    pts = scan[scan["ring"] == ring]
+    inc = 2.0 * np.pi / n
+    idx = np.round(np.arctan2(pts["y"], pts["x"]) / inc).astype(np.int64) % n
+    ranges = np.full(n, np.inf, dtype=np.float32)
+    inten = np.zeros(n, dtype=np.float32)
+    ranges[idx] = np.sqrt(pts["x"] ** 2 + pts["y"] ** 2 + pts["z"] ** 2)
+    inten[idx] = pts["intensity"]
+    rmin, rmax = lidar["range_m"]
+    return {"angle_min": 0.0, "angle_max": float(inc * (n - 1)), "angle_increment": float(inc),
+            "range_min": float(rmin), "range_max": float(rmax), "ranges": ranges,
+            "intensities": inten, "ring": ring, "elevation_deg": float(elev[ring])}
+
+
+#: The run's depth PNGs saturate here (>= 65.535 m, e.g. the sky).
+FAR_MM = 65535
+
+
+def depth_m(depth_mm: NDArray[np.uint16]) -> NDArray[np.float32]:
+    """uint16 mm -> float32 m (REP-118): 0 (no return) -> NaN, 65535 (too far) -> +inf."""
+    d = depth_mm.astype(np.float32) * np.float32(0.001)
+    d[depth_mm == 0] = np.nan
+    d[depth_mm == FAR_MM] = np.inf
+    return d
+
+
+def depth_points(
+    depth_mm: NDArray[np.uint16], k: NDArray[np.float64], stride_px: int
+) -> NDArray[np.float32]:
+    """Organised (H/s, W/s, 3) float32 points in the optical frame; NaN: no return or too far."""
+    mm = depth_mm[::stride_px, ::stride_px]
+    d = mm.astype(np.float32) * np.float32(0.001)
+    h, w = d.shape
+    v, u = np.mgrid[0:h, 0:w].astype(np.float32) * np.float32(stride_px)
+    x = (u - np.float32(k[0, 2])) / np.float32(k[0, 0]) * d
+    y = (v - np.float32(k[1, 2])) / np.float32(k[1, 1]) * d
+    pts = np.stack([x, y, d], axis=-1)
+    pts[(mm == 0) | (mm == FAR_MM)] = np.nan
+    return pts

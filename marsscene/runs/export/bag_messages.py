@@ -1,0 +1,154 @@
+"""ROS 2 message builders on one ``rosbags`` typestore and the time-ordered queue of a bag's
+messages (the only module that touches ``rosbags`` types; :mod:`.bag` writes the bag)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from marsscene.errors import missing_dependency
+from marsscene.runs.runlog import CameraStream
+
+__all__ = ["MessageBuilder"]
+
+
+class MessageBuilder:
+    """ROS 2 Jazzy message builders on one ``rosbags`` typestore, and the queue of messages.
+
+    ``topic`` registers a topic (in write order for equal stamps), ``add`` queues a message,
+    ``write`` builds, serialises (CDR) and writes them in stamp order.
+    """
+
+    def __init__(self) -> None:
+        try:
+            from rosbags.typesys import Stores, get_typestore
+        except ImportError:  # pragma: no cover - exercised without the extra only
+            raise missing_dependency("rosbags", "ros") from None
+        self.store = get_typestore(Stores.ROS2_JAZZY)
+        self.T: Any = self.store.types
+        self.topics: dict[str, tuple[str, bool]] = {}  # topic -> (msgtype, latched)
+        self.events: list[tuple[int, int, int, Callable[..., Any], tuple[Any, ...]]] = []
+
+    def topic(self, name: str, msgtype: str, *, latched: bool = False) -> None:
+        self.topics[name] = (msgtype, latched)
+
+    def add(self, topic: str, t_s: float, build: Callable[..., Any], *args: Any) -> None:
+        """Queue a message: ``build(*args)`` is called when it is written (images load late)."""
+        order = list(self.topics).index(topic)
+        self.events.append((round(float(t_s) * 1e9), order, len(self.events), build, args))
+
+    def header(self, t_s: float, frame: str) -> Any:
+        ns = round(t_s * 1e9)
+        return self.T["std_msgs/msg/Header"](
+            stamp=self.T["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9),
+            frame_id=frame,
+        )
+
+    def vec(self, v: Any) -> Any:
+        return self.T["geometry_msgs/msg/Vector3"](x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+    def quat(self, q: Any) -> Any:
+        return self.T["geometry_msgs/msg/Quaternion"](
+            x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])
+        )
+
+    def tf(self, t_s: float, parent: str, child: str, xyz: Any, q: Any) -> Any:
+        tr = self.T["geometry_msgs/msg/Transform"](translation=self.vec(xyz), rotation=self.quat(q))
+        return self.T["geometry_msgs/msg/TransformStamped"](
+            header=self.header(t_s, parent), child_frame_id=child, transform=tr
+        )
+
+    def odometry(self, t_s: float, parent: str, xyz: Any, q: Any, lin: Any, ang: Any) -> Any:
+        point = self.T["geometry_msgs/msg/Point"](x=float(xyz[0]), y=float(xyz[1]),
+                                                 z=float(xyz[2]))
+        pose = self.T["geometry_msgs/msg/Pose"](position=point, orientation=self.quat(q))
+        twist = self.T["geometry_msgs/msg/Twist"](linear=self.vec(lin), angular=self.vec(ang))
+        return self.T["nav_msgs/msg/Odometry"](
+            header=self.header(t_s, parent), child_frame_id="base_link",
+            pose=self.T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+            twist=self.T["geometry_msgs/msg/TwistWithCovariance"](twist=twist,
+                                                                  covariance=np.zeros(36)),
+        )
+
+    def imu(self, t_s: float, row: Any, gyro_var: float, accel_var: float) -> Any:
+        cov_o = np.zeros(9)
+        cov_o[0] = -1.0  # REP-145: no orientation estimate
+        return self.T["sensor_msgs/msg/Imu"](
+            header=self.header(t_s, "imu_link"), orientation=self.quat((0, 0, 0, 1)),
+            orientation_covariance=cov_o, angular_velocity=self.vec(row[4:7]),
+            angular_velocity_covariance=np.diag([gyro_var] * 3).ravel(),
+            linear_acceleration=self.vec(row[1:4]),
+            linear_acceleration_covariance=np.diag([accel_var] * 3).ravel(),
+        )
+
+    def image(self, t_s: float, frame: str, arr: np.ndarray, encoding: str) -> Any:
+        h, w = arr.shape[:2]
+        data = np.ascontiguousarray(arr).view(np.uint8).reshape(-1)
+        return self.T["sensor_msgs/msg/Image"](
+            header=self.header(t_s, frame), height=h, width=w, encoding=encoding,
+            is_bigendian=0, step=len(data) // h, data=data,
+        )
+
+    def camera_info(self, t_s: float, frame: str, cam: CameraStream, tx: float) -> Any:
+        k = cam.k
+        p = np.hstack([k, [[tx], [0.0], [0.0]]])
+        roi = self.T["sensor_msgs/msg/RegionOfInterest"](
+            x_offset=0, y_offset=0, height=0, width=0, do_rectify=False
+        )
+        return self.T["sensor_msgs/msg/CameraInfo"](
+            header=self.header(t_s, frame), height=int(cam.intrinsics["height"]),
+            width=int(cam.intrinsics["width"]), distortion_model="plumb_bob", d=np.zeros(5),
+            k=k.ravel(), r=np.eye(3).ravel(), p=p.ravel(), binning_x=0, binning_y=0, roi=roi,
+        )
+
+    def cloud(self, t_s: float, frame: str, rec: np.ndarray, shape: tuple[int, int]) -> Any:
+        pf = self.T["sensor_msgs/msg/PointField"]
+        fields, off = [], 0
+        for name in rec.dtype.names or ():
+            sub = rec.dtype.fields[name][0]  # type: ignore[index]
+            kind = pf.UINT16 if sub == np.dtype("<u2") else pf.FLOAT32
+            fields.append(pf(name=name, offset=off, datatype=kind, count=1))
+            off += sub.itemsize
+        data = np.ascontiguousarray(rec).view(np.uint8).reshape(-1)
+        return self.T["sensor_msgs/msg/PointCloud2"](
+            header=self.header(t_s, frame), height=shape[0], width=shape[1], fields=fields,
+            is_bigendian=False, point_step=rec.dtype.itemsize,
+            row_step=rec.dtype.itemsize * shape[1], data=data, is_dense=False,
+        )
+
+    def write(self, path: Path, storage: str, progress: Callable[[int, int], None] | None
+              ) -> dict[str, int]:
+        from rosbags.interfaces import (
+            Qos,
+            QosDurability,
+            QosHistory,
+            QosLiveliness,
+            QosReliability,
+            QosTime,
+        )
+        from rosbags.rosbag2 import StoragePlugin, Writer
+
+        forever = QosTime(sec=2147483647, nsec=4294967295)
+        latched = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE,
+                      QosDurability.TRANSIENT_LOCAL, forever, forever, QosLiveliness.AUTOMATIC,
+                      forever, False)
+        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+        counts = dict.fromkeys(self.topics, 0)
+        names = list(self.topics)
+        self.events.sort(key=lambda e: e[:3])
+        with Writer(path, version=9, storage_plugin=plugin) as w:
+            conns = [
+                w.add_connection(name, mt, typestore=self.store,
+                                 offered_qos_profiles=[latched] if lat else [])
+                for name, (mt, lat) in self.topics.items()
+            ]
+            for i, (ns, order, _, build, args) in enumerate(self.events):
+                msg = build(*args)
+                w.write(conns[order], ns, self.store.serialize_cdr(msg, msg.__msgtype__))
+                counts[names[order]] += 1
+                if progress is not None and (i % 200 == 0 or i == len(self.events) - 1):
+                    progress(i + 1, len(self.events))
+        return counts

@@ -1,0 +1,180 @@
+"""The bag's topics: which messages, at which stamps, built from which run-folder logs.
+
+Each ``add_*`` queues ``(stamp, topic, builder, args)`` on a
+:class:`marsscene.runs.export.bag_messages.MessageBuilder`; images and scans are read only when
+the message is written. No ``rosbags`` import here (that stays in
+:mod:`marsscene.runs.export.bag_messages`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from marsscene.errors import RuntimeSimError
+from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
+from marsscene.runs.export import bag_data as bd
+from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
+from marsscene.runs.runlog import CameraStream, RunLog, read_image, read_ply
+
+if TYPE_CHECKING:
+    from marsscene.runs.export.bag_messages import MessageBuilder
+
+__all__ = ["add_camera", "add_lidar", "add_state", "add_stereo"]
+
+
+def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo: bool) -> None:
+    extra = {c.name: c.intrinsics for c in cams[1:]} if stereo else {}
+    statics = static_transforms(run.rover, extra)
+    t0 = float(run.gt.timestamps_s[0])
+    for name, mt in (("/clock", "rosgraph_msgs/msg/Clock"), ("/tf", "tf2_msgs/msg/TFMessage")):
+        bag.topic(name, mt)
+    bag.topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True)
+    bag.topic("/rover/robot_description", "std_msgs/msg/String", latched=True)
+    for name, mt in (("/rover/cmd_vel", "geometry_msgs/msg/Twist"),
+                     ("/rover/odom", "nav_msgs/msg/Odometry"),
+                     ("/rover/GT_Trajectory", "nav_msgs/msg/Odometry"),
+                     ("/rover/joint_states", "sensor_msgs/msg/JointState"),
+                     ("/rover/imu_noisy", "sensor_msgs/msg/Imu")):
+        bag.topic(name, mt)
+    tfm = bag.T["tf2_msgs/msg/TFMessage"]
+
+    def tf_static() -> Any:
+        return tfm(transforms=[bag.tf(t0, s.parent, s.child, s.xyz_m, s.quat_xyzw)
+                               for s in statics])
+
+    bag.add("/tf_static", t0, tf_static)
+    bag.add("/rover/robot_description", t0, bag.T["std_msgs/msg/String"],
+            rover_urdf(run.rover, statics))
+    clock = bag.T["rosgraph_msgs/msg/Clock"]
+    for t in run.imu[:, 0]:
+        bag.add("/clock", t, lambda t: clock(clock=bag.header(t, "").stamp), t)
+    mo_xyz, mo_q = bd.map_to_odom(run.gt, run.odom)
+    pos, vel, twist = bd.joint_states(run.wheels, run.rover)
+    gt_lin, gt_ang = bd.body_twist_from_poses(run.gt)
+    od, gt = run.odom, run.gt
+    names = [*DRIVE_JOINTS, *STEER_JOINTS]
+    js = bag.T["sensor_msgs/msg/JointState"]
+    tw = bag.T["geometry_msgs/msg/Twist"]
+
+    def tf(i: int, t: float) -> Any:
+        return tfm(transforms=[bag.tf(t, "map", "odom", mo_xyz[i], mo_q[i]),
+                               bag.tf(t, "odom", "base_link", od.xyz_m[i], od.quat_xyzw[i])])
+
+    def odom(i: int, t: float) -> Any:
+        return bag.odometry(t, "odom", od.xyz_m[i], od.quat_xyzw[i], (twist[i, 0], 0, 0),
+                            (0, 0, twist[i, 1]))
+
+    def truth(i: int, t: float) -> Any:
+        return bag.odometry(t, "map", gt.xyz_m[i], gt.quat_xyzw[i], gt_lin[i], gt_ang[i])
+
+    for i, t in enumerate(od.timestamps_s):
+        bag.add("/tf", t, tf, i, t)
+        bag.add("/rover/odom", t, odom, i, t)
+        bag.add("/rover/GT_Trajectory", t, truth, i, t)
+
+    def joints(i: int, t: float) -> Any:
+        return js(header=bag.header(t, "base_link"), name=names, position=pos[i],
+                  velocity=vel[i], effort=np.zeros(0))
+
+    def cmd(row: np.ndarray) -> Any:
+        return tw(linear=bag.vec((row[1], 0, 0)), angular=bag.vec((0, 0, row[2])))
+
+    for i, t in enumerate(run.wheels[:, 0]):
+        bag.add("/rover/joint_states", t, joints, i, t)
+    for row in run.cmd:
+        bag.add("/rover/cmd_vel", row[0], cmd, row)
+    noise = run.meta.get("noise", {})
+    g_var = float(noise.get("gyro_sigma_rad_s", 0.0)) ** 2
+    a_var = float(noise.get("accel_sigma_m_s2", 0.0)) ** 2
+    for row in run.imu:
+        bag.add("/rover/imu_noisy", row[0], bag.imu, row[0], row, g_var, a_var)
+    if run.imu_true is not None:
+        bag.topic("/rover/imu", "sensor_msgs/msg/Imu")
+        for row in run.imu_true:
+            bag.add("/rover/imu", row[0], bag.imu, row[0], row, 0.0, 0.0)
+
+
+def add_camera(bag: MessageBuilder, cam: CameraStream, encoding: str, stride: int) -> None:
+    frame = camera_frame(cam.name)
+    bag.topic("/rover/rgb/image_raw", "sensor_msgs/msg/Image")
+    bag.topic("/rover/rgb/camera_info", "sensor_msgs/msg/CameraInfo")
+
+    def rgb(i: int, t: float) -> Any:
+        return bag.image(t, frame, read_image(cam.rgb_files[i]), "rgb8")
+
+    for i, t in enumerate(cam.stamps_s):
+        bag.add("/rover/rgb/image_raw", t, rgb, i, t)
+        bag.add("/rover/rgb/camera_info", t, bag.camera_info, t, frame, cam, 0.0)
+    if not cam.depth_files:
+        return
+    bag.topic("/rover/depth/image_raw", "sensor_msgs/msg/Image")
+    bag.topic("/rover/depth/camera_info", "sensor_msgs/msg/CameraInfo")
+    bag.topic("/rover/depth/points", "sensor_msgs/msg/PointCloud2")
+    dtype = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
+    cache: dict[int, np.ndarray] = {}
+
+    def depth(i: int) -> np.ndarray:  # the image and the cloud share one PNG decode
+        return cache.pop(i) if i in cache else cache.setdefault(i, read_image(cam.depth_files[i]))
+
+    def image(i: int, t: float) -> Any:
+        mm = depth(i)
+        arr = bd.depth_m(mm) if encoding == "32FC1" else mm.astype("<u2")
+        return bag.image(t, frame, arr, encoding)
+
+    def cloud(i: int, t: float) -> Any:
+        pts = bd.depth_points(depth(i), cam.k, stride)
+        return bag.cloud(t, frame, np.ascontiguousarray(pts).view(dtype)[..., 0], pts.shape[:2])
+
+    for i, t in enumerate(cam.stamps_s):
+        bag.add("/rover/depth/image_raw", t, image, i, t)
+        bag.add("/rover/depth/camera_info", t, bag.camera_info, t, frame, cam, 0.0)
+        bag.add("/rover/depth/points", t, cloud, i, t)
+
+
+def add_stereo(bag: MessageBuilder, cam: CameraStream) -> None:
+    frame = camera_frame(cam.name)
+    base = cam.intrinsics.get("baseline_m", cam.intrinsics.get("stereo_baseline_m", 0.0))
+    tx = -float(cam.k[0, 0]) * float(base) if cam.name == "right" else 0.0  # ROS P[0,3]
+    img, info = f"/rover/stereo/{cam.name}/image_raw", f"/rover/stereo/{cam.name}/camera_info"
+    bag.topic(img, "sensor_msgs/msg/Image")
+    bag.topic(info, "sensor_msgs/msg/CameraInfo")
+
+    def build(i: int, t: float) -> Any:
+        arr = read_image(cam.rgb_files[i])
+        return bag.image(t, frame, arr, "rgb8" if arr.ndim == 3 else "mono8")
+
+    for i, t in enumerate(cam.stamps_s):
+        bag.add(img, t, build, i, t)
+        bag.add(info, t, bag.camera_info, t, frame, cam, tx)
+
+
+def add_lidar(
+    bag: MessageBuilder, run: RunLog, stamps: np.ndarray, files: tuple[Path, ...]
+) -> None:
+    cfg = run.meta.get("lidar") or {}
+    if "channels" not in cfg:
+        raise RuntimeSimError(f"{run.path / 'run.json'} has no LiDAR configuration")
+    bag.topic("/rover/lidar/points", "sensor_msgs/msg/PointCloud2")
+    bag.topic("/rover/scan", "sensor_msgs/msg/LaserScan")
+    scan_t = bag.T["sensor_msgs/msg/LaserScan"]
+    period = 1.0 / float(cfg.get("rate_hz", 10.0))
+    cache: dict[int, np.ndarray] = {}
+
+    def load(i: int) -> np.ndarray:  # the cloud and the scan share one file read
+        return cache.pop(i) if i in cache else cache.setdefault(i, read_ply(files[i]))
+
+    def laser(i: int, t: float) -> Any:
+        s = bd.laser_scan(load(i), cfg)
+        return scan_t(header=bag.header(t, "lidar_link"), time_increment=0.0, scan_time=period,
+                      **{k: v for k, v in s.items() if k not in ("ring", "elevation_deg")})
+
+    def cloud(i: int, t: float) -> Any:
+        rec = load(i)
+        return bag.cloud(t, "lidar_link", rec, (1, len(rec)))
+
+    for i, t in enumerate(stamps):
+        bag.add("/rover/lidar/points", t, cloud, i, t)
+        bag.add("/rover/scan", t, laser, i, t)

@@ -1,0 +1,247 @@
+"""SLAM dataset folders from a run folder: TUM RGB-D and EuRoC MAV (numpy + Pillow only).
+
+* ``tum-rgbd`` (Sturm et al. 2012): ``rgb/``, ``depth/`` (16-bit PNG, 5000 per metre, 0 = no
+  return), ``rgb.txt``, ``depth.txt``, ``groundtruth.txt`` (navcam optical frame in ``map``),
+  ``associations.txt`` and an ORB-SLAM3 settings file ``orbslam3_rgbd.yaml``.
+* ``euroc`` (Burri et al. 2016): ``mav0/cam0`` (navcam or stereo left), ``mav0/cam1`` (stereo
+  right, when logged), ``mav0/imu0`` (noisy IMU, body = ``base_link``),
+  ``mav0/state_groundtruth_estimate0``, each with ``data.csv`` and ``sensor.yaml``, plus
+  ``timestamps.txt`` and ORB-SLAM3 settings (``orbslam3_stereo_inertial.yaml`` or
+  ``orbslam3_mono_inertial.yaml``). Images are mono8, as in EuRoC.
+
+Commands to run ORB-SLAM3 on them: ``docs/ros.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from marsscene._atomic import replacing_dir
+from marsscene.errors import ExportError, RuntimeSimError
+from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
+from marsscene.runs.logs import png_bytes
+from marsscene.runs.runlog import CameraStream, RunLog, read_image
+
+__all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset"]
+
+FORMATS = ("tum-rgbd", "euroc")
+#: TUM RGB-D depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored as 0).
+TUM_DEPTH_PER_M = 5000
+
+
+def export_dataset(
+    run_dir: str | os.PathLike[str],
+    fmt: str,
+    out_dir: str | os.PathLike[str] | None = None,
+    *,
+    overwrite: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+) -> Path:
+    """Write ``RUN_DIR`` as a ``tum-rgbd`` or ``euroc`` folder (default ``RUN_DIR/<format>``).
+
+    Needs camera logs (``euroc`` also uses ``camera/left`` and ``camera/right`` when present);
+    a camera-less run raises :class:`~marsscene.errors.RuntimeSimError`, an existing output
+    folder :class:`~marsscene.errors.ExportError` unless ``overwrite``. ``progress(done,
+    total)`` is called per image written. Returns the folder.
+    """
+    if fmt not in FORMATS:
+        raise ExportError(f"format = {fmt!r}; expected one of {', '.join(FORMATS)}")
+    run = RunLog(run_dir)
+    cams = run.camera_streams()
+    if not cams:
+        raise RuntimeSimError(f"{run.path} has no camera logs; drive with --camera to export "
+                              f"{fmt}")
+    if fmt == "tum-rgbd" and not cams[0].depth_files:
+        raise RuntimeSimError(f"{run.path}: the camera logged no depth; tum-rgbd needs RGB-D")
+    final = Path(out_dir) if out_dir is not None else run.path / fmt.replace("-", "_")
+    stereo = [c for c in cams[1:] if c.name in ("left", "right")]
+    statics = static_transforms(run.rover, {c.name: c.intrinsics for c in stereo})
+    pair = sorted(stereo, key=lambda c: c.name)  # left, right
+    used = [cams[0]] if fmt == "tum-rgbd" or len(pair) != 2 else pair
+    total = sum(len(c.stamps_s) for c in used)
+    done = iter(range(1, total + 1))
+
+    def tick() -> None:
+        if progress is not None:
+            progress(next(done), total)
+
+    with replacing_dir(final, overwrite=overwrite, create=False) as tmp:
+        if fmt == "tum-rgbd":
+            _tum_rgbd(run, cams[0], statics, tmp, tick)
+        else:
+            _euroc(run, used, statics, tmp, tick)
+    return final
+
+
+def camera_trajectory(
+    run: RunLog, t_base_cam: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Ground-truth poses of a camera (4 x 4 pose in ``base_link``): xyz (N, 3), quat xyzw."""
+    rot = Rotation.from_quat(run.gt.quat_xyzw)
+    xyz = run.gt.xyz_m + rot.apply(t_base_cam[:3, 3])
+    q = (rot * Rotation.from_matrix(t_base_cam[:3, :3])).as_quat()
+    return xyz, q
+
+
+def _lines(rows: list[str], head: str) -> str:
+    return head + "".join(r + "\n" for r in rows)
+
+
+def _tum_rgbd(
+    run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None]
+) -> None:
+    (out / "rgb").mkdir(parents=True)
+    (out / "depth").mkdir()
+    stamps = [f"{t:.6f}" for t in cam.stamps_s]
+    for s, rgb, dep in zip(stamps, cam.rgb_files, cam.depth_files, strict=True):
+        (out / "rgb" / f"{s}.png").write_bytes(rgb.read_bytes())
+        mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // 1000)
+        (out / "depth" / f"{s}.png").write_bytes(
+            png_bytes(np.where(mm > 65535, 0, mm).astype(np.uint16)))
+        tick()
+    src = f"# file: marsscene run {run.path.name}\n"
+    (out / "rgb.txt").write_text(_lines([f"{s} rgb/{s}.png" for s in stamps],
+                                        "# color images\n" + src + "# timestamp filename\n"))
+    (out / "depth.txt").write_text(_lines(
+        [f"{s} depth/{s}.png" for s in stamps],
+        f"# depth maps ({TUM_DEPTH_PER_M} per metre, 0 = no return)\n" + src
+        + "# timestamp filename\n"))
+    (out / "associations.txt").write_text(
+        _lines([f"{s} rgb/{s}.png {s} depth/{s}.png" for s in stamps], ""))
+    xyz, q = camera_trajectory(run, frame_in_base(statics, camera_frame(cam.name)))
+    rows = [
+        f"{t:.6f} " + " ".join(f"{v:.6f}" for v in p) + " " + " ".join(f"{v:.9f}" for v in r)
+        for t, p, r in zip(run.gt.timestamps_s, xyz, q, strict=True)
+    ]
+    (out / "groundtruth.txt").write_text(_lines(
+        rows, "# ground truth trajectory: navcam optical frame in map\n" + src
+        + "# timestamp tx ty tz qx qy qz qw\n"))
+    i = cam.intrinsics
+    (out / "orbslam3_rgbd.yaml").write_text(_orb_head(cam, run) + _orb_cam(1, i) + (
+        f"Stereo.ThDepth: 40.0\nStereo.b: 0.07\nRGBD.DepthMapFactor: {TUM_DEPTH_PER_M:.1f}\n"
+    ) + _ORB_TAIL)
+
+
+def _euroc(
+    run: RunLog, cams: list[CameraStream], statics: list, out: Path, tick: Callable[[], None]
+) -> None:
+    mav = out / "mav0"
+    t_b_c = [frame_in_base(statics, camera_frame(c.name)) for c in cams]
+    for k, (cam, tbc) in enumerate(zip(cams, t_b_c, strict=True)):
+        d = mav / f"cam{k}"
+        (d / "data").mkdir(parents=True)
+        ns = [round(t * 1e9) for t in cam.stamps_s]
+        for n, rgb in zip(ns, cam.rgb_files, strict=True):
+            img = read_image(rgb)
+            mono = img if img.ndim == 2 else np.round(img @ [0.299, 0.587, 0.114]).astype(np.uint8)
+            (d / "data" / f"{n}.png").write_bytes(png_bytes(mono))
+            tick()
+        (d / "data.csv").write_text(_lines([f"{n},{n}.png" for n in ns],
+                                           "#timestamp [ns],filename\n"))
+        i = cam.intrinsics
+        (d / "sensor.yaml").write_text(
+            f"sensor_type: camera\ncomment: marsscene {camera_frame(cam.name)}\n"
+            + _t_bs(tbc) + f"rate_hz: {_rate(cam.stamps_s):g}\n"
+            f"resolution: [{i['width']}, {i['height']}]\ncamera_model: pinhole\n"
+            f"intrinsics: [{i['fx']:.9g}, {i['fy']:.9g}, {i['cx']:.9g}, {i['cy']:.9g}]\n"
+            "distortion_model: radial-tangential\ndistortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n"
+        )
+        if k == 0:
+            (out / "timestamps.txt").write_text(_lines([str(n) for n in ns], ""))
+    imu = mav / "imu0"
+    imu.mkdir(parents=True)
+    rows = [f"{round(r[0] * 1e9)}," + ",".join(f"{v:.9g}" for v in (*r[4:7], *r[1:4]))
+            for r in run.imu]
+    (imu / "data.csv").write_text(_lines(rows, "#timestamp [ns],w_RS_S_x [rad s^-1],"
+                                  "w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],"
+                                  "a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n"))
+    nd = _noise_density(run)
+    (imu / "sensor.yaml").write_text(
+        "sensor_type: imu\ncomment: marsscene IMU (body = base_link), white noise + constant "
+        "bias\n" + _t_bs(np.eye(4)) + f"rate_hz: {_rate(run.imu[:, 0]):g}\n"
+        f"gyroscope_noise_density: {nd[0]:.9g}\ngyroscope_random_walk: 0.0\n"
+        f"accelerometer_noise_density: {nd[1]:.9g}\naccelerometer_random_walk: 0.0\n"
+    )
+    gt = mav / "state_groundtruth_estimate0"
+    gt.mkdir()
+    v = np.gradient(run.gt.xyz_m, run.gt.timestamps_s, axis=0) if len(run.gt) > 1 else \
+        np.zeros_like(run.gt.xyz_m)
+    noise = run.meta.get("noise", {})
+    bias = (*noise.get("gyro_bias_rad_s", (0, 0, 0)), *noise.get("accel_bias_m_s2", (0, 0, 0)))
+    rows = [
+        f"{round(t * 1e9)}," + ",".join(f"{x:.9g}" for x in (*p, q[3], *q[:3], *vel, *bias))
+        for t, p, q, vel in zip(run.gt.timestamps_s, run.gt.xyz_m, run.gt.quat_xyzw, v,
+                                strict=True)
+    ]
+    (gt / "data.csv").write_text(_lines(rows, _EUROC_GT_HEAD))
+    name = "stereo_inertial" if len(cams) == 2 else "mono_inertial"
+    text = _orb_head(cams[0], run) + "".join(_orb_cam(k + 1, c.intrinsics)
+                                             for k, c in enumerate(cams))
+    if len(cams) == 2:
+        text += "Stereo.ThDepth: 60.0\n" + _cv_mat("Stereo.T_c1_c2",
+                                                   np.linalg.inv(t_b_c[0]) @ t_b_c[1])
+    text += _cv_mat("IMU.T_b_c1", t_b_c[0]) + (
+        f"IMU.InsertKFsWhenLost: 0\nIMU.NoiseGyro: {max(nd[0], 1e-5):.9g}\n"
+        f"IMU.NoiseAcc: {max(nd[1], 1e-4):.9g}\nIMU.GyroWalk: 1e-06\nIMU.AccWalk: 1e-05\n"
+        f"IMU.Frequency: {_rate(run.imu[:, 0]):.1f}\n"
+    )
+    (out / f"orbslam3_{name}.yaml").write_text(text + _ORB_TAIL)
+
+
+_EUROC_GT_HEAD = (
+    "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], "
+    "q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], "
+    "b_w_RS_S_y [rad s^-1], b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], "
+    "b_a_RS_S_z [m s^-2]\n"
+)
+
+
+def _rate(stamps: NDArray[np.float64]) -> float:
+    return float(1.0 / np.median(np.diff(stamps))) if len(stamps) > 1 else 0.0
+
+
+def _noise_density(run: RunLog) -> tuple[float, float]:
+    """Continuous-time white-noise densities: sigma_discrete / sqrt(rate) (per sqrt(Hz))."""
+    noise, rate = run.meta.get("noise", {}), _rate(run.imu[:, 0])
+    root = math.sqrt(rate) if rate > 0 else 1.0
+    return (float(noise.get("gyro_sigma_rad_s", 0.0)) / root,
+            float(noise.get("accel_sigma_m_s2", 0.0)) / root)
+
+
+def _t_bs(m: NDArray[np.float64]) -> str:
+    data = ", ".join(f"{v:.9g}" for v in m.ravel())
+    return f"T_BS:\n  cols: 4\n  rows: 4\n  data: [{data}]\n"
+
+
+def _cv_mat(name: str, m: NDArray[np.float64]) -> str:
+    data = ", ".join(f"{v:.9f}" for v in m.ravel())
+    return f"{name}: !!opencv-matrix\n  rows: 4\n  cols: 4\n  dt: f\n  data: [{data}]\n"
+
+
+def _orb_head(cam: CameraStream, run: RunLog) -> str:
+    i = cam.intrinsics
+    return (f'%YAML:1.0\n# ORB-SLAM3 settings for marsscene run {run.path.name}\n'
+            f'File.version: "1.0"\nCamera.type: "PinHole"\nCamera.width: {i["width"]}\n'
+            f'Camera.height: {i["height"]}\nCamera.fps: {round(_rate(cam.stamps_s))}\n'
+            "Camera.RGB: 1\n")
+
+
+def _orb_cam(k: int, i: dict[str, float]) -> str:
+    return "".join(f"Camera{k}.{n}: {float(i[n]):.9g}\n" for n in ("fx", "fy", "cx", "cy")) + \
+        "".join(f"Camera{k}.{n}: 0.0\n" for n in ("k1", "k2", "p1", "p2"))
+
+
+_ORB_TAIL = (
+    "ORBextractor.nFeatures: 1250\nORBextractor.scaleFactor: 1.2\nORBextractor.nLevels: 8\n"
+    "ORBextractor.iniThFAST: 20\nORBextractor.minThFAST: 7\nViewer.KeyFrameSize: 0.05\n"
+    "Viewer.KeyFrameLineWidth: 1.0\nViewer.GraphLineWidth: 0.9\nViewer.PointSize: 2.0\n"
+    "Viewer.CameraSize: 0.08\nViewer.CameraLineWidth: 3.0\nViewer.ViewpointX: 0.0\n"
+    "Viewer.ViewpointY: -0.7\nViewer.ViewpointZ: -1.8\nViewer.ViewpointF: 500.0\n"
+)

@@ -1,0 +1,176 @@
+"""Read a run folder written by :func:`marsscene.sim.driver.drive` (numpy + Pillow only).
+
+The bag writer (:mod:`marsscene.runs.export.bag`) and the dataset exports
+(:mod:`marsscene.runs.export.datasets`) read runs from disk, not from memory, so they work after the
+fact and on runs from other versions of the drive. Camera folders are discovered: ``camera/``
+itself (the navcam, RGB + depth) and every sub-folder of it with its own ``stamps.csv``
+(``camera/left``, ``camera/right`` for a stereo head; see :func:`camera_streams`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene.errors import RuntimeSimError
+from marsscene.rover.config import RoverConfig
+from marsscene.runs.tum import Trajectory, read_tum
+
+__all__ = ["CameraStream", "RunLog", "read_image", "read_ply"]
+
+_REQUIRED = ("run.json", "gt.tum", "odom.tum", "cmd.csv", "wheels.csv", "imu.csv")
+
+
+def _read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
+    lines = path.read_text(encoding="utf-8").splitlines()
+    if not lines:
+        raise RuntimeSimError(f"{path}: empty log (no header)")
+    return lines[0].split(","), [ln.split(",") for ln in lines[1:] if ln.strip()]
+
+
+def _numeric_csv(path: Path, columns: int) -> NDArray[np.float64]:
+    head, rows = _read_csv(path)
+    if len(head) != columns or any(len(r) != columns for r in rows):
+        raise RuntimeSimError(f"{path}: expected {columns} columns per row ({','.join(head)})")
+    try:
+        return np.array(rows, dtype=np.float64).reshape(-1, columns)
+    except ValueError:
+        raise RuntimeSimError(f"{path}: not a number in the log") from None
+
+
+@dataclass(frozen=True)
+class CameraStream:
+    """One camera's images in a run folder.
+
+    ``name`` is ``"navcam"`` for ``camera/`` itself, else the sub-folder name (``left``, ...).
+    ``depth_files`` is empty when the camera logged no depth.
+    """
+
+    name: str
+    folder: Path
+    stamps_s: NDArray[np.float64]
+    rgb_files: tuple[Path, ...]
+    depth_files: tuple[Path, ...]
+    intrinsics: dict[str, Any]
+
+    @property
+    def k(self) -> NDArray[np.float64]:
+        """3 x 3 pinhole matrix (pixels)."""
+        i = self.intrinsics
+        return np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
+
+
+def _camera_stream(name: str, folder: Path, fallback: dict[str, Any] | None) -> CameraStream:
+    head, rows = _read_csv(folder / "stamps.csv")
+    if head[:2] != ["t", "rgb"]:
+        raise RuntimeSimError(f"{folder / 'stamps.csv'}: expected columns t,rgb[,depth]")
+    stamps = np.array([float(r[0]) for r in rows], dtype=np.float64)
+    rgb = tuple(folder / r[1] for r in rows)
+    depth = tuple(folder / r[2] for r in rows if len(r) > 2 and r[2])
+    if depth and len(depth) != len(rgb):
+        raise RuntimeSimError(f"{folder / 'stamps.csv'}: depth missing for some frames")
+    missing = [p for p in (*rgb, *depth) if not p.is_file()]
+    if missing:
+        raise RuntimeSimError(f"{folder}: {len(missing)} image file(s) missing, e.g. {missing[0]}")
+    path = folder / "intrinsics.json"
+    if path.is_file():
+        intr = json.loads(path.read_text(encoding="utf-8"))
+    elif fallback is not None:
+        intr = dict(fallback)
+    else:
+        raise RuntimeSimError(f"{folder}: no intrinsics.json")
+    return CameraStream(name, folder, stamps, rgb, depth, intr)
+
+
+def read_image(path: Path) -> NDArray[Any]:
+    """A PNG as an array: (H, W, 3) uint8 RGB, (H, W) uint8 mono or (H, W) uint16."""
+    from PIL import Image
+
+    with Image.open(path) as im:
+        if im.mode in ("I;16", "I;16B", "I"):
+            return np.asarray(im, dtype=np.uint16)
+        return np.asarray(im.convert("RGB") if im.mode not in ("RGB", "L") else im)
+
+
+def read_ply(path: Path) -> NDArray[Any]:
+    """A LiDAR scan (binary PLY written by :func:`~marsscene.runs.logs.ply_bytes`).
+
+    Returns a structured array with fields ``x y z intensity`` (float32) and ``ring`` (uint16).
+    """
+    raw = path.read_bytes()
+    end = raw.find(b"end_header\n")
+    if not raw.startswith(b"ply\n") or end < 0:
+        raise RuntimeSimError(f"{path}: not a binary PLY scan")
+    n = int(next(ln.split()[2] for ln in raw[:end].decode("ascii").splitlines()
+                 if ln.startswith("element vertex")))
+    dtype = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"),
+                      ("ring", "<u2")])
+    return np.frombuffer(raw, dtype=dtype, count=n, offset=end + len(b"end_header\n"))
+
+
+class RunLog:
+    """The logs of one run folder (see :mod:`marsscene.runs.logs` for the layout).
+
+    Raises :class:`~marsscene.errors.RuntimeSimError` naming the missing files when the folder
+    is not a complete run.
+    """
+
+    def __init__(self, run_dir: str | os.PathLike[str]) -> None:
+        self.path = Path(run_dir)
+        if not self.path.is_dir():
+            raise RuntimeSimError(f"{self.path} is not a run folder (no such directory)")
+        missing = [f for f in _REQUIRED if not (self.path / f).is_file()]
+        if missing:
+            raise RuntimeSimError(
+                f"{self.path} is not a complete run folder: missing {', '.join(missing)}"
+            )
+        self.meta: dict[str, Any] = json.loads((self.path / "run.json").read_text("utf-8"))
+        rover = {k: v for k, v in self.meta.get("rover", {}).items()
+                 if k in RoverConfig.__dataclass_fields__}
+        self.rover = RoverConfig(**rover)
+        self.gt: Trajectory = read_tum(self.path / "gt.tum")
+        self.odom: Trajectory = read_tum(self.path / "odom.tum")
+        self.cmd = _numeric_csv(self.path / "cmd.csv", 3)
+        self.wheels = _numeric_csv(self.path / "wheels.csv", 11)
+        self.imu = _numeric_csv(self.path / "imu.csv", 7)
+        true = self.path / "imu_true.csv"
+        self.imu_true = _numeric_csv(true, 7) if true.is_file() else None
+
+    @property
+    def lidar(self) -> tuple[NDArray[np.float64], tuple[Path, ...]] | None:
+        """LiDAR stamps (s) and PLY files, or None when the run has no LiDAR."""
+        stamps = self.path / "lidar" / "stamps.csv"
+        if not stamps.is_file():
+            return None
+        _, rows = _read_csv(stamps)
+        files = tuple(self.path / "lidar" / r[1] for r in rows)
+        missing = [p for p in files if not p.is_file()]
+        if missing:
+            raise RuntimeSimError(f"{stamps.parent}: {len(missing)} scan(s) missing, e.g. "
+                                  f"{missing[0]}")
+        return np.array([float(r[0]) for r in rows], dtype=np.float64), files
+
+    def camera_streams(self) -> list[CameraStream]:
+        """The navcam (``camera/``) first, then extra camera folders in name order."""
+        root = self.path / "camera"
+        if not (root / "stamps.csv").is_file():
+            return []
+        main = _camera_stream("navcam", root, None)
+        extra = [
+            _camera_stream(p.name, p, main.intrinsics)
+            for p in sorted(root.iterdir())
+            if p.is_dir() and (p / "stamps.csv").is_file()
+        ]
+        base = (self.meta.get("camera") or {}).get("stereo_baseline_m")
+        for cam in extra:  # the run's camera config may carry the stereo baseline
+            if base is not None and "baseline_m" not in cam.intrinsics:
+                cam.intrinsics.setdefault("stereo_baseline_m", base)
+        return [main, *extra]
+
+

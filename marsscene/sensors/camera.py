@@ -1,0 +1,260 @@
+"""The mast camera (mono RGB-D, optional Navcam-like stereo): MuJoCo offscreen rendering.
+
+``MUJOCO_GL=egl`` (or ``osmesa``). The camera renders its own model of the scene
+(:class:`marsscene.sensors.camera_world.CameraWorld`): smooth terrain meshes around the rover
+with baked, non-repeating ground textures (:mod:`marsscene.sensors.camera_ground`) and every
+catalogue rock in the window as visual-only meshes. Lighting comes from the scene's lighting
+stage (manifest), in linear units:
+
+* sun: directional light, colour ``k E_dn sun_rgb``; shadow map centred on the camera;
+* sky: ambient ``k E_diffuse sky_rgb`` and a skybox of radiance ``E_diffuse / pi`` (zenith
+  0.8x, horizon 1.2x); dust fog with the meteorological visibility (``3.912 H / tau``);
+
+where ``k`` scales the brightest sunlit surface to just below 1. The image is then exposed
+(:class:`marsscene.sensors.exposure.Exposure`: auto-exposure, or fixed), optionally with
+seeded shot + read noise, and sRGB-encoded. Depth is metric (m), read from the depth buffer
+of the same render pass (:class:`marsscene.sensors.offscreen.OffscreenView`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene.errors import RuntimeSimError
+from marsscene.sensors.camera_scene import scene_albedo_field, scene_lighting
+from marsscene.sensors.camera_world import ALBEDO_SCALE, CameraWorld
+from marsscene.sensors.exposure import Exposure
+from marsscene.sensors.offscreen import OffscreenView
+
+__all__ = ["MastCamera", "scene_lighting"]
+
+#: Fixed-exposure mode: linear 1.0 is a surface of albedo ALBEDO_SCALE under this irradiance.
+FIXED_REFERENCE_W_M2 = 600.0
+_SHADOW_CLIP_M = 20.0
+_SHADOW_MAP_PX = 1024  # 3.9 cm texels over +-20 m; 2048 costs ~10-15 % more on llvmpipe
+_SHADOW_SNAP_M = 4.0
+_SKY_ZFAR_FRACTION = 0.45
+
+
+class MastCamera:
+    """Offscreen renderer of a :class:`~marsscene.sim.rover_sim.RoverSim`'s mast camera(s)."""
+
+    def __init__(self, sim: Any, *, rng: np.random.Generator | None = None) -> None:
+        from marsscene.rover.config import CameraConfig
+
+        cam = sim.run.camera if sim.run.camera is not None else CameraConfig()
+        self.config = cam
+        self.width, self.height = cam.width_px, cam.height_px
+        self.depth = cam.depth
+        self.noise_rng = rng if cam.sensor_noise else None
+        lt = scene_lighting(sim.scene_dir, tau=cam.tau, sun_elevation_deg=cam.sun_elevation_deg,
+                            sun_azimuth_deg=cam.sun_azimuth_deg)
+        self.lighting = lt
+        share = lt.direct_horizontal_w_m2 / max(lt.global_horizontal_w_m2, 1e-9)
+        from marsscene.seeding import stage_rng
+        from marsscene.sensors.camera_scene import scene_seed
+
+        seed = scene_seed(sim.scene_dir)
+        self.world = CameraWorld(
+            sim.heightfield, Path(sim.scene_dir), window_m=cam.terrain_window_m,
+            tile_m=cam.texture_tile_m, tile_px=cam.texture_px,
+            sun_direction_enu=lt.sun_direction_enu, direct_share=share,
+            rng=stage_rng(seed, "texture"),
+            field=scene_albedo_field(sim.scene_dir, sim.heightfield),
+            near_m=cam.near_window_m, far_stride=cam.far_post_stride,
+        )
+        rows, cols = sim.heightfield.shape
+        self.windowed = self.world.nr < rows or self.world.nc < cols
+        spec = sim.build_spec()
+        self._edit(spec, sim, lt)
+        self.model = spec.compile()
+        self.data = mujoco.MjData(self.model)
+        self.world.update(self.model, tuple(sim.pose()[0][:2]), _forward_xy(sim), force=True)
+        name = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, n)  # noqa: E731
+        self.camera_id = name("rover/navcam")
+        self.stereo_ids = (name("cam_left"), name("cam_right")) if cam.stereo else None
+        self.sun_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_LIGHT, "sun")
+        m = self.model
+        self.rock_geoms = np.flatnonzero(
+            (m.geom_bodyid == 0) & (m.geom_type == mujoco.mjtGeom.mjGEOM_MESH)
+            & (m.geom_contype != 0))
+        self._show_window_rocks()
+        self._flags = {mujoco.mjtRndFlag.mjRND_SHADOW: bool(cam.shadows),
+                       mujoco.mjtRndFlag.mjRND_REFLECTION: False,
+                       mujoco.mjtRndFlag.mjRND_FOG: True,
+                       mujoco.mjtRndFlag.mjRND_SKYBOX: True}
+        self.exposure = Exposure(cam.exposure, target_mean=cam.target_mean,
+                                 fixed_gain=cam.exposure_gain)
+        self.exposure_stereo = Exposure(cam.exposure, target_mean=cam.target_mean,
+                                       fixed_gain=cam.exposure_gain)
+        try:
+            self.view = OffscreenView(self.model, width=self.width, height=self.height)
+        except Exception as err:
+            raise RuntimeSimError(
+                f"cannot create an offscreen renderer (MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}):"
+                f" {err}; install EGL or OSMesa (apt-get install libosmesa6) and set MUJOCO_GL "
+                "before importing mujoco"
+            ) from None
+        self._upload()
+
+    # ---- model edits ---------------------------------------------------------------------------
+    def _edit(self, spec: Any, sim: Any, lt: Any) -> None:
+        cam = self.config
+        terrain = spec.geom("terrain")
+        terrain.group = 5  # hidden: the window mesh is drawn instead
+        outer = spec.geom("terrain_outer")  # level-of-detail scenes: its focus posts are lowered
+        if outer is not None:
+            outer.group = 5
+        for geom in spec.geoms:  # MJCF collision rocks: literature rock colour
+            if geom.material == "rock":
+                geom.material = "cam_rock_geom"
+        spec.add_material(name="cam_rock_geom", rgba=[0.2 / ALBEDO_SCALE * 0.9,
+                                                       0.145 / ALBEDO_SCALE * 0.9,
+                                                       0.11 / ALBEDO_SCALE * 0.9, 1.0],
+                          specular=0.0, shininess=0.0, reflectance=0.0)
+        self.world.add_to_spec(spec, tuple(sim.pose()[0][:2]), _forward_xy(sim))
+        e_dn, e_dif = lt.direct_normal_w_m2, lt.diffuse_horizontal_w_m2
+        if cam.exposure == "fixed":
+            k = 1.0 / FIXED_REFERENCE_W_M2
+        else:  # brightest case: albedo ALBEDO_SCALE facing the sun, plus the sky
+            k = 0.95 / max(e_dn + e_dif, 1e-6)
+        sun_rgb, sky_rgb = np.asarray(lt.sun_color_rgb), np.asarray(lt.sky_color_rgb)
+        for light in spec.lights:
+            light.active = light.name == "sun"
+        sun = spec.light("sun")
+        if sun is None:
+            sun = spec.worldbody.add_light(name="sun")
+        sun.type = mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+        sun.dir = [-c for c in lt.sun_direction_enu]
+        sun.diffuse = (k * e_dn * sun_rgb).tolist()
+        sun.specular = [0.0, 0.0, 0.0]
+        sun.ambient = [0.0, 0.0, 0.0]
+        sun.castshadow = bool(cam.shadows)
+        vis = spec.visual
+        vis.headlight.ambient = (k * e_dif * sky_rgb).tolist()
+        vis.headlight.diffuse = [0.0, 0.0, 0.0]
+        vis.headlight.specular = [0.0, 0.0, 0.0]
+        sky = k * e_dif * sky_rgb / ALBEDO_SCALE  # radiance E_diffuse / pi, in render units
+        skybox = next((t for t in spec.textures
+                       if t.type == mujoco.mjtTexture.mjTEXTURE_SKYBOX), None)
+        if skybox is None:
+            skybox = spec.add_texture(name="cam_sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+                                      width=64, height=64)
+        skybox.builtin = mujoco.mjtBuiltin.mjBUILTIN_GRADIENT
+        skybox.file = ""
+        skybox.rgb1 = np.clip(0.8 * sky, 0, 1).tolist()
+        skybox.rgb2 = np.clip(1.2 * sky, 0, 1).tolist()
+        extent = max(cam.terrain_window_m, 10.0)
+        spec.stat.extent = extent
+        vis.map.znear = 0.05 / extent
+        vis.map.zfar = 4.0
+        vis.map.shadowclip = _SHADOW_CLIP_M / extent
+        vis.quality.shadowsize = _SHADOW_MAP_PX
+        vis.quality.offsamples = 0
+        vis.global_.offwidth = max(int(cam.width_px), 640)
+        vis.global_.offheight = max(int(cam.height_px), 480)
+        vis_m = lt.visibility_m if math.isfinite(lt.visibility_m) else 1e9
+        vis.map.fogstart = 0.0
+        vis.map.fogend = float(min(vis_m, 1e9) / extent)
+        vis.rgba.fog = [*np.clip(1.2 * sky, 0, 1).tolist(), 1.0]
+        if cam.stereo:
+            body = spec.body("rover/base_link")
+            pos = np.asarray(sim.model.cam_pos[sim.camera_id], dtype=np.float64)
+            quat = np.asarray(sim.model.cam_quat[sim.camera_id], dtype=np.float64)
+            fovy = float(sim.model.cam_fovy[sim.camera_id])
+            for name, dy in (("cam_left", cam.stereo_baseline_m / 2),
+                             ("cam_right", -cam.stereo_baseline_m / 2)):
+                body.add_camera(name=name, pos=(pos + np.array([0.0, dy, 0.0])).tolist(),
+                                quat=quat.tolist(), fovy=fovy)
+
+    def _upload(self, far: bool = True, near: bool = True) -> None:
+        mesh = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, n)  # noqa: E731
+        tex = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_TEXTURE, n)  # noqa: E731
+        for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
+            self.view.upload_mesh(mesh(name))
+        if far:
+            self.view.upload_texture(tex("cam_ground_far"))
+        if near:
+            self.view.upload_mesh(mesh("cam_terrain_near"))
+            self.view.upload_texture(tex("cam_ground_near"))
+
+    # ---- rendering -----------------------------------------------------------------------------
+    def _sync(self, sim: Any) -> None:
+        xy = tuple(sim.pose()[0][:2])
+        far, near = self.world.update(self.model, xy, _forward_xy(sim))
+        if far or near:
+            self._upload(far, near)
+        if far:
+            self._show_window_rocks()
+        self.data.qpos[: sim.data.qpos.size] = sim.data.qpos
+        mujoco.mj_kinematics(self.model, self.data)
+        # shadow map: a box of +-_SHADOW_CLIP_M around the ground ahead of the camera, its
+        # centre snapped to a world lattice: the shadow texels stay fixed to the ground between
+        # snaps, so shadow edges do not shimmer from frame to frame (features stay put)
+        cam_pos = self.data.cam_xpos[self.camera_id]
+        fwd = -self.data.cam_xmat[self.camera_id].reshape(3, 3)[:, 2]
+        ahead = cam_pos + 0.5 * _SHADOW_CLIP_M * np.r_[fwd[:2], 0.0]
+        centre = np.round(ahead / _SHADOW_SNAP_M) * _SHADOW_SNAP_M
+        s = np.asarray(self.lighting.sun_direction_enu)
+        self.model.light_pos[self.sun_id] = centre + 2.0 * _SHADOW_CLIP_M * s
+        mujoco.mj_camlight(self.model, self.data)
+
+    def _show_window_rocks(self) -> None:
+        """MJCF rocks outside the terrain window would float in the sky: hide them."""
+        x0, y0, x1, y1 = self.world.window_bounds_xy_m()
+        p = self.model.geom_pos[self.rock_geoms]
+        inside = (p[:, 0] >= x0) & (p[:, 0] <= x1) & (p[:, 1] >= y0) & (p[:, 1] <= y1)
+        self.model.geom_group[self.rock_geoms] = np.where(inside, 0, 5)
+
+    def _render(self, camera_id: int, depth: bool
+                ) -> tuple[NDArray[np.float32], NDArray[np.float32] | None]:
+        """Linear RGB in [0, 1] and (with ``depth``) metric depth from one render pass."""
+        rgb, depth_m = self.view.render(self.data, camera_id, self._flags, depth=depth)
+        linear = rgb.astype(np.float32) * np.float32(1.0 / 255.0)
+        if depth_m is None:
+            return linear, None
+        # the lit pass draws the skybox camera-centred at >= ~0.5 zfar (measured 0.504); the
+        # farthest terrain-window point is < 1.5 extent = 0.375 zfar: beyond 0.45 zfar is sky
+        far = self.model.vis.map.zfar * self.model.stat.extent
+        return linear, np.where(depth_m < _SKY_ZFAR_FRACTION * far, depth_m, 0.0).astype(
+            np.float32)
+
+    def _linear(self, camera_id: int) -> NDArray[np.float32]:
+        return self._render(camera_id, False)[0]
+
+    def render(self, sim: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
+        """RGB (H, W, 3) uint8 (exposed, sRGB) and depth (H, W) float32 in m (or None).
+
+        One render pass fills both: the depth buffer of the lit RGB pass is read back too
+        (0 where the ray meets the sky).
+        """
+        self._sync(sim)
+        linear, depth = self._render(self.camera_id, self.depth)
+        return self.exposure.apply(linear, self.noise_rng), depth
+
+    def render_stereo(self, sim: Any) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
+        """Rectified stereo pair (left, right) at the current state (call after :meth:`render`)."""
+        if self.stereo_ids is None:
+            raise RuntimeSimError("the camera was configured without stereo")
+        left = self.exposure_stereo.apply(self._linear(self.stereo_ids[0]), self.noise_rng)
+        # both views share the left view's gain, as a synchronised stereo head does
+        g = self.exposure_stereo.gain
+        right_exp = Exposure("fixed", fixed_gain=g if g is not None else 1.0)
+        right = right_exp.apply(self._linear(self.stereo_ids[1]), self.noise_rng)
+        return left, right
+
+    def close(self) -> None:
+        self.view.close()
+
+
+def _forward_xy(sim: Any) -> tuple[float, float]:
+    """Horizontal viewing direction of the mast camera (its -z axis)."""
+    fwd = -np.asarray(sim.data.cam_xmat[sim.camera_id]).reshape(3, 3)[:, 2]
+    return float(fwd[0]), float(fwd[1])

@@ -1,0 +1,232 @@
+"""``drive``: run the rover along a route (or a fixed command) and write the logs.
+
+Every sensor is sampled on one simulation clock. The loop advances the physics in ticks of the
+greatest common divisor of all sensor periods; the controller (pure pursuit on the ground-truth
+pose, the MarsLab protocol) runs at ``run.control_hz``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from marsscene._validate import plain
+from marsscene.errors import RuntimeSimError
+from marsscene.runs.tum import Trajectory
+from marsscene.sensors.imu import imu_measure
+from marsscene.sensors.lidar import Lidar
+from marsscene.sensors.odometry import WheelOdometry, measure_wheels
+from marsscene.sim.pursuit import PurePursuit, PursuitConfig
+from marsscene.sim.route import Route, cross_track_m
+from marsscene.sim.run_writer import RunWriter
+
+__all__ = ["DriveResult", "drive"]
+
+
+class DriveResult:
+    """What a drive produced: trajectories, commands and summary statistics."""
+
+    def __init__(
+        self,
+        gt: Trajectory,
+        odom: Trajectory,
+        cmd: np.ndarray,
+        summary: dict[str, Any],
+        lidar: list[dict[str, Any]],
+        images: list[tuple[np.ndarray, np.ndarray | None]],
+    ):
+        self.gt, self.odom, self.cmd, self.summary = gt, odom, cmd, summary
+        self.lidar_scans, self.images = lidar, images
+        self.imu: np.ndarray = np.zeros((0, 7))
+        self.stereo_images: list[tuple[np.ndarray, np.ndarray]] = []
+
+
+def _period(sim: Any, rate_hz: float) -> int:
+    return round(1.0 / (rate_hz * sim.dt_physics_s))
+
+
+def _time_limit_s(route: Route | None, command: Any, seconds: float | None) -> float:
+    if route is None and command is None:
+        raise RuntimeSimError("drive needs a route or a command")
+    limit = (seconds if seconds is not None
+             else (2.0 * route.length_m / 0.1 + 60.0 if route is not None else None))
+    if limit is None or limit <= 0:
+        raise RuntimeSimError(
+            f"seconds = {plain(seconds)!r} must be > 0 when driving without a route")
+    return float(limit)
+
+
+class _Loop:
+    """One drive's state: the sensors, their periods on the physics clock, the rows kept."""
+
+    def __init__(self, sim: Any, route: Route | None, command: Any, pursuit: PursuitConfig | None,
+                 rng: np.random.Generator, keep: bool, writer_out: Path | None):
+        run = sim.run
+        self.sim, self.command, self.rng, self.keep = sim, command, rng, keep
+        self.follower = PurePursuit(route, pursuit) if route is not None else None
+        self.lidar = Lidar(run.lidar) if run.lidar is not None else None
+        self.periods = {"control": _period(sim, run.control_hz), "imu": _period(sim, run.imu_hz)}
+        if run.lidar is not None:
+            self.periods["lidar"] = _period(sim, run.lidar.rate_hz)
+        self.renderer = None
+        if run.camera is not None:
+            self.periods["camera"] = _period(sim, run.camera.rate_hz)
+            self.renderer = sim.make_renderer(rng=rng.spawn(1)[0])
+        self.stereo = self.renderer is not None and self.renderer.stereo_ids is not None
+        self.writer = RunWriter(writer_out, sim, lidar=self.lidar is not None,
+                                camera=self.renderer is not None, stereo=self.stereo)
+        pos0, _ = sim.pose()
+        self.odo = WheelOdometry(sim.rover, pos0[0], pos0[1], pos0[2], sim.yaw_rad())
+        self.gt_rows: list[np.ndarray] = []
+        self.od_rows: list[np.ndarray] = []
+        self.cmd_rows: list[tuple[float, float, float]] = []
+        self.imu_rows: list[np.ndarray] = []
+        self.scans: list[dict[str, Any]] = []
+        self.images: list[tuple[np.ndarray, np.ndarray | None]] = []
+        self.stereo_images: list[tuple[np.ndarray, np.ndarray]] = []
+        self.n_lidar = self.n_cam = 0
+
+    def control(self, k: int, t: float) -> bool:
+        """Log ground truth and odometry, command the rover; True once the route is done."""
+        sim = self.sim
+        pos, quat = sim.pose()
+        self.gt_rows.append(np.concatenate([[t], pos, quat]))
+        rates, steer = measure_wheels(sim.wheel_rates(), sim.steer_angles(), sim.run.noise,
+                                      rng=self.rng)
+        if k > 0:
+            self.odo.update(rates, steer, self.periods["control"] * sim.dt_physics_s)
+        opos, oquat = self.odo.pose()
+        self.od_rows.append(np.concatenate([[t], opos, oquat]))
+        if self.follower is not None:
+            v, w = self.follower.command(pos[0], pos[1], sim.yaw_rad())
+        else:
+            v, w = self.command(t) if callable(self.command) else self.command
+        sim.apply(v, w)
+        self.cmd_rows.append((t, v, w))
+        self.writer.control(t, v, w, rates, steer)
+        return self.follower is not None and self.follower.done
+
+    def imu(self, t: float) -> None:
+        acc_true, gyr_true = self.sim.imu_true()
+        acc, gyr = imu_measure(acc_true, gyr_true, self.sim.run.noise, rng=self.rng)
+        self.writer.imu(t, acc, gyr, acc_true, gyr_true)
+        if self.keep:
+            self.imu_rows.append(np.concatenate([[t], acc, gyr]))
+
+    def scan(self, t: float) -> None:
+        assert self.lidar is not None
+        sim = self.sim
+        scan = self.lidar.scan(sim.model, sim.data, sim.lidar_site, sim.heightfield)
+        self.writer.lidar(t, self.n_lidar, scan)
+        if self.keep:
+            self.scans.append({"t": t, **scan})
+        self.n_lidar += 1
+
+    def frame(self, t: float) -> None:
+        assert self.renderer is not None
+        rgb, depth = self.sim.render(self.renderer)
+        self.writer.camera(t, self.n_cam, rgb, depth)
+        if self.stereo:
+            pair = self.renderer.render_stereo(self.sim)
+            self.writer.stereo(t, self.n_cam, pair)
+            if self.keep:
+                self.stereo_images.append(pair)
+        if self.keep:
+            self.images.append((rgb, depth))
+        self.n_cam += 1
+
+    def run(self, limit_s: float, progress: Callable[[float, float], None] | None) -> None:
+        """Step the physics in ticks of the sensors' common period until done or the limit."""
+        sim, periods = self.sim, self.periods
+        tick = math.gcd(*periods.values())
+        steps_limit = round(limit_s / sim.dt_physics_s)
+        k, next_report = 0, 1.0
+        while k <= steps_limit:
+            t = k * sim.dt_physics_s
+            if k % periods["control"] == 0 and self.control(k, t):
+                break
+            if k % periods["imu"] == 0:
+                self.imu(t)
+            if self.lidar is not None and k % periods["lidar"] == 0:
+                self.scan(t)
+            if self.renderer is not None and k % periods["camera"] == 0:
+                self.frame(t)
+            if progress is not None and t >= next_report:
+                progress(t, limit_s)
+                next_report += 1.0
+            sim.advance(tick)
+            k += tick
+
+    def result(self, route: Route | None) -> DriveResult:
+        """Close the writers and the renderer; the trajectories and the summary."""
+        self.writer.close()
+        summary_camera = {}
+        if self.renderer is not None:
+            summary_camera = {"exposure_gain_last": self.renderer.exposure.gain}
+            self.renderer.close()
+        gt_a, od_a = np.array(self.gt_rows), np.array(self.od_rows)
+        gt = Trajectory.from_wxyz(gt_a[:, 0], gt_a[:, 1:4], gt_a[:, 4:8])
+        odom = Trajectory.from_wxyz(od_a[:, 0], od_a[:, 1:4], od_a[:, 4:8])
+        summary: dict[str, Any] = {
+            "sim_time_s": round(float(gt.timestamps_s[-1]), 6),
+            "poses": len(gt),
+            "path_length_m": round(gt.path_length_m(), 6),
+            "lidar_scans": self.n_lidar,
+            "camera_frames": self.n_cam,
+            "goal_reached": bool(self.follower.done) if self.follower is not None else None,
+            **summary_camera,
+        }
+        if route is not None:
+            ct = cross_track_m(route, gt.xyz_m[:, :2])
+            summary["cross_track_rms_m"] = round(float(np.sqrt(np.mean(ct**2))), 6)
+            summary["cross_track_max_m"] = round(float(ct.max()), 6)
+        self.writer.finish(self.sim, gt, odom, summary,
+                           self.follower.config if self.follower is not None else None)
+        res = DriveResult(gt, odom, np.array(self.cmd_rows), summary, self.scans, self.images)
+        res.stereo_images = self.stereo_images
+        if self.keep and self.imu_rows:
+            res.imu = np.array(self.imu_rows)
+        return res
+
+
+def drive(
+    sim: Any,
+    *,
+    route: Route | None = None,
+    command: tuple[float, float] | Callable[[float], tuple[float, float]] | None = None,
+    seconds: float | None = None,
+    out_dir: str | Path | None = None,
+    rng: np.random.Generator,
+    pursuit: PursuitConfig | None = None,
+    keep_sensors: bool = False,
+    progress: Callable[[float, float], None] | None = None,
+) -> DriveResult:
+    """Drive ``sim`` and log every sensor.
+
+    Parameters
+    ----------
+    sim : RoverSim
+    route : Route, optional
+        Followed with pure pursuit until the goal (or ``seconds``).
+    command : (v, omega) or callable t -> (v, omega), optional
+        Open-loop command instead of a route.
+    seconds : float, optional
+        Sim-time limit (required without a route).
+    out_dir : path, optional
+        Run folder (layout in :mod:`marsscene.runs.logs`); nothing is written if omitted.
+    rng : numpy.random.Generator
+        Sensor noise stream (e.g. ``stage_rng(seed, "sensors")``).
+    keep_sensors : bool
+        Keep LiDAR scans, images and IMU samples in memory in the result.
+    progress : callable, optional
+        ``progress(t_s, limit_s)`` called once per simulated second.
+    """
+    limit_s = _time_limit_s(route, command, seconds)
+    out = Path(out_dir) if out_dir is not None else None
+    loop = _Loop(sim, route, command, pursuit, rng, keep_sensors, out)
+    loop.run(limit_s, progress)
+    return loop.result(route)

@@ -1,0 +1,93 @@
+"""Pure-pursuit path follower with bounded commands (Coulter 1992, CMU-RI-TR-92-01).
+
+The MarsLab protocol: ``0 <= v <= 0.5 m/s``, ``|omega| <= 0.2 rad/s`` at 50 Hz. When the pursuit
+curvature would need a faster turn, ``v`` is reduced so the curvature is kept and
+``|omega| = omega_max``; a target behind the rover gives a turn in place.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from marsscene._validate import check_range
+from marsscene.sim.route import Route
+
+__all__ = ["PurePursuit", "PursuitConfig"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class PursuitConfig:
+    """Pure-pursuit parameters (m, m/s, rad/s, Hz)."""
+
+    lookahead_m: float = 1.0
+    v_max_m_s: float = 0.5
+    omega_max_rad_s: float = 0.2
+    rate_hz: float = 50.0
+    goal_tolerance_m: float = 0.25
+    slow_down_m: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_range("pursuit.lookahead_m", self.lookahead_m, 0.05, 50.0)
+        check_range("pursuit.v_max_m_s", self.v_max_m_s, 0.0, 0.5, lo_open=True)
+        check_range("pursuit.omega_max_rad_s", self.omega_max_rad_s, 0.0, 0.2, lo_open=True)
+        check_range("pursuit.rate_hz", self.rate_hz, 1.0, 500.0)
+        check_range("pursuit.goal_tolerance_m", self.goal_tolerance_m, 0.01, 10.0)
+        check_range("pursuit.slow_down_m", self.slow_down_m, 0.0, 50.0)
+
+
+class PurePursuit:
+    """Follow a :class:`Route`; call :meth:`command` once per control period."""
+
+    def __init__(self, route: Route, config: PursuitConfig | None = None) -> None:
+        self.route = route
+        self.config = config if config is not None else PursuitConfig()
+        self.s = route.s_m
+        self.index = 0
+        self.done = False
+
+    def _advance(self, x: float, y: float) -> None:
+        # nearest point in a forward window: progress is monotone, so closed loops work
+        hi = int(np.searchsorted(self.s, self.s[self.index] + 3 * self.config.lookahead_m + 1.0))
+        win = self.route.xy_m[self.index : hi + 1]
+        d = np.hypot(win[:, 0] - x, win[:, 1] - y)
+        self.index += int(np.argmin(d))
+
+    def command(self, x_m: float, y_m: float, yaw_rad: float) -> tuple[float, float]:
+        """``(v, omega)`` for the current pose; ``(0, 0)`` once the goal is reached."""
+        cfg = self.config
+        if self.done:
+            return 0.0, 0.0
+        self._advance(x_m, y_m)
+        goal = self.route.xy_m[-1]
+        to_go = self.s[-1] - self.s[self.index]
+        if (
+            to_go < cfg.lookahead_m
+            and math.hypot(goal[0] - x_m, goal[1] - y_m) < cfg.goal_tolerance_m
+        ):
+            self.done = True
+            return 0.0, 0.0
+        j = min(int(np.searchsorted(self.s, self.s[self.index] + cfg.lookahead_m)), len(self.s) - 1)
+        tx, ty = self.route.xy_m[j]
+        dx, dy = tx - x_m, ty - y_m
+        c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+        bx, by = c * dx + s * dy, -s * dx + c * dy
+        dist = math.hypot(bx, by)
+        if dist < 1e-6:
+            return 0.0, 0.0
+        alpha = math.atan2(by, bx)
+        if abs(alpha) > math.pi / 2:  # target behind: turn in place
+            return 0.0, math.copysign(cfg.omega_max_rad_s, alpha)
+        kappa = 2.0 * math.sin(alpha) / dist
+        v = cfg.v_max_m_s
+        if cfg.slow_down_m > 0:
+            v *= min(1.0, max(to_go, 0.0) / cfg.slow_down_m + 0.1)
+        omega = v * kappa
+        if abs(omega) > cfg.omega_max_rad_s:
+            v = cfg.omega_max_rad_s / abs(kappa)
+            omega = math.copysign(cfg.omega_max_rad_s, kappa)
+        return min(max(v, 0.0), cfg.v_max_m_s), max(
+            -cfg.omega_max_rad_s, min(cfg.omega_max_rad_s, omega)
+        )

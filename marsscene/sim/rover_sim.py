@@ -1,0 +1,377 @@
+"""``RoverSim``: a built scene + the rover in MuJoCo, driven by ``cmd_vel``.
+
+The scene's ``mjcf/scene.xml`` is loaded with :class:`mujoco.MjSpec` and the rover is attached
+in memory (prefix ``rover/``), so ``scene.xml`` stays rover-free. One :meth:`RoverSim.step` is one
+control period (default 50 Hz = 10 physics steps of 2 ms).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+    os.environ["MUJOCO_GL"] = "egl"  # headless offscreen rendering; set MUJOCO_GL to override
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene.errors import RuntimeSimError
+from marsscene.rover.config import RoverConfig, RunConfig
+from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
+from marsscene.sim.corridor import cull_scene_xml
+from marsscene.sim.rover_model import rover_mjcf
+from marsscene.sim.terrain import scene_heightfield
+from marsscene.terrain.heightfield import Heightfield
+from marsscene.transforms import quat_from_yaw_normal
+
+__all__ = ["PREFIX", "RoverSim", "load_scene_spec"]
+
+PREFIX = "rover/"
+
+
+def load_scene_spec(
+    scene_dir: str | Path,
+    *,
+    corridor_xy_m: Any = None,
+    corridor_m: float = 15.0,
+) -> tuple[Any, Path, tuple[int, int]]:
+    """Open ``scene_dir/mjcf/scene.xml`` as an ``MjSpec`` (clear error if it is missing).
+
+    With a corridor polyline, rock geoms farther than ``corridor_m`` from it are left out
+    (:func:`marsscene.sim.corridor.cull_scene_xml`). Returns ``(spec, xml path,
+    (rocks kept, rocks in the scene))``.
+    """
+    root = Path(scene_dir)
+    xml = root / "mjcf" / "scene.xml"
+    if not root.is_dir():
+        raise RuntimeSimError(f"scene directory {root} does not exist")
+    if not xml.is_file():
+        raise RuntimeSimError(
+            f"{root} is not a built scene: {xml} is missing (build one with `marsscene build`)"
+        )
+    text = xml.read_text(encoding="utf-8")
+    total = text.count('<geom name="rock_')
+    try:
+        if corridor_xy_m is None:
+            return mujoco.MjSpec.from_file(str(xml)), xml, (total, total)
+        culled, kept, total = cull_scene_xml(text, corridor_xy_m, corridor_m)
+        files = set(re.findall(r'file="([^"]+)"', culled))
+        assets = {f: (xml.parent / f).read_bytes() for f in files}
+        return mujoco.MjSpec.from_string(culled, assets=assets), xml, (kept, total)
+    except (ValueError, OSError) as err:  # mujoco raises ValueError with the parser message
+        raise RuntimeSimError(f"{xml}: MuJoCo cannot parse it: {err}") from None
+
+
+class RoverSim:
+    """A rover on a built scene.
+
+    Parameters
+    ----------
+    scene_dir : path-like
+        Folder written by :func:`marsscene.write_scene` (needs ``mjcf/scene.xml``).
+    rover : RoverConfig, optional
+    run : RunConfig, optional
+        Control rate and sensor configs.
+    start_xy_m : tuple of float, optional
+        Spawn position (default: the terrain centre).
+    start_yaw_rad : float
+        Spawn heading, counter-clockwise from east.
+    edit_spec : callable, optional
+        ``f(spec)`` called on the scene ``MjSpec`` before compiling (e.g. to add obstacles).
+    contact_corridor_xy_m : array_like of shape (N, 2), optional
+        A polyline (e.g. the route). When given, scene rock geoms farther than
+        ``contact_corridor_m`` from it are left out of the simulation: MuJoCo recomputes every
+        geom's pose each step, so 1000 static rock meshes cost ~20 us per 2 ms step. The rover
+        only meets rocks near its route; the number kept is in :attr:`rocks_kept`.
+    contact_corridor_m : float
+        Half-width of the corridor (in m).
+    settle_s : float
+        Maximum settling time after spawning (sim time is reset to 0 afterwards).
+    """
+
+    def __init__(
+        self,
+        scene_dir: str | Path,
+        *,
+        rover: RoverConfig | None = None,
+        run: RunConfig | None = None,
+        start_xy_m: tuple[float, float] | None = None,
+        start_yaw_rad: float = 0.0,
+        edit_spec: Callable[[Any], None] | None = None,
+        settle_s: float = 3.0,
+        contact_corridor_xy_m: Any = None,
+        contact_corridor_m: float = 15.0,
+    ) -> None:
+        self.rover = rover if rover is not None else RoverConfig()
+        self.run = run if run is not None else RunConfig()
+        self.scene_dir = Path(scene_dir)
+        fovy = self.run.camera.fovy_deg if self.run.camera is not None else 60.0
+        self.rover_xml = rover_mjcf(self.rover, camera_fovy_deg=fovy)
+        self._edit_spec = edit_spec
+        self._corridor = (
+            None if contact_corridor_xy_m is None
+            else np.asarray(contact_corridor_xy_m, dtype=np.float64).reshape(-1, 2)
+        )
+        self._corridor_m = float(contact_corridor_m)
+        self.rocks_kept: tuple[int, int] = (0, 0)
+        spec = self.build_spec()
+        try:
+            self.model = spec.compile()
+        except Exception as err:
+            raise RuntimeSimError(
+                f"{self.scene_xml}: cannot compile scene + rover: {err}"
+            ) from None
+        self.spec = spec
+        self.data = mujoco.MjData(self.model)
+        self.heightfield: Heightfield = scene_heightfield(self.model)
+        # The LiDAR ray-marches the terrain itself (fast); keep MuJoCo rays off the hfields by
+        # moving them to geom group 3 (the camera renders group 3 too). scene.xml is untouched.
+        # A level-of-detail scene's coarse "terrain_outer" goes there too (LiDAR: focus only).
+        for name in ("terrain", "terrain_outer"):
+            gid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, name)
+            if gid >= 0:
+                self.model.geom_group[gid] = 3
+        self._vis = mujoco.MjvOption()
+        self._vis.geomgroup[3] = 1
+        self.dt_physics_s = float(self.model.opt.timestep)
+        self.substeps = round(1.0 / (self.run.control_hz * self.dt_physics_s))
+        self._ids()
+        self.settle_s = settle_s
+        x0, y0, x1, y1 = self.heightfield.bounds_xy_m
+        self.start_xy_m = start_xy_m if start_xy_m is not None else ((x0 + x1) / 2, (y0 + y1) / 2)
+        self.start_yaw_rad = float(start_yaw_rad)
+        self.reset()
+
+    # ---- setup -------------------------------------------------------------------------------
+    def build_spec(self) -> Any:
+        """A fresh ``MjSpec`` of scene + rover (+ ``edit_spec``), not yet compiled."""
+        spec, self.scene_xml, self.rocks_kept = load_scene_spec(
+            self.scene_dir, corridor_xy_m=self._corridor, corridor_m=self._corridor_m
+        )
+        rover_spec = mujoco.MjSpec.from_string(self.rover_xml)
+        spec.attach(rover_spec, prefix=PREFIX, frame=spec.worldbody.add_frame())
+        if self._edit_spec is not None:
+            self._edit_spec(spec)
+        return spec
+
+    def _ids(self) -> None:
+        m = self.model
+        name = lambda kind, n: mujoco.mj_name2id(m, kind, PREFIX + n)  # noqa: E731
+        self.base_id = name(mujoco.mjtObj.mjOBJ_BODY, "base_link")
+        root = name(mujoco.mjtObj.mjOBJ_JOINT, "root")
+        self.qpos_root = int(m.jnt_qposadr[root])
+        self.qvel_root = int(m.jnt_dofadr[root])
+        self.drive_act = np.array([name(mujoco.mjtObj.mjOBJ_ACTUATOR, j) for j in DRIVE_JOINTS])
+        self.steer_act = np.array([name(mujoco.mjtObj.mjOBJ_ACTUATOR, j) for j in STEER_JOINTS])
+        drive_j = [name(mujoco.mjtObj.mjOBJ_JOINT, j) for j in DRIVE_JOINTS]
+        steer_j = [name(mujoco.mjtObj.mjOBJ_JOINT, j) for j in STEER_JOINTS]
+        self.drive_dof = np.array([m.jnt_dofadr[j] for j in drive_j])
+        self.steer_qpos = np.array([m.jnt_qposadr[j] for j in steer_j])
+        self.wheel_geoms = np.array(
+            [name(mujoco.mjtObj.mjOBJ_GEOM, "wheel_" + j[-2:]) for j in DRIVE_JOINTS]
+        )
+        self.imu_site = name(mujoco.mjtObj.mjOBJ_SITE, "imu")
+        self.lidar_site = name(mujoco.mjtObj.mjOBJ_SITE, "lidar")
+        self.camera_id = name(mujoco.mjtObj.mjOBJ_CAMERA, "navcam")
+        acc = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, PREFIX + "imu_accel")
+        gyr = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, PREFIX + "imu_gyro")
+        self._acc_adr = int(m.sensor_adr[acc])
+        self._gyr_adr = int(m.sensor_adr[gyr])
+
+    def _spawn_pose(self, xy: tuple[float, float], yaw: float) -> NDArray[np.float64]:
+        hf = self.heightfield
+        x, y = float(xy[0]), float(xy[1])
+        half = max(self.rover.wheelbase_front_m, self.rover.wheelbase_rear_m) + 0.6
+        if not bool(hf.contains(x - half, y - half) & hf.contains(x + half, y + half)):
+            x0, y0, x1, y1 = hf.bounds_xy_m
+            raise RuntimeSimError(
+                f"spawn point ({x:.2f}, {y:.2f}) m is outside the terrain or closer than "
+                f"{half:.2f} m to its edge; terrain spans x [{x0:.2f}, {x1:.2f}], "
+                f"y [{y0:.2f}, {y1:.2f}] m"
+            )
+        # Plane fitted to the terrain under the rover footprint gives roll and pitch.
+        g = np.linspace(-half, half, 9)
+        gx, gy = np.meshgrid(x + g, y + g)
+        gz = hf.sample(gx, gy)
+        a = np.column_stack([gx.ravel() - x, gy.ravel() - y, np.ones(gz.size)])
+        (sx, sy, z0), *_ = np.linalg.lstsq(a, gz.ravel(), rcond=None)
+        normal = np.array([-sx, -sy, 1.0]) / math.sqrt(sx * sx + sy * sy + 1.0)
+        clearance = float(np.max(gz.ravel() - a @ np.array([sx, sy, z0])))  # bumps above plane
+        quat = quat_from_yaw_normal(yaw, normal)
+        pos = np.array([x, y, z0]) + normal * (self.rover.ride_height_m + max(clearance, 0) + 0.01)
+        return np.concatenate([pos, quat])
+
+    def reset(
+        self,
+        *,
+        xy_m: tuple[float, float] | None = None,
+        yaw_rad: float | None = None,
+        rng: np.random.Generator | None = None,
+        jitter_xy_m: float = 0.5,
+        jitter_yaw_rad: float = 0.2,
+    ) -> None:
+        """Spawn the rover on the terrain, let it settle (wheels braked), set time to 0.
+
+        With ``rng`` the spawn pose is perturbed uniformly by up to ``jitter_xy_m`` in x and y
+        and ``jitter_yaw_rad`` in heading (randomised episodes); without it, it is exact.
+        """
+        mujoco.mj_resetData(self.model, self.data)
+        xy = xy_m if xy_m is not None else self.start_xy_m
+        yaw = self.start_yaw_rad if yaw_rad is None else float(yaw_rad)
+        if rng is not None:
+            dx, dy, dyaw = rng.uniform(-1.0, 1.0, size=3)
+            xy = (float(xy[0]) + jitter_xy_m * dx, float(xy[1]) + jitter_xy_m * dy)
+            yaw += jitter_yaw_rad * dyaw
+        self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy, yaw)
+        mujoco.mj_forward(self.model, self.data)
+        self.data.ctrl[:] = 0.0
+        steps = round(self.settle_s / self.dt_physics_s)
+        for i in range(steps):
+            mujoco.mj_step(self.model, self.data)
+            if i > 100 and i % 25 == 0:
+                if float(np.abs(self.data.qvel).max()) < 2e-3:
+                    break
+        self.data.time = 0.0
+        self.cmd = (0.0, 0.0)
+
+    # ---- stepping ----------------------------------------------------------------------------
+    def apply(self, v_m_s: float, omega_rad_s: float) -> None:
+        """Set actuator targets for ``cmd_vel`` (clipped to the actuator ranges by MuJoCo)."""
+        rates, steer = wheel_commands(float(v_m_s), float(omega_rad_s), self.rover)
+        self.data.ctrl[self.drive_act] = rates
+        self.data.ctrl[self.steer_act] = steer
+        self.cmd = (float(v_m_s), float(omega_rad_s))
+
+    def step(self, v_m_s: float, omega_rad_s: float) -> None:
+        """Apply ``cmd_vel`` and advance one control period."""
+        self.apply(v_m_s, omega_rad_s)
+        mujoco.mj_step(self.model, self.data, nstep=self.substeps)
+        if not np.isfinite(self.data.qpos).all():
+            raise RuntimeSimError(f"simulation diverged at t = {self.data.time:.3f} s")
+
+    def advance(self, nstep: int) -> None:
+        """Advance the physics ``nstep`` steps with the current actuator targets."""
+        mujoco.mj_step(self.model, self.data, nstep=int(nstep))
+        if not np.isfinite(self.data.qpos).all():
+            raise RuntimeSimError(f"simulation diverged at t = {self.data.time:.3f} s")
+
+    # ---- camera ------------------------------------------------------------------------------
+    def make_renderer(self, *, rng: np.random.Generator | None = None) -> Any:
+        """An offscreen mast-camera renderer (:class:`marsscene.sensors.camera.MastCamera`).
+
+        ``rng`` draws sensor noise when ``CameraConfig.sensor_noise`` is on.
+        """
+        from marsscene.sensors.camera import MastCamera
+
+        return MastCamera(self, rng=rng)
+
+    def render(self, renderer: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
+        """RGB (H, W, 3) uint8 and depth (H, W) float32 in m (None if depth is off)."""
+        return renderer.render(self)
+
+    def camera_intrinsics(self, side: str | None = None) -> dict[str, Any]:
+        """Pinhole intrinsics of the mast camera (OpenCV convention, pixels).
+
+        ``side = "left"`` / ``"right"``: one view of the rectified stereo pair (same
+        intrinsics; the right camera sits ``baseline_m`` along the left camera's +x).
+        """
+        cam = self.run.camera
+        w, h = (cam.width_px, cam.height_px) if cam is not None else (640, 480)
+        fovy = math.radians(float(self.model.cam_fovy[self.camera_id]))
+        f = 0.5 * h / math.tan(fovy / 2)
+        extra: dict[str, Any] = {}
+        if side is not None:
+            b = cam.stereo_baseline_m if cam is not None else 0.424
+            extra = {
+                "side": side,
+                "baseline_m": b,
+                "rectified": True,
+                "T_left_right_m": [b, 0.0, 0.0],
+                "offset_from_navcam_m": [(-0.5 if side == "left" else 0.5) * b, 0.0, 0.0],
+            }
+        return {
+            **extra,
+            "width": w,
+            "height": h,
+            "fx": f,
+            "fy": f,
+            "cx": w / 2,
+            "cy": h / 2,
+            "depth_unit_m": 0.001,
+            "frame": "optical: x right, y down, z forward",
+        }
+
+    def write_rover_xml(self, path: str | Path | None = None) -> Path:
+        """Write the rover MJCF (default: beside ``scene.xml``, as ``rover.xml``)."""
+        target = Path(path) if path is not None else self.scene_xml.parent / "rover.xml"
+        target.write_text(self.rover_xml, encoding="utf-8")
+        return target
+
+    @property
+    def time_s(self) -> float:
+        return float(self.data.time)
+
+    # ---- state -------------------------------------------------------------------------------
+    def pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Ground-truth ``base_link`` pose: position (3,) in m and quaternion (w, x, y, z)."""
+        q = self.data.qpos[self.qpos_root : self.qpos_root + 7]
+        return q[:3].copy(), q[3:7].copy()
+
+    def yaw_rad(self) -> float:
+        w, x, y, z = self.pose()[1]
+        return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+    def wheel_rates(self) -> NDArray[np.float64]:
+        """True wheel angular speeds (rad/s), DRIVE_JOINTS order."""
+        return self.data.qvel[self.drive_dof].copy()
+
+    def steer_angles(self) -> NDArray[np.float64]:
+        """True corner steering angles (rad), STEER_JOINTS order."""
+        return self.data.qpos[self.steer_qpos].copy()
+
+    def imu_true(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Noise-free specific force (m/s^2, incl. gravity) and angular rate (rad/s), IMU frame."""
+        s = self.data.sensordata
+        return s[self._acc_adr : self._acc_adr + 3].copy(), s[
+            self._gyr_adr : self._gyr_adr + 3
+        ].copy()
+
+    def wheels_in_contact(self) -> NDArray[np.bool_]:
+        """Which of the six wheels touch anything (DRIVE_JOINTS order)."""
+        n = self.data.ncon
+        g = np.concatenate([self.data.contact.geom1[:n], self.data.contact.geom2[:n]])
+        return np.isin(self.wheel_geoms, g)
+
+
+def scene_obstacles(sim: RoverSim) -> Any:
+    """Non-terrain world geoms of the scene (rocks) as :class:`~marsscene.runtime.Obstacles`.
+
+    Radius is the geom's horizontal bounding radius, height its top above the terrain.
+    """
+    from marsscene.sim.route import Obstacles
+
+    m, d = sim.model, sim.data
+    world = np.flatnonzero(
+        (m.geom_bodyid == 0)
+        & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)
+        & (m.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
+    )
+    if len(world) == 0:
+        return Obstacles(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
+    aabb = m.geom_aabb[world]  # (n, 6): centre offset, half sizes in the geom frame
+    rot = d.geom_xmat[world].reshape(-1, 3, 3)
+    half_world = np.einsum("nij,nj->ni", np.abs(rot), aabb[:, 3:])
+    centre = d.geom_xpos[world] + np.einsum("nij,nj->ni", rot, aabb[:, :3])
+    top = centre[:, 2] + half_world[:, 2]
+    ground = sim.heightfield.sample(centre[:, 0], centre[:, 1])
+    return Obstacles(
+        centre[:, :2].copy(),
+        np.hypot(half_world[:, 0], half_world[:, 1]),
+        np.maximum(top - ground, 0.0),
+    )

@@ -1,0 +1,125 @@
+"""The run folder as a drive writes it (layout in :mod:`marsscene.runs.logs`): CSV logs opened
+up front and appended per sample, LiDAR PLYs and camera PNGs per frame, and the trajectories
+and ``run.json`` at the end."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
+from marsscene.runs.logs import CsvLog, ImageWriter, ply_bytes, write_json
+from marsscene.runs.tum import Trajectory, write_tum
+
+__all__ = ["RunWriter"]
+
+_IMU_COLUMNS = ["t", "ax", "ay", "az", "gx", "gy", "gz"]
+_FRAMES = {
+    "world": "map: x east, y north, z up (REP-103/105)",
+    "base_link": "x forward, y left, z up",
+    "imu": "= base_link",
+    "lidar": "x forward, y left, z up at the mast top",
+}
+
+
+class RunWriter:
+    """Writes one drive's run folder ``out``; every method is a no-op without a folder."""
+
+    def __init__(self, out: Path | None, sim: Any, *, lidar: bool, camera: bool, stereo: bool):
+        self.out = out
+        self.logs: dict[str, CsvLog] = {}
+        self.images = ImageWriter()  # camera PNGs are encoded beside the simulation
+        if out is None:
+            return
+        out.mkdir(parents=True, exist_ok=True)
+        self.logs["cmd"] = CsvLog(out / "cmd.csv", ["t", "v", "omega"])
+        self.logs["wheels"] = CsvLog(out / "wheels.csv", [
+            "t", *[f"rate_{j[-2:]}" for j in DRIVE_JOINTS],
+            *[f"steer_{j[-2:]}" for j in STEER_JOINTS]])
+        self.logs["imu"] = CsvLog(out / "imu.csv", _IMU_COLUMNS)
+        self.logs["imu_true"] = CsvLog(out / "imu_true.csv", _IMU_COLUMNS)
+        if lidar:
+            self.logs["lidar"] = CsvLog(out / "lidar" / "stamps.csv", ["t", "file", "points"])
+        if camera:
+            self.logs["camera"] = CsvLog(out / "camera" / "stamps.csv", ["t", "rgb", "depth"])
+            write_json(out / "camera" / "intrinsics.json", sim.camera_intrinsics())
+            if stereo:
+                for side in ("left", "right"):
+                    self.logs[side] = CsvLog(out / "camera" / side / "stamps.csv", ["t", "rgb"])
+                    (out / "camera" / side / "rgb").mkdir(parents=True, exist_ok=True)
+                    write_json(out / "camera" / side / "intrinsics.json",
+                               sim.camera_intrinsics(side))
+
+    def control(self, t: float, v: float, w: float, rates: Any, steer: Any) -> None:
+        if self.logs:
+            self.logs["cmd"].row(t, (v, w))
+            self.logs["wheels"].row(t, (*rates, *steer))
+
+    def imu(self, t: float, acc: Any, gyr: Any, acc_true: Any, gyr_true: Any) -> None:
+        if self.logs:
+            self.logs["imu"].row(t, (*acc, *gyr))
+            self.logs["imu_true"].row(t, (*acc_true, *gyr_true))
+
+    def lidar(self, t: float, index: int, scan: dict[str, Any]) -> None:
+        if self.out is None:
+            return
+        name = f"{index:06d}.ply"
+        (self.out / "lidar" / name).write_bytes(
+            ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"]))
+        self.logs["lidar"].row(t, (name, len(scan["range_m"])))
+
+    def camera(self, t: float, index: int, rgb: Any, depth: Any) -> None:
+        if self.out is None:
+            return
+        name = f"{index:06d}.png"
+        (self.out / "camera" / "rgb").mkdir(parents=True, exist_ok=True)
+        self.images.submit(self.out / "camera" / "rgb" / name, rgb)
+        dname = ""
+        if depth is not None:
+            (self.out / "camera" / "depth").mkdir(parents=True, exist_ok=True)
+            mm = np.clip(np.round(depth * 1000.0), 0, 65535).astype(np.uint16)
+            self.images.submit(self.out / "camera" / "depth" / name, mm)
+            dname = "depth/" + name
+        self.logs["camera"].row(t, ("rgb/" + name, dname))
+
+    def stereo(self, t: float, index: int, pair: Any) -> None:
+        if self.out is None:
+            return
+        name = f"{index:06d}.png"
+        for side, img in zip(("left", "right"), pair, strict=True):
+            self.images.submit(self.out / "camera" / side / "rgb" / name, img)
+            self.logs[side].row(t, ("rgb/" + name,))
+
+    def close(self) -> None:
+        self.images.close()
+        for log in self.logs.values():
+            log.close()
+
+    def finish(self, sim: Any, gt: Trajectory, odom: Trajectory, summary: dict[str, Any],
+               pursuit: Any) -> None:
+        """Write the trajectories and ``run.json``."""
+        if self.out is None:
+            return
+        run = sim.run
+        write_tum(self.out / "gt.tum", gt, header="ground truth base_link in map (world) frame")
+        write_tum(self.out / "odom.tum", odom,
+                  header="wheel odometry base_link in odom frame (= map at t=0)")
+        write_json(self.out / "run.json", {
+            "summary": summary,
+            "rover": asdict(sim.rover),
+            "noise": asdict(run.noise),
+            "rates_hz": {
+                "physics": 1.0 / sim.dt_physics_s,
+                "control": run.control_hz,
+                "imu": run.imu_hz,
+                "lidar": run.lidar.rate_hz if run.lidar else None,
+                "camera": run.camera.rate_hz if run.camera else None,
+            },
+            "lidar": asdict(run.lidar) if run.lidar else None,
+            "camera": asdict(run.camera) if run.camera else None,
+            "pursuit": asdict(pursuit) if pursuit is not None else None,
+            "frames": _FRAMES,
+        })
