@@ -12,8 +12,12 @@ import click
 
 from marsscene.cli._common import user_errors
 from marsscene.cli.bag import bag_options, write_run_bag
+from marsscene.rover.lidar import lidar_models
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
+
+
+_LIDAR_MODELS = tuple(lidar_models())
 
 
 def _read_waypoints(path: Path) -> Any:
@@ -91,7 +95,13 @@ def _size(text: str) -> tuple[int, int]:
               help="Override the scene's dust optical depth for the camera's lighting.")
 @click.option("--sun-elevation", type=click.FloatRange(-10, 90), default=None,
               help="Override the sun elevation (deg) for the camera's lighting.")
-@click.option("--lidar", is_flag=True, help="Log a 16-channel LiDAR at 10 Hz (PLY).")
+@click.option("--lidar", is_flag=True,
+              help="Log a spinning 3D LiDAR (default model os1-64: 64 x 1024 at 10 Hz; PLY).")
+@click.option("--lidar-model", type=click.Choice(_LIDAR_MODELS), default=None,
+              help="LiDAR model from datasheets (docs/runtime.md); implies --lidar.")
+@click.option("--run-config", type=_PATH,
+              help="TOML/JSON run config: [run], [lidar] (e.g. model = \"vlp16\"), [camera], "
+              "[noise] tables; options given on the command line win.")
 @click.option("--noise-config", type=_PATH, help="TOML/JSON noise config ([noise] table).")
 @click.option(
     "--seed",
@@ -135,6 +145,8 @@ def drive(
     out_dir: Path,
     camera: bool,
     lidar: bool,
+    lidar_model: str | None,
+    run_config: Path | None,
     noise_config: Path | None,
     seed: int,
     lookahead: float,
@@ -166,7 +178,8 @@ def drive(
     if write_bag and (out_dir / "bag").exists() and not overwrite:
         raise click.ClickException(f"{out_dir / 'bag'} exists; pass --overwrite to replace it")
     with user_errors():
-        run = _run_config(noise_config, lidar, camera or stereo, camera_size=camera_size,
+        run = _run_config(run_config, noise_config, lidar, lidar_model, camera or stereo,
+                          camera_size=camera_size,
                           rate_hz=camera_hz, stereo=stereo, exposure=exposure,
                           exposure_gain=exposure_gain, sensor_noise=camera_noise,
                           shadows=not no_shadows, tau=tau, sun_elevation_deg=sun_elevation)
@@ -189,17 +202,26 @@ def drive(
                    f"(drive: {wall:.1f} s)")
 
 
-def _run_config(noise_config: Path | None, lidar: bool, camera: bool, *, camera_size: str,
+def _run_config(run_config: Path | None, noise_config: Path | None, lidar: bool,
+                lidar_model: str | None, camera: bool, *, camera_size: str,
                 **camera_kw: Any) -> Any:
-    """The drive's :class:`~marsscene.rover.config.RunConfig` from the options."""
+    """The drive's :class:`~marsscene.rover.config.RunConfig`: the run config file (if any),
+    then the command-line options over it."""
+    import dataclasses
+
     from marsscene.rover.config import CameraConfig, LidarConfig, NoiseConfig, RunConfig
 
-    noise = NoiseConfig.from_file(noise_config) if noise_config else NoiseConfig()
-    cam_cfg = None
+    run = RunConfig.from_file(run_config) if run_config else RunConfig()
+    if noise_config:
+        run = dataclasses.replace(run, noise=NoiseConfig.from_file(noise_config))
+    if lidar or lidar_model:
+        base = run.lidar if run.lidar is not None else LidarConfig()
+        lid = dataclasses.replace(base, model=lidar_model) if lidar_model else base
+        run = dataclasses.replace(run, lidar=lid)
     if camera:
         w, h = _size(camera_size)
-        cam_cfg = CameraConfig(width_px=w, height_px=h, **camera_kw)
-    return RunConfig(noise=noise, lidar=LidarConfig() if lidar else None, camera=cam_cfg)
+        run = dataclasses.replace(run, camera=CameraConfig(width_px=w, height_px=h, **camera_kw))
+    return run
 
 
 def _prepare(scene_dir: Path, run: Any, route_path: Path | None, waypoints_path: Path | None,

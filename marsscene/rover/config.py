@@ -11,6 +11,7 @@ from typing import Any
 
 from marsscene._validate import check_choice, check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError
+from marsscene.rover.lidar import LidarConfig
 
 __all__ = ["CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig", "RunConfig"]
 
@@ -130,38 +131,6 @@ class NoiseConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
-class LidarConfig:
-    """3D LiDAR by ray casting (defaults: a 16-channel spinning unit at 10 Hz)."""
-
-    channels: int = 16
-    horizontal_samples: int = 360
-    vertical_fov_deg: tuple[float, float] = (-15.0, 15.0)
-    range_m: tuple[float, float] = (0.3, 50.0)
-    rate_hz: float = 10.0
-    dust_extinction_per_m: float = 0.0
-    """Two-way Beer-Lambert attenuation ``exp(-2 alpha r)`` of intensity only (not of range)."""
-
-    def __post_init__(self) -> None:
-        if not 1 <= int(self.channels) <= 256:
-            raise ConfigError(
-                f"lidar.channels = {self.channels!r} is out of range; allowed [1, 256]"
-            )
-        if not 4 <= int(self.horizontal_samples) <= 8192:
-            raise ConfigError(
-                f"lidar.horizontal_samples = {self.horizontal_samples!r} is out of range; "
-                "allowed [4, 8192]"
-            )
-        lo, hi = self.vertical_fov_deg
-        check_range("lidar.vertical_fov_deg[0]", lo, -90.0, 90.0)
-        check_range("lidar.vertical_fov_deg[1]", hi, lo, 90.0)
-        rmin, rmax = self.range_m
-        check_range("lidar.range_m[0]", rmin, 0.0, 10.0)
-        check_range("lidar.range_m[1]", rmax, rmin, 1000.0, lo_open=True)
-        _check_rate("lidar.rate_hz", self.rate_hz)
-        check_range("lidar.dust_extinction_per_m", self.dust_extinction_per_m, 0.0, 1.0)
-
-
-@dataclass(frozen=True, kw_only=True)
 class CameraConfig:
     """Mast RGB-D camera rendered offscreen (``MUJOCO_GL=egl`` or ``osmesa``).
 
@@ -239,3 +208,39 @@ class RunConfig:
     def __post_init__(self) -> None:
         _check_rate("run.control_hz", self.control_hz)
         _check_rate("run.imu_hz", self.imu_hz)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> RunConfig:
+        r"""Read a run config: ``.toml`` or ``.json`` with optional tables ``[run]``
+        (``control_hz``, ``imu_hz``), ``[lidar]`` (e.g. ``model = "vlp16"``), ``[camera]`` and
+        ``[noise]``; a sensor without its table is off.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> p = pathlib.Path(tempfile.mkdtemp()) / "run.toml"
+        >>> _ = p.write_text('[lidar]\nmodel = "vlp16"\n')
+        >>> RunConfig.from_file(p).lidar.spec.channels
+        16
+        """
+        p = Path(path)
+        try:
+            text = p.read_text(encoding="utf-8")
+            doc: Any = json.loads(text) if p.suffix == ".json" else tomllib.loads(text)
+        except (OSError, ValueError) as err:
+            raise ConfigError(f"cannot read run config {p}: {err}") from None
+        if not isinstance(doc, dict):
+            raise ConfigError(f"{p}: a run config is a table of tables")
+        unknown = sorted(set(doc) - {"run", "lidar", "camera", "noise"})
+        if unknown:
+            raise ConfigError(f"{p}: unknown table(s) {unknown}; allowed: run, lidar, camera, "
+                              "noise")
+        rates = doc.get("run", {})
+        if not isinstance(rates, dict) or set(rates) - {"control_hz", "imu_hz"}:
+            raise ConfigError(f"{p}: [run] takes control_hz and imu_hz; got {rates!r}")
+        sensors = {
+            key: dataclass_from_mapping(kind, doc[key], key)
+            for key, kind in (("lidar", LidarConfig), ("camera", CameraConfig),
+                              ("noise", NoiseConfig)) if key in doc
+        }
+        return cls(**{k: float(v) for k, v in rates.items()}, **sensors)  # type: ignore[arg-type]

@@ -30,6 +30,11 @@ from numpy.typing import NDArray
 __all__ = ["CsvLog", "ply_bytes", "png_bytes", "write_json"]
 
 
+#: One LiDAR point as the run folder's PLY files and the bag's PointCloud2 hold it.
+PLY_DTYPE = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"),
+                      ("t", "<u4"), ("ring", "<u2")])
+
+
 def _num(v: float) -> str:
     s = f"{float(v):.9g}"
     return "0" if s in ("-0", "0") else s
@@ -54,18 +59,23 @@ class CsvLog:
 
 
 def ply_bytes(
-    xyz_m: NDArray[np.float32], intensity: NDArray[np.float32], ring: NDArray[np.uint16]
+    xyz_m: NDArray[np.float32], intensity: NDArray[np.float32], ring: NDArray[np.uint16],
+    t_s: NDArray[np.float64] | None = None,
 ) -> bytes:
-    """Binary little-endian PLY with ``x y z intensity`` float32 and ``ring`` uint16."""
+    """Binary little-endian PLY of a LiDAR scan: ``x y z intensity`` float32, ``t`` uint32
+    (nanoseconds after the scan's stamp, as ``ouster-ros`` names it) and ``ring`` uint16."""
     n = len(xyz_m)
+    t_ns = np.zeros(n, dtype=np.uint32) if t_s is None else np.round(
+        np.asarray(t_s, dtype=np.float64) * 1e9).astype(np.uint32)
     head = (
-        "ply\nformat binary_little_endian 1.0\ncomment marsscene lidar, sensor frame\n"
+        "ply\nformat binary_little_endian 1.0\ncomment marsscene lidar, sensor frame; "
+        "t: ns after the scan stamp\n"
         f"element vertex {n}\nproperty float x\nproperty float y\nproperty float z\n"
-        "property float intensity\nproperty ushort ring\nend_header\n"
+        "property float intensity\nproperty uint t\nproperty ushort ring\nend_header\n"
     ).encode("ascii")
-    rec = np.zeros(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("i", "<f4"), ("r", "<u2")])
+    rec = np.zeros(n, dtype=PLY_DTYPE)
     rec["x"], rec["y"], rec["z"] = xyz_m[:, 0], xyz_m[:, 1], xyz_m[:, 2]
-    rec["i"], rec["r"] = intensity, ring
+    rec["intensity"], rec["t"], rec["ring"] = intensity, t_ns, ring
     return head + rec.tobytes()
 
 

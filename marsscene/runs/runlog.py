@@ -98,20 +98,29 @@ def read_image(path: Path) -> NDArray[Any]:
         return np.asarray(im.convert("RGB") if im.mode not in ("RGB", "L") else im)
 
 
+_PLY_TYPES = {"float": "<f4", "uint": "<u4", "ushort": "<u2", "uchar": "u1", "double": "<f8",
+              "int": "<i4", "short": "<i2"}
+
+
 def read_ply(path: Path) -> NDArray[Any]:
     """A LiDAR scan (binary PLY written by :func:`~marsscene.runs.logs.ply_bytes`).
 
-    Returns a structured array with fields ``x y z intensity`` (float32) and ``ring`` (uint16).
+    Returns a structured array with the file's fields: ``x y z intensity`` (float32), ``t``
+    (uint32 ns after the scan's stamp; absent in run folders written before it existed) and
+    ``ring`` (uint16).
     """
     raw = path.read_bytes()
     end = raw.find(b"end_header\n")
     if not raw.startswith(b"ply\n") or end < 0:
         raise RuntimeSimError(f"{path}: not a binary PLY scan")
-    n = int(next(ln.split()[2] for ln in raw[:end].decode("ascii").splitlines()
-                 if ln.startswith("element vertex")))
-    dtype = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"),
-                      ("ring", "<u2")])
-    return np.frombuffer(raw, dtype=dtype, count=n, offset=end + len(b"end_header\n"))
+    lines = raw[:end].decode("ascii").splitlines()
+    n = int(next(ln.split()[2] for ln in lines if ln.startswith("element vertex")))
+    try:
+        fields = [(ln.split()[2], _PLY_TYPES[ln.split()[1]]) for ln in lines
+                  if ln.startswith("property ")]
+    except (KeyError, IndexError):
+        raise RuntimeSimError(f"{path}: unsupported PLY property types") from None
+    return np.frombuffer(raw, dtype=np.dtype(fields), count=n, offset=end + len(b"end_header\n"))
 
 
 class RunLog:

@@ -1,93 +1,176 @@
-"""A ray-cast spinning 3D LiDAR: heightfield march plus MuJoCo rays for rocks."""
+"""A ray-cast spinning 3D LiDAR: the terrain by :func:`~marsscene.sensors.raycast.ray_heightfield`
+(exact, vectorised) and rocks by MuJoCo rays (``mj_multiRay``).
+
+The sensor is a :class:`~marsscene.rover.lidar.LidarSpec` (a named datasheet model, see
+``marsscene/rover/data/lidar_models.toml``). One :meth:`Lidar.scan` is one revolution that starts
+at the scan's stamp: every ray carries its firing time, and with ``motion_distortion`` each
+column is cast from the pose the sensor has at that time (the current twist held for the sweep),
+so a moving rover's scan is skewed as a real one is; points stay in the sensor frame of their
+own firing time (drivers publish them so; deskewing uses the times). Range noise is Gaussian
+with the datasheet's sigma, dropouts are Bernoulli; both draw from the Generator passed in.
+Intensity is ``|cos(incidence)| * exp(-2 alpha r)``: dust attenuates intensity, never range.
+"""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.rover.config import LidarConfig
-from marsscene.sensors.raycast import ray_heightfield
+from marsscene.rover.lidar import LidarConfig
+from marsscene.sensors.raycast import TerrainCaster, embree_available
+from marsscene.sensors.rock_mesh import static_geom_mesh
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["Lidar"]
+__all__ = ["Lidar", "rotation_about"]
+
+_GRAZE = 0.05  # |cos(incidence)| floor of the rock plane correction (motion distortion)
+
+
+def rotation_about(omega_t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(n, 3, 3) rotation matrices of the rotation vectors ``omega_t`` (n, 3) (Rodrigues)."""
+    theta = np.linalg.norm(omega_t, axis=1)
+    safe = np.where(theta > 1e-12, theta, 1.0)
+    k = omega_t / safe[:, None]
+    kx = np.zeros((len(k), 3, 3))
+    kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    kx[:, 1, 0], kx[:, 2, 0], kx[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
+    return np.asarray(np.eye(3)[None] + s * kx + (1.0 - c) * (kx @ kx), dtype=np.float64)
 
 
 class Lidar:
-    """A spinning multi-channel LiDAR by MuJoCo ray casting (``mj_multiRay``).
+    """One spinning LiDAR. ``rng`` draws range noise and dropouts (required when the model has
+    either); ``rocks`` are the scene's catalogue rocks that are not MuJoCo geoms ((N, 6), see
+    :func:`marsscene.sensors.camera_world.read_rock_catalog`), cast with the terrain."""
 
-    Rays start at the ``lidar`` site and see scene geoms only (groups 0 and 1; the rover's geoms
-    are in group 2). Returns points in the sensor frame (x forward, y left, z up) with an
-    intensity ``|cos(incidence)| * exp(-2 alpha r)``: dust attenuates intensity, never range.
-    """
-
-    def __init__(self, config: LidarConfig):
+    def __init__(self, config: LidarConfig, *, rng: np.random.Generator | None = None,
+                 rocks: NDArray[np.float64] | None = None):
         self.config = config
-        lo, hi = np.radians(config.vertical_fov_deg)
-        elev = np.linspace(lo, hi, config.channels) if config.channels > 1 else np.array([lo])
-        azim = np.arange(config.horizontal_samples) * (2 * math.pi / config.horizontal_samples)
-        e, a = np.meshgrid(elev, azim, indexing="ij")
-        self.ring = np.repeat(np.arange(config.channels), config.horizontal_samples)
+        self.rocks = rocks
+        self.spec = spec = config.spec
+        if rng is None and (spec.range_noise_sigma_m > 0 or spec.dropout_probability > 0):
+            raise ValueError("a LiDAR with range noise or dropouts needs rng=")
+        self.rng = rng
+        elev = np.radians(np.asarray(spec.vertical_angles_deg))
+        azim = spec.column_azimuth_rad()
+        a, e = np.meshgrid(azim, elev, indexing="ij")  # (columns, beams): firing order
         self.dirs_sensor = np.stack(
             [np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)], axis=-1
         ).reshape(-1, 3)
-        self._geomid = np.zeros(len(self.dirs_sensor), dtype=np.int32)
-        self._dist = np.zeros(len(self.dirs_sensor), dtype=np.float64)
-        self._normal = np.zeros((len(self.dirs_sensor), 3), dtype=np.float64)
+        self.ring = np.tile(spec.rings(), spec.horizontal_samples).astype(np.uint16)
+        self.t_s = spec.firing_time_s().T.reshape(-1)
+        self.column = np.repeat(np.arange(spec.horizontal_samples), spec.channels)
+        n = len(self.dirs_sensor)
+        self._geomid = np.zeros(n, dtype=np.int32)
+        self._dist = np.zeros(n, dtype=np.float64)
+        self._normal = np.zeros((n, 3), dtype=np.float64)
         self._groups = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)
+        self._caster: TerrainCaster | None = None
 
-    def scan(
-        self, model: Any, data: Any, site_id: int, terrain: Heightfield | None = None
-    ) -> dict[str, NDArray[Any]]:
-        """One full sweep at the current state.
+    def caster(self, terrain: Heightfield, model: Any = None, data: Any = None
+               ) -> TerrainCaster:
+        """The caster of ``terrain``, the catalogue rocks and the model's static geoms (kept
+        while the terrain is the same object)."""
+        if self._caster is None or self._caster.hf is not terrain:
+            static = static_geom_mesh(model, data) if model is not None else None
+            self._caster = TerrainCaster(terrain, self.spec.range_m[1], rocks=self.rocks,
+                                         static=static)
+        return self._caster
 
-        With ``terrain`` the heightfield is ray-marched in numpy (fast on large terrains) and
-        MuJoCo rays see geom groups 0 and 1 only (``RoverSim`` moves its terrain geom to
-        group 3); without it MuJoCo casts against groups 0, 1 and 3.
-
-        Returns
-        -------
-        dict with ``xyz_m`` (N, 3) float32 (sensor frame), ``intensity`` (N,) float32 in [0, 1],
-        ``ring`` (N,) uint16, ``range_m`` (N,) float32 — only rays that hit within range.
-        """
+    def _mujoco_rays(self, model: Any, data: Any, origin: NDArray[np.float64],
+                     origins: NDArray[np.float64] | None, dirs: NDArray[np.float64],
+                     terrain: Heightfield | None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Without Embree: MuJoCo rays for the geoms (and the hfield without ``terrain``),
+        the numpy march for ``terrain``."""
         import mujoco
 
-        rot = data.site_xmat[site_id].reshape(3, 3)
-        origin = data.site_xpos[site_id].copy()
-        dirs_world = self.dirs_sensor @ rot.T
-        n = len(dirs_world)
-        rmin, rmax = self.config.range_m
+        rmin, rmax = self.spec.range_m
         groups = self._groups if terrain is not None else np.array([1, 1, 0, 1, 0, 0], np.uint8)
-        mujoco.mj_multiRay(
-            model,
-            data,
-            origin,
-            dirs_world.ravel(),
-            groups,
-            1,
-            -1,
-            self._geomid,
-            self._dist,
-            self._normal.ravel(),
-            n,
-            rmax,
-        )
+        mujoco.mj_multiRay(model, data, origin, dirs.ravel(), groups, 1, -1, self._geomid,
+                           self._dist, self._normal.ravel(), len(dirs), rmax + 1.0)
         dist = np.where(self._geomid >= 0, self._dist, np.inf)
         normals = self._normal.reshape(-1, 3).copy()
+        if origins is not None:
+            # geoms were cast from the sweep's first origin: move each hit along its ray to
+            # where the ray from the column's own origin meets the same plane
+            dn = np.einsum("ij,ij->i", dirs, normals)
+            shift = np.einsum("ij,ij->i", origins - origin, normals)
+            ok = np.isfinite(dist) & (np.abs(dn) > _GRAZE)
+            dist = np.where(ok, dist + shift / np.where(ok, dn, 1.0), dist)
         if terrain is not None:
-            t_dist, t_normal = ray_heightfield(terrain, origin, dirs_world, (rmin, rmax))
+            t_dist, t_normal = self.caster(terrain).cast(
+                origins if origins is not None else origin, dirs, (rmin, rmax))
             closer = t_dist < dist
             dist = np.where(closer, t_dist, dist)
             normals[closer] = t_normal[closer]
+        return dist, normals
+
+    def _world_rays(self, rot: NDArray[np.float64], origin: NDArray[np.float64],
+                    twist: NDArray[np.float64] | None
+                    ) -> tuple[NDArray[np.float64] | None, NDArray[np.float64]]:
+        """Per-ray origins (n, 3) (None: all at ``origin``) and unit directions (n, 3) in the
+        world frame."""
+        if twist is None or not self.spec.motion_distortion:
+            return None, self.dirs_sensor @ rot.T
+        omega, vel = twist[:3], twist[3:]
+        t_col = self.t_s.reshape(self.spec.horizontal_samples, -1)[:, 0]
+        r_col = rotation_about(t_col[:, None] * omega[None, :]) @ rot  # (columns, 3, 3)
+        d = self.dirs_sensor.reshape(self.spec.horizontal_samples, -1, 3)
+        dirs = np.einsum("cij,cbj->cbi", r_col, d).reshape(-1, 3)
+        origins = origin[None, :] + self.t_s[:, None] * vel[None, :]
+        return origins, dirs
+
+    def scan(self, model: Any, data: Any, site_id: int, terrain: Heightfield | None = None,
+             *, twist: NDArray[np.float64] | None = None) -> dict[str, NDArray[Any]]:
+        """One revolution from the current state.
+
+        Parameters
+        ----------
+        model, data : mujoco.MjModel, mujoco.MjData
+        site_id : int
+            The ``lidar`` site.
+        terrain : Heightfield, optional
+            The terrain (``RoverSim`` moves its hfield geom to group 3). With ``embreex`` the
+            terrain, the catalogue rocks and the static geoms of groups 0 and 1 are cast in one
+            Embree scene; without it MuJoCo rays see groups 0 and 1 and the numpy march the
+            terrain. Without ``terrain`` MuJoCo casts against groups 0, 1 and 3.
+        twist : ndarray of shape (6,), optional
+            The site's angular and linear velocity (world frame, ``mj_objectVelocity`` order)
+            held during the sweep for motion distortion.
+
+        Returns
+        -------
+        dict with ``xyz_m`` (N, 3) float32 (sensor frame at each point's firing time),
+        ``intensity`` (N,) float32 in [0, 1], ``ring`` (N,) uint16, ``t_s`` (N,) float64
+        firing time after the stamp, ``range_m`` (N,) float32: only returns, in firing order.
+        """
+        spec = self.spec
+        rot = np.asarray(data.site_xmat[site_id], dtype=np.float64).reshape(3, 3)
+        origin = np.asarray(data.site_xpos[site_id], dtype=np.float64).copy()
+        origins, dirs = self._world_rays(rot, origin, twist)
+        rmin, rmax = spec.range_m
+        if terrain is not None and embree_available():  # everything in one Embree scene
+            dist, normals = self.caster(terrain, model, data).cast(
+                origins if origins is not None else origin, dirs, (rmin, rmax))
+        else:
+            dist, normals = self._mujoco_rays(model, data, origin, origins, dirs, terrain)
         hit = np.isfinite(dist) & (dist >= rmin) & (dist <= rmax)
+        if spec.dropout_probability > 0:
+            assert self.rng is not None
+            hit &= self.rng.random(hit.size) >= spec.dropout_probability
         r = dist[hit]
-        cos_inc = np.abs(np.einsum("ij,ij->i", normals[hit], dirs_world[hit]))
-        intensity = cos_inc * np.exp(-2.0 * self.config.dust_extinction_per_m * r)
+        if spec.range_noise_sigma_m > 0:
+            assert self.rng is not None
+            r = np.maximum(r + spec.range_noise_sigma_m * self.rng.standard_normal(r.size), 0.0)
+        cos_inc = np.abs(np.einsum("ij,ij->i", normals[hit], dirs[hit]))
+        intensity = np.clip(cos_inc, 0.0, 1.0) * np.exp(-2.0 * spec.dust_extinction_per_m * r)
         return {
             "xyz_m": (self.dirs_sensor[hit] * r[:, None]).astype(np.float32),
             "intensity": intensity.astype(np.float32),
-            "ring": self.ring[hit].astype(np.uint16),
+            "ring": self.ring[hit],
+            "t_s": self.t_s[hit],
             "range_m": r.astype(np.float32),
         }

@@ -17,6 +17,7 @@ import numpy as np
 from marsscene._validate import plain
 from marsscene.errors import RuntimeSimError
 from marsscene.runs.tum import Trajectory
+from marsscene.sensors.camera_world import read_rock_catalog
 from marsscene.sensors.imu import imu_measure
 from marsscene.sensors.lidar import Lidar
 from marsscene.sensors.odometry import WheelOdometry, measure_wheels
@@ -68,14 +69,16 @@ class _Loop:
         run = sim.run
         self.sim, self.command, self.rng, self.keep = sim, command, rng, keep
         self.follower = PurePursuit(route, pursuit) if route is not None else None
-        self.lidar = Lidar(run.lidar) if run.lidar is not None else None
         self.periods = {"control": _period(sim, run.control_hz), "imu": _period(sim, run.imu_hz)}
-        if run.lidar is not None:
-            self.periods["lidar"] = _period(sim, run.lidar.rate_hz)
         self.renderer = None
         if run.camera is not None:
             self.periods["camera"] = _period(sim, run.camera.rate_hz)
             self.renderer = sim.make_renderer(rng=rng.spawn(1)[0])
+        self.lidar = None
+        if run.lidar is not None:  # its own stream: LiDAR noise never moves IMU/wheel noise
+            self.periods["lidar"] = _period(sim, run.lidar.spec.rate_hz)
+            self.lidar = Lidar(run.lidar, rng=rng.spawn(1)[0],
+                               rocks=read_rock_catalog(Path(sim.scene_dir)))
         self.stereo = self.renderer is not None and self.renderer.stereo_ids is not None
         self.writer = RunWriter(writer_out, sim, lidar=self.lidar is not None,
                                 camera=self.renderer is not None, stereo=self.stereo)
@@ -120,7 +123,8 @@ class _Loop:
     def scan(self, t: float) -> None:
         assert self.lidar is not None
         sim = self.sim
-        scan = self.lidar.scan(sim.model, sim.data, sim.lidar_site, sim.heightfield)
+        scan = self.lidar.scan(sim.model, sim.data, sim.lidar_site, sim.heightfield,
+                               twist=sim.site_twist(sim.lidar_site))
         self.writer.lidar(t, self.n_lidar, scan)
         if self.keep:
             self.scans.append({"t": t, **scan})

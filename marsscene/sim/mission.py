@@ -76,7 +76,7 @@ def prepare_drive(
                              max_slope_deg=max_slope_deg, obstacles=scene_obstacles(sim))
     if sim.rocks_kept[1]:  # simulate only the rocks the rover can meet or sense
         if run.lidar is not None:
-            corridor_m = max(corridor_m, run.lidar.range_m[1])
+            corridor_m = max(corridor_m, run.lidar.spec.range_m[1])
         if run.camera is not None:
             corridor_m = max(corridor_m, run.camera.terrain_window_m / 2.0)
         sim = RoverSim(scene_dir, run=run, settle_s=0.0, contact_corridor_xy_m=route.xy_m,

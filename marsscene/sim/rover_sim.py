@@ -327,6 +327,14 @@ class RoverSim:
         w, x, y, z = self.pose()[1]
         return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
+    def site_twist(self, site_id: int) -> NDArray[np.float64]:
+        """A site's angular and linear velocity (rad/s, m/s; world frame), ``(wx, wy, wz, vx,
+        vy, vz)``."""
+        twist = np.zeros(6)
+        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_SITE, site_id,
+                                 twist, 0)
+        return twist
+
     def wheel_rates(self) -> NDArray[np.float64]:
         """True wheel angular speeds (rad/s), DRIVE_JOINTS order."""
         return self.data.qvel[self.drive_dof].copy()

@@ -68,7 +68,7 @@ class RunWriter:
             return
         name = f"{index:06d}.ply"
         (self.out / "lidar" / name).write_bytes(
-            ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"]))
+            ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"]))
         self.logs["lidar"].row(t, (name, len(scan["range_m"])))
 
     def camera(self, t: float, index: int, rgb: Any, depth: Any) -> None:
@@ -115,10 +115,10 @@ class RunWriter:
                 "physics": 1.0 / sim.dt_physics_s,
                 "control": run.control_hz,
                 "imu": run.imu_hz,
-                "lidar": run.lidar.rate_hz if run.lidar else None,
+                "lidar": run.lidar.spec.rate_hz if run.lidar else None,
                 "camera": run.camera.rate_hz if run.camera else None,
             },
-            "lidar": asdict(run.lidar) if run.lidar else None,
+            "lidar": run.lidar.spec.to_dict() if run.lidar else None,
             "camera": asdict(run.camera) if run.camera else None,
             "pursuit": asdict(pursuit) if pursuit is not None else None,
             "frames": _FRAMES,

@@ -200,9 +200,13 @@ def test_lidar_cloud_and_scan_equal_the_ply_scans(bag_msgs, stereo_run):
     for (_, cloud), (_, scan), f in zip(msgs["/rover/lidar/points"], msgs["/rover/scan"], files,
                                         strict=True):
         ply = read_ply(f)
-        assert [p.name for p in cloud.fields] == ["x", "y", "z", "intensity", "ring"]
+        # the fields ouster-ros publishes: t is uint32 ns after the stamp (PointField 6)
+        assert [(p.name, p.datatype, p.offset) for p in cloud.fields] == [
+            ("x", 7, 0), ("y", 7, 4), ("z", 7, 8), ("intensity", 7, 12), ("t", 6, 16),
+            ("ring", 4, 20)]
         got = np.frombuffer(cloud.data.tobytes(), ply.dtype)
         np.testing.assert_array_equal(got, ply)
+        assert np.all(np.diff(got["t"].astype(np.int64)) >= 0) and got["t"].max() < 1e8
         ring = ply[ply["ring"] == 2]  # -10 deg: the ring nearest to horizontal
         finite = np.isfinite(scan.ranges)
         assert finite.sum() == len(ring) > 0

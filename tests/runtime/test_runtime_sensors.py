@@ -89,8 +89,9 @@ def test_imu_at_rest_reads_mars_gravity(flat_scene, bias_z: float) -> None:
 
 def test_lidar_hits_flat_ground_and_dust_only_dims(flat_scene) -> None:
     sim = RoverSim(flat_scene)
-    clear = Lidar(LidarConfig(channels=16, horizontal_samples=90))
-    dusty = Lidar(LidarConfig(channels=16, horizontal_samples=90, dust_extinction_per_m=0.02))
+    clear = Lidar(LidarConfig(model="simple", channels=16, horizontal_samples=90))
+    dusty = Lidar(LidarConfig(model="simple", channels=16, horizontal_samples=90,
+                              dust_extinction_per_m=0.02))
     a = clear.scan(sim.model, sim.data, sim.lidar_site, sim.heightfield)
     b = dusty.scan(sim.model, sim.data, sim.lidar_site, sim.heightfield)
     c = clear.scan(sim.model, sim.data, sim.lidar_site)  # MuJoCo's own ray-hfield test
@@ -174,11 +175,11 @@ def test_logs_layout_and_determinism(gentle_scene, tmp_path) -> None:
     ply = (outs[0] / "lidar" / "000000.ply").read_bytes()
     head, body = ply.split(b"end_header\n")
     n = int(head.split(b"element vertex ")[1].split()[0])
-    rec = np.frombuffer(
-        body, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("i", "<f4"), ("r", "<u2")]
-    )
+    rec = np.frombuffer(body, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("i", "<f4"),
+                                     ("t", "<u4"), ("r", "<u2")])
     assert len(rec) == n > 0
     assert np.all((rec["i"] >= 0) & (rec["i"] <= 1))
+    assert np.all(np.diff(rec["t"].astype(np.int64)) >= 0) and rec["t"].max() < 100_000_000
     # other seed -> other noise
     sim = RoverSim(gentle_scene, run=run)
     drive(

@@ -84,9 +84,12 @@ def laser_scan(scan: NDArray[Any], lidar: dict[str, Any]) -> dict[str, Any]:
 
     Ranges are the 3-D beam ranges of that ring, binned by azimuth over [0, 2 pi).
     """
-    channels, n = int(lidar["channels"]), int(lidar["horizontal_samples"])
-    lo, hi = lidar["vertical_fov_deg"]
-    elev = np.linspace(lo, hi, channels) if channels > 1 else np.array([lo])
+    n = int(lidar["horizontal_samples"])
+    if "vertical_angles_deg" in lidar:  # rings are the beams sorted by elevation, lowest first
+        elev = np.sort(np.asarray(lidar["vertical_angles_deg"], dtype=np.float64))
+    else:  # run folders written before named models: uniform beams
+        channels, (lo, hi) = int(lidar["channels"]), lidar["vertical_fov_deg"]
+        elev = np.linspace(lo, hi, channels) if channels > 1 else np.array([lo])
     ring = int(np.argmin(np.abs(elev)))
     pts = scan[scan["ring"] == ring]
     inc = 2.0 * np.pi / n

@@ -106,12 +106,12 @@ class MessageBuilder:
 
     def cloud(self, t_s: float, frame: str, rec: np.ndarray, shape: tuple[int, int]) -> Any:
         pf = self.T["sensor_msgs/msg/PointField"]
-        fields, off = [], 0
+        kinds = {np.dtype("<f4"): pf.FLOAT32, np.dtype("<u4"): pf.UINT32,
+                 np.dtype("<u2"): pf.UINT16, np.dtype("u1"): pf.UINT8}
+        fields = []
         for name in rec.dtype.names or ():
-            sub = rec.dtype.fields[name][0]  # type: ignore[index]
-            kind = pf.UINT16 if sub == np.dtype("<u2") else pf.FLOAT32
-            fields.append(pf(name=name, offset=off, datatype=kind, count=1))
-            off += sub.itemsize
+            sub, off = rec.dtype.fields[name][:2]  # type: ignore[index]
+            fields.append(pf(name=name, offset=off, datatype=kinds[sub], count=1))
         data = np.ascontiguousarray(rec).view(np.uint8).reshape(-1)
         return self.T["sensor_msgs/msg/PointCloud2"](
             header=self.header(t_s, frame), height=shape[0], width=shape[1], fields=fields,

@@ -168,7 +168,8 @@ def add_lidar(
 
     def laser(i: int, t: float) -> Any:
         s = bd.laser_scan(load(i), cfg)
-        return scan_t(header=bag.header(t, "lidar_link"), time_increment=0.0, scan_time=period,
+        return scan_t(header=bag.header(t, "lidar_link"),
+                      time_increment=period / int(cfg["horizontal_samples"]), scan_time=period,
                       **{k: v for k, v in s.items() if k not in ("ring", "elevation_deg")})
 
     def cloud(i: int, t: float) -> Any:

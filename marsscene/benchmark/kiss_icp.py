@@ -1,0 +1,99 @@
+"""KISS-ICP (Vizzo et al. 2023, doi:10.1109/LRA.2023.3236571) as a LiDAR-odometry baseline.
+
+:func:`run_kiss_icp` runs the ``kiss_icp_pipeline`` command on a run's ROS 2 bag exactly as a
+user would (``kiss_icp_pipeline --topic /rover/lidar/points RUN/bag``, default configuration
+unless ``config`` is given) and reads the TUM trajectory it writes; :func:`lidar_ground_truth`
+is the run's ground truth moved to the ``lidar_link`` frame, the frame KISS-ICP estimates;
+:func:`score_lidar_odometry` aligns one to the other (Umeyama, SE(3)) and reports ATE and the
+estimated path length. A run that fails (no output, too few poses) is a result, not a crash.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from marsscene.errors import MissingDependencyError
+from marsscene.rover.geometry import sensor_mounts
+from marsscene.runs.evaluation import ate
+from marsscene.runs.runlog import RunLog
+from marsscene.runs.tum import Trajectory, read_tum
+
+__all__ = ["LidarOdometryScore", "lidar_ground_truth", "run_kiss_icp", "score_lidar_odometry"]
+
+KISS_ICP_CITATION = ("Vizzo, Guadagnino, Mersch, Wiesmann, Behley, Stachniss 2023, KISS-ICP, "
+                     "IEEE RA-L 8(2), doi:10.1109/LRA.2023.3236571")
+TOPIC = "/rover/lidar/points"
+
+
+@dataclass(frozen=True)
+class LidarOdometryScore:
+    """ATE (SE(3)-aligned) of a LiDAR-odometry estimate against the lidar_link ground truth."""
+
+    ate_rmse_m: float
+    path_m: float
+    estimated_path_m: float
+    poses: int
+    status: str = "ok"
+
+    @property
+    def ate_percent(self) -> float:
+        return 100.0 * self.ate_rmse_m / max(self.path_m, 1e-9)
+
+
+def _executable() -> str:
+    exe = shutil.which("kiss_icp_pipeline") or str(Path(sys.executable).parent
+                                                    / "kiss_icp_pipeline")
+    if not Path(exe).is_file():
+        raise MissingDependencyError("kiss_icp_pipeline not found: pip install "
+                                     "'marsscene[bench]' (kiss-icp)")
+    return exe
+
+
+def run_kiss_icp(bag: str | Path, *, topic: str = TOPIC, config: str | Path | None = None,
+                 timeout_s: float | None = None) -> Trajectory | None:
+    """KISS-ICP's trajectory (lidar frame, starting at the identity) for a ROS 2 bag folder;
+    ``None`` if it wrote none (a failure)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [_executable(), "--topic", topic, str(Path(bag).resolve())]
+        if config is not None:
+            cmd += ["--config", str(Path(config).resolve())]
+        env = dict(os.environ, kiss_icp_out_dir=tmp)
+        done = subprocess.run(cmd, cwd=tmp, env=env, capture_output=True, text=True,
+                              timeout=timeout_s, check=False)
+        found = sorted(Path(tmp).rglob("*_tum.txt"))
+        if done.returncode != 0 or not found:
+            return None
+        return read_tum(found[0])
+
+
+def lidar_ground_truth(run: RunLog) -> Trajectory:
+    """The ground-truth pose of ``lidar_link`` (the base pose composed with the LiDAR mount)."""
+    from scipy.spatial.transform import Rotation
+
+    (mx, my, mz), pitch = sensor_mounts(run.rover)["lidar"]
+    gt = run.gt
+    rot = Rotation.from_quat(gt.quat_xyzw)
+    xyz = gt.xyz_m + rot.apply(np.array([mx, my, mz]))
+    quat = (rot * Rotation.from_euler("y", pitch)).as_quat()
+    return Trajectory(gt.timestamps_s, xyz, quat)
+
+
+def score_lidar_odometry(estimate: Trajectory | None, run: RunLog) -> LidarOdometryScore:
+    """ATE of ``estimate`` against the run's lidar_link ground truth (``status`` says why a
+    run has no score)."""
+    gt = lidar_ground_truth(run)
+    path = gt.path_length_m()
+    if estimate is None or len(estimate) < 3:
+        return LidarOdometryScore(float("nan"), path, float("nan"),
+                                  0 if estimate is None else len(estimate), "lost")
+    result = ate(estimate, gt)
+    return LidarOdometryScore(float(result.stats.rmse), path, estimate.path_length_m(),
+                              len(estimate))
