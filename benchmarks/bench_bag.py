@@ -41,7 +41,8 @@ def _drive() -> dict[str, float]:
     from marsscene.sim.rover_sim import RoverSim
 
     shutil.rmtree(_RUN, ignore_errors=True)
-    run = RunConfig(camera=CameraConfig(width_px=640, height_px=480), lidar=LidarConfig())
+    run = RunConfig(camera=CameraConfig(width_px=640, height_px=480),
+                    lidar=LidarConfig(model="simple"))
     sim = RoverSim(_SCENE, run=run, start_xy_m=(-20.0, -10.0))
     t0 = time.perf_counter()
     drive(sim, command=(0.5, 0.05), seconds=SIM_S, out_dir=_RUN, rng=stage_rng(0, "sensors"))

@@ -1,6 +1,7 @@
 """LiDAR: ray-cast speed per sensor model, and KISS-ICP (default configuration) on drives.
 
-Run: ``python benchmarks/bench_lidar.py`` (cast timings + the default-scene drive), or
+Run: ``python benchmarks/bench_lidar.py`` (cast timings + the default-scene route of issue 21
+per model), or
 ``python benchmarks/bench_lidar.py drive SCENE LENGTH_M [MODEL]`` with SCENE one of
 ``default``, ``mars-base``, ``main-crater``, ``grand-canyon`` (a square loop of LENGTH_M around
 the scene centre, authored by the route planner). Each drive is what a user types:
@@ -26,6 +27,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 CACHE = Path(tempfile.gettempdir()) / "marsscene_bench_lidar"
 MODELS = ("simple", "vlp16", "os1-64", "os1-128")
+_ISSUE_ROUTE = "-10 -10\n10 -10\n10 10\n"
 
 
 def _scene(name: str) -> Path:
@@ -85,8 +87,9 @@ def drive(scene: str, length_m: float, model: str = "os1-64", camera: bool = Fal
 
     scene_dir = _scene(scene)
     run_dir = CACHE / f"run-{scene}-{int(length_m)}-{model}{'-cam' if camera else ''}"
-    wp = CACHE / f"wp-{int(length_m)}.txt"
-    wp.write_text(_loop_waypoints(length_m / 4.0))
+    wp = CACHE / f"wp-{scene}-{int(length_m)}.txt"
+    # the default scene: the issue's route (-10,-10) -> (10,-10) -> (10,10), 39.5 m
+    wp.write_text(_ISSUE_ROUTE if scene == "default" else _loop_waypoints(length_m / 4.0))
     cmd = ["marsscene", "drive", str(scene_dir), "--waypoints", str(wp), "--lidar-model",
            model, "--bag", "--overwrite", "--out", str(run_dir)]
     if camera:
@@ -110,7 +113,8 @@ def drive(scene: str, length_m: float, model: str = "os1-64", camera: bool = Fal
 
 def main() -> None:
     cast_timings()
-    drive("default", 80.0)
+    for model in MODELS:
+        drive("default", 40.0, model)
 
 
 if __name__ == "__main__":

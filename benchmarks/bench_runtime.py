@@ -39,7 +39,7 @@ def _drive(kind: str) -> dict[str, float]:
     # rover can meet (here: within 25 m of the start; it drives ~10 m in 20 s).
     corridor = np.zeros((1, 2)) if kind in ("corridor", "sphere", "lidar", "camera") else None
     run = RunConfig(
-        lidar=LidarConfig() if kind == "lidar" else None,
+        lidar=LidarConfig(model="simple") if kind == "lidar" else None,
         camera=CameraConfig(width_px=320, height_px=240) if kind == "camera" else None,
     )
     t0 = time.perf_counter()

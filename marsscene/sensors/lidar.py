@@ -13,6 +13,7 @@ Intensity is ``|cos(incidence)| * exp(-2 alpha r)``: dust attenuates intensity, 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -147,16 +148,36 @@ class Lidar:
         ``intensity`` (N,) float32 in [0, 1], ``ring`` (N,) uint16, ``t_s`` (N,) float64
         firing time after the stamp, ``range_m`` (N,) float32: only returns, in firing order.
         """
-        spec = self.spec
-        rot = np.asarray(data.site_xmat[site_id], dtype=np.float64).reshape(3, 3)
+        return self.prepare(model, data, site_id, terrain, twist=twist)()
+
+    def prepare(self, model: Any, data: Any, site_id: int, terrain: Heightfield | None = None,
+                *, twist: NDArray[np.float64] | None = None
+                ) -> Callable[[], dict[str, NDArray[Any]]]:
+        """:meth:`scan` in two steps: read the state now, cast when the returned function is
+        called. With Embree the call touches no MuJoCo data, so it may run on another thread
+        while the simulation advances (call the functions in order: the noise draws are)."""
+        rot = np.asarray(data.site_xmat[site_id], dtype=np.float64).reshape(3, 3).copy()
         origin = np.asarray(data.site_xpos[site_id], dtype=np.float64).copy()
-        origins, dirs = self._world_rays(rot, origin, twist)
-        rmin, rmax = spec.range_m
+        twist = None if twist is None else np.asarray(twist, dtype=np.float64).copy()
         if terrain is not None and embree_available():  # everything in one Embree scene
-            dist, normals = self.caster(terrain, model, data).cast(
-                origins if origins is not None else origin, dirs, (rmin, rmax))
-        else:
-            dist, normals = self._mujoco_rays(model, data, origin, origins, dirs, terrain)
+            caster = self.caster(terrain, model, data)  # built here: it reads the model
+
+            def cast() -> dict[str, NDArray[Any]]:
+                origins, dirs = self._world_rays(rot, origin, twist)
+                dist, normals = caster.cast(origins if origins is not None else origin, dirs,
+                                            self.spec.range_m)
+                return self._returns(dist, normals, dirs)
+
+            return cast
+        origins, dirs = self._world_rays(rot, origin, twist)
+        dist, normals = self._mujoco_rays(model, data, origin, origins, dirs, terrain)
+        return lambda: self._returns(dist, normals, dirs)
+
+    def _returns(self, dist: NDArray[np.float64], normals: NDArray[np.float64],
+                 dirs: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+        """The scan's returns: range limits, dropouts, range noise, intensity."""
+        spec = self.spec
+        rmin, rmax = spec.range_m
         hit = np.isfinite(dist) & (dist >= rmin) & (dist <= rmax)
         if spec.dropout_probability > 0:
             assert self.rng is not None

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -92,6 +93,8 @@ class _Loop:
         self.images: list[tuple[np.ndarray, np.ndarray | None]] = []
         self.stereo_images: list[tuple[np.ndarray, np.ndarray]] = []
         self.n_lidar = self.n_cam = 0
+        self._lidar_pool: ThreadPoolExecutor | None = None
+        self._pending: tuple[float, Future[dict[str, Any]]] | None = None
 
     def control(self, k: int, t: float) -> bool:
         """Log ground truth and odometry, command the rover; True once the route is done."""
@@ -121,10 +124,24 @@ class _Loop:
             self.imu_rows.append(np.concatenate([[t], acc, gyr]))
 
     def scan(self, t: float) -> None:
+        """Read the LiDAR's pose now; cast on the helper thread while the simulation goes on
+        (the previous scan is collected first, so scans are written in order)."""
         assert self.lidar is not None
         sim = self.sim
-        scan = self.lidar.scan(sim.model, sim.data, sim.lidar_site, sim.heightfield,
-                               twist=sim.site_twist(sim.lidar_site))
+        cast = self.lidar.prepare(sim.model, sim.data, sim.lidar_site, sim.heightfield,
+                                  twist=sim.site_twist(sim.lidar_site))
+        self.collect_scan()
+        if self._lidar_pool is None:
+            self._lidar_pool = ThreadPoolExecutor(1, thread_name_prefix="marsscene-lidar")
+        self._pending = (t, self._lidar_pool.submit(cast))
+
+    def collect_scan(self) -> None:
+        """Wait for the scan on the helper thread (if any) and write it."""
+        if self._pending is None:
+            return
+        t, future = self._pending
+        self._pending = None
+        scan = future.result()
         self.writer.lidar(t, self.n_lidar, scan)
         if self.keep:
             self.scans.append({"t": t, **scan})
@@ -167,6 +184,9 @@ class _Loop:
 
     def result(self, route: Route | None) -> DriveResult:
         """Close the writers and the renderer; the trajectories and the summary."""
+        self.collect_scan()
+        if self._lidar_pool is not None:
+            self._lidar_pool.shutdown()
         self.writer.close()
         summary_camera = {}
         if self.renderer is not None:
