@@ -30,7 +30,8 @@ import argparse
 import math
 import sys
 
-#: Blender's USD importer scales DistantLight intensity by this factor (Blender 4.1-5.0).
+#: Blender's USD importer scales DistantLight intensity by this factor (Blender 4.1-5.0);
+#: the same value as marsscene.export.usd.display.BLENDER_SUN_IMPORT_FACTOR.
 BLENDER_SUN_IMPORT_FACTOR = 4.0
 
 

@@ -70,6 +70,7 @@ def _import_authors() -> None:
     import marsscene.export.usd.assets
     import marsscene.export.usd.cameras
     import marsscene.export.usd.craters
+    import marsscene.export.usd.display
     import marsscene.export.usd.lighting
     import marsscene.export.usd.rocks
     import marsscene.export.usd.stage
@@ -166,4 +167,8 @@ def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda",
         if not layer.Export(str(target)):
             raise OSError(f"could not write {target}")
         written.append(target)
+        # display-referred siblings (not for .usdz, which is one self-contained file)
+        from marsscene.export.usd.display import write_display_layers
+
+        written += write_display_layers(stage, scene, out, target.name)
     return written
