@@ -96,7 +96,7 @@ def _size(text: str) -> tuple[int, int]:
 @click.option("--sun-elevation", type=click.FloatRange(-10, 90), default=None,
               help="Override the sun elevation (deg) for the camera's lighting.")
 @click.option("--lidar", is_flag=True,
-              help="Log a spinning 3D LiDAR (default model os1-64: 64 x 1024 at 10 Hz; PLY).")
+              help="Log a spinning 3D LiDAR (default model os1-128: 128 x 1024 at 10 Hz; PLY).")
 @click.option("--lidar-model", type=click.Choice(_LIDAR_MODELS), default=None,
               help="LiDAR model from datasheets (docs/runtime.md); implies --lidar.")
 @click.option("--run-config", type=_PATH,

@@ -37,7 +37,7 @@ from marsscene.errors import ConfigError
 __all__ = ["DEFAULT_LIDAR_MODEL", "LidarConfig", "LidarSpec", "lidar_models"]
 
 #: The model of ``LidarConfig()`` and ``marsscene drive --lidar``.
-DEFAULT_LIDAR_MODEL = "os1-64"
+DEFAULT_LIDAR_MODEL = "os1-128"
 _PHYSICS_HZ = 500.0
 _VLP16_LASER_S = 2.304e-6  # one laser's slot inside a VLP-16 firing sequence
 _FIRING_OFFSETS = ("none", "velodyne")

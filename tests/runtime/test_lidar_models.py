@@ -33,7 +33,7 @@ def test_models_follow_their_datasheets():
     simple = LidarConfig(model="simple").spec
     assert (simple.channels, simple.horizontal_samples, simple.range_m) == (16, 360, (0.3, 50.0))
     assert all(m["source"] for m in lidar_models().values())
-    assert LidarConfig().spec.model == "os1-64"
+    assert LidarConfig().spec.model == "os1-128"  # KISS-ICP tracks the paper-style drive
 
 
 def test_rings_are_beams_sorted_by_elevation():
