@@ -10,6 +10,7 @@ stage's random draws.
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 from marsscene.assets import place_assets
@@ -22,12 +23,14 @@ from marsscene.pipeline.lighting import lighting_stage
 from marsscene.pipeline.lod import LodWorld
 from marsscene.pipeline.record import BuildRecord
 from marsscene.pipeline.rocks import rock_stage
-from marsscene.pipeline.terrain import TerrainStage, terrain_stage
+from marsscene.pipeline.terrain import TerrainStage, resolve_lod, terrain_stage
 from marsscene.scene import Provenance, Scene
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.lod import OuterTerrain, lod_summary, stitch
 
 __all__ = ["build_scene"]
+
+log = logging.getLogger("marsscene")
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
@@ -56,6 +59,10 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     """
     config = config if config is not None else SceneConfig()
     rec = BuildRecord()
+    config, lod_note = resolve_lod(config, dem)
+    if lod_note:
+        log.warning(lod_note)
+        rec.notes.append(lod_note)
     with rec.stage("terrain"):
         terrain = terrain_stage(config, seed, dem, rec.models, rec.notes, rec.summary)
     world = terrain.world

@@ -27,7 +27,12 @@ from marsscene.terrain.lattice import LATTICE_CITATION
 if TYPE_CHECKING:
     from marsscene.pipeline.lod import LodWorld
 
-__all__ = ["TerrainStage", "lod_inputs", "terrain_stage"]
+__all__ = ["TerrainStage", "lod_inputs", "resolve_lod", "terrain_stage"]
+
+#: Outer-level posts an automatic level-of-detail terrain aims at (main-crater: 13 M), and the
+#: largest side of its focus square in posts (4000: 1 km at 0.25 m, 16 M posts).
+AUTO_OUTER_POSTS = 16_000_000
+AUTO_FOCUS_POSTS_PER_SIDE = 4000
 
 _FBM_CITATION = (
     "fractional Brownian surface by spectral synthesis (Saupe 1988; Turcotte 1997, "
@@ -152,9 +157,42 @@ def terrain_stage(config: SceneConfig, seed: int, dem: DEM | None, models: list[
     return TerrainStage(None if world else hf, frame, inputs, texture, world)
 
 
+def resolve_lod(config: SceneConfig, dem: DEM | None = None) -> tuple[SceneConfig, str | None]:
+    """``terrain.lod = "auto"`` made true or false, and the note saying why when true.
+
+    A procedural terrain whose full-resolution grid would hold more than
+    :data:`~marsscene.terrain.synth.MAX_POSTS` posts gets two levels: its ``post_m`` inside the
+    ``focus_size_m`` square, and the smallest whole multiple of it outside that keeps the outer
+    grid under :data:`AUTO_OUTER_POSTS`. Everything else keeps one grid (a DEM's size is only
+    known once it is read: ask for ``--lod`` there).
+    """
+    import math
+
+    from marsscene.terrain.synth import MAX_POSTS
+
+    tcfg = config.terrain
+    if tcfg.lod != "auto":
+        return config, None
+    post = tcfg.post_m if tcfg.post_m is not None else 0.25
+    w, h = tcfg.effective_size_m
+    posts = (round(w / post) + 1) * (round(h / post) + 1)
+    if dem is not None or tcfg.source != "procedural" or posts <= MAX_POSTS:
+        return config.replace(terrain=dataclasses.replace(tcfg, lod=False)), None
+    k = max(2, math.ceil(math.sqrt(posts / AUTO_OUTER_POSTS)))
+    focus = min(tcfg.focus_size_m, w, h, AUTO_FOCUS_POSTS_PER_SIDE * post)
+    lod = dataclasses.replace(tcfg, lod=True, focus_post_m=post, post_m=post * k,
+                              focus_size_m=focus)
+    note = (f"terrain: a {w:g} x {h:g} m grid at {post:g} m posts would hold {posts:,} posts "
+            f"(limit {MAX_POSTS:,}), so the terrain has two levels (terrain.lod = \"auto\"): "
+            f"{post:g} m posts in the central {focus:g} m square (move it with --focus-xy), "
+            f"{post * k:g} m outside; --no-lod insists on one grid")
+    return config.replace(terrain=lod), note
+
+
 def lod_inputs(config: SceneConfig, seed: int, dem: DEM | None = None
                ) -> tuple[LodWorld, GeoFrame]:
     """The level-of-detail world of ``config`` (the terrain stage alone)."""
+    config, _ = resolve_lod(config, dem)
     if not config.terrain.lod:
         raise ConfigError("a focus tile needs terrain.lod = true")
     t = terrain_stage(config, seed, dem, [], [], {})

@@ -70,10 +70,12 @@ class TerrainConfig:
     """Refuse a DEM build whose estimated memory exceeds this (in GB)."""
     texture_max_px: int = 4096
     """Largest side of the draped orthoimage texture (in pixels)."""
-    lod: bool = False
+    lod: bool | str = "auto"
     """Two-level terrain (:mod:`marsscene.terrain.lod`): ``focus_post_m`` posts over the focus
     square, ``post_m`` posts over the whole footprint outside it (with a DEM: the DEM's posts,
-    snapped to a whole multiple of ``focus_post_m``)."""
+    snapped to a whole multiple of ``focus_post_m``). ``"auto"`` (default): one grid unless a
+    procedural terrain's full-resolution grid would exceed the post budget, then two levels
+    (the build says so; see :func:`marsscene.pipeline.terrain.resolve_lod`)."""
     focus_xy_m: tuple[float, float] | None = None
     """Centre of the full-resolution focus square (in m, scene frame); default the origin."""
     focus_size_m: float = 1000.0
@@ -116,8 +118,8 @@ class TerrainConfig:
         self._check_lod_keys()
 
     def _check_lod_keys(self) -> None:
-        if not isinstance(self.lod, bool):
-            raise ConfigError(f"terrain.lod must be true or false; got {self.lod!r}")
+        if not isinstance(self.lod, bool) and self.lod != "auto":
+            raise ConfigError(f'terrain.lod must be true, false or "auto"; got {self.lod!r}')
         if self.focus_xy_m is not None and len(self.focus_xy_m) != 2:
             raise ConfigError(f"terrain.focus_xy_m must be [x, y]; got {self.focus_xy_m!r}")
         check_range("terrain.focus_size_m", self.focus_size_m, 0.0, 20_000.0, lo_open=True)

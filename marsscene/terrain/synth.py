@@ -37,7 +37,10 @@ def _check_posts(rows: int, cols: int) -> None:
         est_gb = rows * cols * 4 * 6 / 1e9
         raise MemoryBudgetError(
             f"a {rows} x {cols} grid ({rows * cols:,} posts) needs about {est_gb:.1f} GB; "
-            f"the limit is {MAX_POSTS:,} posts: crop the DEM or raise post_m"
+            f"the limit is {MAX_POSTS:,} posts: raise post_m (--post-m), crop the DEM, or "
+            "build a level-of-detail terrain (terrain.lod = true, --lod, with --focus-size-m and "
+            '--focus-xy; terrain.lod = "auto" does it for procedural terrain; --preset '
+            "main-crater is such a scene)"
         )
 
 

@@ -50,8 +50,11 @@ def test_full_size_presets_fit_the_memory_plan(name: str) -> None:
         return float(n[1] - n[0]) * area_m2 * r.ejecta_boost
 
     area = t.size_m[0] * t.size_m[1]
-    assert t.lod == (PAPER_SIZES_KM[name] >= 3.0)
-    if t.lod:
+    from marsscene.pipeline.terrain import resolve_lod
+
+    assert (t.lod is True) == (PAPER_SIZES_KM[name] >= 3.0)
+    assert resolve_lod(cfg)[0].terrain.lod == (PAPER_SIZES_KM[name] >= 3.0)  # auto: one grid
+    if t.lod is True:
         assert (t.focus_post_m, t.focus_size_m, t.post_m) == (0.25, 1000.0, 1.0)
         assert (t.focus_size_m / t.focus_post_m + 1) ** 2 <= 0.15 * MAX_POSTS
         assert expected_rocks(r.d_min_m, t.focus_size_m**2) <= r.max_rocks
