@@ -182,8 +182,10 @@ def check_memory(source_posts: int, output_posts: int, max_bytes: float, what: s
         raise MemoryBudgetError(
             f"{what}: {source_posts:,} source posts -> {output_posts:,} output posts needs "
             f"about {need / 1e9:.1f} GB, over the {max_bytes / 1e9:.1f} GB budget "
-            "(terrain.max_memory_gb): crop smaller (--crop-lonlat/--size-m, --crop-px) or "
-            "use a coarser --post-m"
+            "(terrain.max_memory_gb): crop smaller (--crop-lonlat/--size-m, --crop-px), use a "
+            "coarser --post-m, or keep the crop with a level-of-detail terrain (--lod: the DEM "
+            "at its own posts outside a --focus-size-m square detailed to 0.25 m, read "
+            "averaged strip by strip)"
         )
 
 
