@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from marsscene.errors import RuntimeSimError
 from marsscene.sensors.camera_scene import scene_albedo_field, scene_lighting
+from marsscene.sensors.camera_shadow import shade_mesh_geoms
 from marsscene.sensors.camera_world import ALBEDO_SCALE, CameraWorld
 from marsscene.sensors.exposure import Exposure
 from marsscene.sensors.offscreen import OffscreenView
@@ -37,8 +38,16 @@ __all__ = ["MastCamera", "scene_lighting"]
 
 #: Fixed-exposure mode: linear 1.0 is a surface of albedo ALBEDO_SCALE under this irradiance.
 FIXED_REFERENCE_W_M2 = 600.0
+#: Longest exposure of the auto mode, as a gain in the fixed mode's units (e.g. 1 ms at gain 1
+#: up to 100 ms, a 10 Hz frame's whole period): twilight far below the horizon stays dark.
+MAX_EXPOSURE_GAIN = 100.0
 _SHADOW_CLIP_M = 20.0
 _SHADOW_MAP_PX = 1024  # 3.9 cm texels over +-20 m; 2048 costs ~10-15 % more on llvmpipe
+#: Below this sun elevation the shadow map has _SHADOW_MAP_LOW_SUN_PX texels a side: a texel
+#: stretches 1 / sin(elevation) along the ground, so rock and rover shadows get saw-tooth
+#: edges (a 3.9 cm texel is 1.1 m long at 2 deg)
+_LOW_SUN_DEG = 10.0
+_SHADOW_MAP_LOW_SUN_PX = 2048
 _SHADOW_SNAP_M = 4.0
 _SKY_ZFAR_FRACTION = 0.45
 
@@ -69,6 +78,8 @@ class MastCamera:
             rng=stage_rng(seed, "texture"),
             field=scene_albedo_field(sim.scene_dir, sim.heightfield),
             near_m=cam.near_window_m, far_stride=cam.far_post_stride,
+            terrain_shadows=bool(cam.shadows),
+            sun_radius_rad=math.radians(lt.sun_angular_diameter_deg / 2.0),
         )
         rows, cols = sim.heightfield.shape
         self.windowed = self.world.nr < rows or self.world.nc < cols
@@ -85,15 +96,19 @@ class MastCamera:
         self.rock_geoms = np.flatnonzero(
             (m.geom_bodyid == 0) & (m.geom_type == mujoco.mjtGeom.mjGEOM_MESH)
             & (m.geom_contype != 0))
+        if self.world.sun_shadow is not None:  # MJCF rocks standing in terrain shadows
+            shade_mesh_geoms(m, self.rock_geoms, self.world.sun_shadow)
         self._show_window_rocks()
         self._flags = {mujoco.mjtRndFlag.mjRND_SHADOW: bool(cam.shadows),
                        mujoco.mjtRndFlag.mjRND_REFLECTION: False,
                        mujoco.mjtRndFlag.mjRND_FOG: True,
                        mujoco.mjtRndFlag.mjRND_SKYBOX: True}
-        self.exposure = Exposure(cam.exposure, target_mean=cam.target_mean,
-                                 fixed_gain=cam.exposure_gain)
-        self.exposure_stereo = Exposure(cam.exposure, target_mean=cam.target_mean,
-                                       fixed_gain=cam.exposure_gain)
+        # the render's linear values in the fixed mode's units (the render itself is scaled to
+        # use the 8 bits of the GL buffer in either mode: no banding in dark fixed exposures)
+        scale = 1.0 / (FIXED_REFERENCE_W_M2 * self.render_scale)
+        self.exposure, self.exposure_stereo = (
+            Exposure(cam.exposure, target_mean=cam.target_mean, fixed_gain=cam.exposure_gain,
+                     input_scale=scale, max_gain=MAX_EXPOSURE_GAIN) for _ in range(2))
         try:
             self.view = OffscreenView(self.model, width=self.width, height=self.height)
         except Exception as err:
@@ -121,10 +136,11 @@ class MastCamera:
                           specular=0.0, shininess=0.0, reflectance=0.0)
         self.world.add_to_spec(spec, tuple(sim.pose()[0][:2]), _forward_xy(sim))
         e_dn, e_dif = lt.direct_normal_w_m2, lt.diffuse_horizontal_w_m2
-        if cam.exposure == "fixed":
-            k = 1.0 / FIXED_REFERENCE_W_M2
-        else:  # brightest case: albedo ALBEDO_SCALE facing the sun, plus the sky
-            k = 0.95 / max(e_dn + e_dif, 1e-6)
+        # render units: the brightest case (albedo ALBEDO_SCALE facing the sun, plus the sky;
+        # or the skybox's horizon, 1.2 E_diffuse / pi) just below 1 in either exposure mode;
+        # Exposure.input_scale converts for fixed gains
+        k = 0.95 / max(e_dn + e_dif, 1.2 * e_dif / ALBEDO_SCALE, 1e-6)
+        self.render_scale = k
         sun_rgb, sky_rgb = np.asarray(lt.sun_color_rgb), np.asarray(lt.sky_color_rgb)
         for light in spec.lights:
             light.active = light.name == "sun"
@@ -156,7 +172,8 @@ class MastCamera:
         vis.map.znear = 0.05 / extent
         vis.map.zfar = 4.0
         vis.map.shadowclip = _SHADOW_CLIP_M / extent
-        vis.quality.shadowsize = _SHADOW_MAP_PX
+        vis.quality.shadowsize = (_SHADOW_MAP_PX if lt.sun_elevation_deg >= _LOW_SUN_DEG
+                                  else _SHADOW_MAP_LOW_SUN_PX)
         vis.quality.offsamples = 0
         vis.global_.offwidth = max(int(cam.width_px), 640)
         vis.global_.offheight = max(int(cam.height_px), 480)
@@ -177,13 +194,15 @@ class MastCamera:
     def _upload(self, far: bool = True, near: bool = True) -> None:
         mesh = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MESH, n)  # noqa: E731
         tex = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_TEXTURE, n)  # noqa: E731
-        for name in ("cam_terrain", "cam_rocks", "cam_pebbles"):
+        layers = self.world.layers
+        for name in (*("cam_terrain" + x for x in layers), *(lod.name for lod in self.world.lods)):
             self.view.upload_mesh(mesh(name))
-        if far:
-            self.view.upload_texture(tex("cam_ground_far"))
-        if near:
-            self.view.upload_mesh(mesh("cam_terrain_near"))
-            self.view.upload_texture(tex("cam_ground_near"))
+        for layer in layers:
+            if far:
+                self.view.upload_texture(tex("cam_ground_far" + layer))
+            if near:
+                self.view.upload_mesh(mesh("cam_terrain_near" + layer))
+                self.view.upload_texture(tex("cam_ground_near" + layer))
 
     # ---- rendering -----------------------------------------------------------------------------
     def _sync(self, sim: Any) -> None:
@@ -195,6 +214,7 @@ class MastCamera:
             self._show_window_rocks()
         self.data.qpos[: sim.data.qpos.size] = sim.data.qpos
         mujoco.mj_kinematics(self.model, self.data)
+        mujoco.mj_camlight(self.model, self.data)  # this frame's camera pose (cam_xpos)
         # shadow map: a box of +-_SHADOW_CLIP_M around the ground ahead of the camera, its
         # centre snapped to a world lattice: the shadow texels stay fixed to the ground between
         # snaps, so shadow edges do not shimmer from frame to frame (features stay put)
@@ -245,7 +265,7 @@ class MastCamera:
             raise RuntimeSimError("the camera was configured without stereo")
         left = self.exposure_stereo.apply(self._linear(self.stereo_ids[0]), self.noise_rng)
         # both views share the left view's gain, as a synchronised stereo head does
-        g = self.exposure_stereo.gain
+        g = self.exposure_stereo.render_gain
         right_exp = Exposure("fixed", fixed_gain=g if g is not None else 1.0)
         right = right_exp.apply(self._linear(self.stereo_ids[1]), self.noise_rng)
         return left, right

@@ -15,6 +15,8 @@ into two world-anchored textures, each over its own mesh:
 
 Both meshes are world-anchored: texture coordinates follow the posts, so the pattern stays
 fixed to the ground as the meshes move. Textures hold ``albedo / ALBEDO_SCALE`` in 8 bits.
+With terrain shadows, :meth:`GroundWindow.sunlit` multiplies a texture by the sun's
+visibility for the ground's sun layer (:mod:`marsscene.sensors.camera_shadow`).
 """
 
 from __future__ import annotations
@@ -24,14 +26,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene.sensors.camera_shadow import texel_visibility
 from marsscene.terrain.albedo_field import AlbedoField
 from marsscene.terrain.heightfield import Heightfield
+from marsscene.terrain.horizon import SunShadow
 
 __all__ = ["FAR_BLOCK", "NEAR_DROP_M", "GroundWindow", "bake_ground"]
 
 FAR_BLOCK = 8
 NEAR_DROP_M = 0.25
 _CHUNK_ROWS = 512
+#: Texels per side of one terrain-shadow value (near 4 x 3.9 mm, far 2 x 3.1 cm): edges
+#: sharper than the meshes' posts at a fraction of the per-texel cost.
+NEAR_SHADOW_BLOCK, FAR_SHADOW_BLOCK = 4, 2
 
 
 def _interp_matrix(n_out: int, n_in: int, pos: NDArray[Any]) -> NDArray[np.float32]:
@@ -81,6 +88,21 @@ def bake_ground(tile_u8: NDArray[np.uint8], tile_texel_m: float, field: AlbedoFi
     return out
 
 
+def shade_texture(texture: NDArray[np.uint8], factor: NDArray[np.float32], block: int
+                  ) -> NDArray[np.uint8]:
+    """``texture`` (rows, cols, 3) times ``factor`` (one value per ``block`` x ``block``)."""
+    rows, cols, _ = texture.shape
+    out = np.zeros_like(texture)
+    for a in range(0, rows, _CHUNK_ROWS):
+        b = min(a + _CHUNK_ROWS, rows)
+        f = np.repeat(factor[a // block : (b + block - 1) // block], block, axis=0)
+        f = np.repeat(f[a % block : a % block + b - a], block, axis=1)[:, :cols]
+        val = texture[a:b].astype(np.float32) * f[..., None]
+        np.clip(np.rint(val), 0, 255, out=val)
+        out[a:b] = val.astype(np.uint8)
+    return out
+
+
 def _block_mean(tile_u8: NDArray[np.uint8], block: int) -> NDArray[np.uint8]:
     n = tile_u8.shape[0]
     if n % block:
@@ -93,8 +115,10 @@ class GroundWindow:
     """Near and far terrain meshes and their baked textures (see the module doc)."""
 
     def __init__(self, hf: Heightfield, *, window_m: float, near_m: float, far_stride: int,
-                 tile_u8: NDArray[np.uint8], tile_m: float, field: AlbedoField) -> None:
+                 tile_u8: NDArray[np.uint8], tile_m: float, field: AlbedoField,
+                 sun_shadow: SunShadow | None = None) -> None:
         self.hf = hf
+        self.sun_shadow = sun_shadow  # the terrain's shadows (the sun layer); None: none
         rows, cols = hf.shape
         cell = hf.cell_size_m
         n = int(window_m / cell) // 2 * 2 + 1
@@ -200,6 +224,21 @@ class GroundWindow:
         return bake_ground(self.tile, self.tile_texel_m, self.field, x0_m=float(x0),
                            y0_m=float(y0), size_px=self.near_tex_px(),
                            texel_m=self.hf.cell_size_m / self.q_near)
+
+    def sunlit(self, texture: NDArray[np.uint8], *, near: bool) -> NDArray[np.uint8]:
+        """The sun layer's texture: ``texture`` (:meth:`far_texture` or :meth:`near_texture`)
+        times the sun's visibility (unchanged without terrain shadows)."""
+        if self.sun_shadow is None:
+            return texture
+        origin = self.near_origin if near else self.origin
+        r0, c0 = origin if origin is not None else (0, 0)
+        x0, y0 = self.hf.xy_of(r0, c0)
+        texel = self.hf.cell_size_m / self.q_near if near else (
+            self.hf.cell_size_m * self.s / self.q_far)
+        block = NEAR_SHADOW_BLOCK if near else FAR_SHADOW_BLOCK
+        vis = texel_visibility(self.sun_shadow, x0_m=float(x0), y0_m=float(y0),
+                               size_px=texture.shape[:2], texel_m=texel, block=block)
+        return shade_texture(texture, vis, block)
 
     # ---- motion -----------------------------------------------------------------------------
     def place(self, xy_m: tuple[float, float], forward_xy: tuple[float, float],

@@ -7,7 +7,9 @@ in linear units by :mod:`marsscene.sensors.camera`). A frame is made like a real
    ``target_mean`` (0.45 by default; mid-grey for an 8-bit image) while at most
    ``max_saturated`` of the pixels clip; the gain follows the target with first-order
    smoothing between frames (``smoothing`` = weight of the new target in log gain), as a
-   camera's AE loop does, so consecutive frames differ little in brightness;
+   camera's AE loop does, so consecutive frames differ little in brightness. The renderer's
+   values times ``input_scale`` are in the fixed mode's reference units; there the gain is at
+   most ``max_gain`` (the longest exposure), so a scene too dark for it stays dark;
 2. optional sensor noise: ``e = g L full_well_e``; ``e + sqrt(e) N(0,1) + read_noise_e N(0,1)``
    (shot noise as its Gaussian limit), from a seeded generator;
 3. the IEC 61966-2-1 sRGB transfer function and 8-bit rounding.
@@ -56,6 +58,11 @@ class Exposure:
         Weight of a new frame's gain in the (log) gain filter; 1 = no smoothing.
     full_well_e, read_noise_e : float
         Noise model (used only when ``rng`` is passed to :meth:`apply`).
+    input_scale : float
+        Reference units per unit of the renderer's linear output (the fixed gain applies to
+        reference units; :attr:`gain` of the auto mode stays in the renderer's units).
+    max_gain : float
+        Largest gain in reference units (auto mode).
     """
 
     def __init__(
@@ -68,6 +75,8 @@ class Exposure:
         smoothing: float = 0.5,
         full_well_e: float = 10000.0,
         read_noise_e: float = 10.0,
+        input_scale: float = 1.0,
+        max_gain: float = math.inf,
     ) -> None:
         self.mode = mode
         self.target_mean = float(target_mean)
@@ -76,7 +85,16 @@ class Exposure:
         self.smoothing = float(smoothing)
         self.full_well_e = float(full_well_e)
         self.read_noise_e = float(read_noise_e)
+        self.input_scale = float(input_scale)
+        self.max_gain = float(max_gain)
         self.gain: float | None = None
+
+    @property
+    def render_gain(self) -> float | None:
+        """The last frame's gain on the renderer's linear values (None before a frame)."""
+        if self.gain is None:
+            return None
+        return self.gain * self.input_scale if self.mode == "fixed" else self.gain
 
     def _auto_gain(self, lin: NDArray[np.floating]) -> float:
         sample = lin[::4, ::4].reshape(-1, lin.shape[-1]) if lin.ndim == 3 else lin[::4, ::4]
@@ -90,7 +108,7 @@ class Exposure:
                 lo_g = mid
             else:
                 hi_g = mid
-        return min(math.sqrt(lo_g * hi_g), hi)
+        return min(math.sqrt(lo_g * hi_g), hi, self.max_gain * self.input_scale)
 
     def apply(
         self, linear: NDArray[np.floating], rng: np.random.Generator | None = None
@@ -107,7 +125,7 @@ class Exposure:
                 a = self.smoothing
                 g = math.exp((1 - a) * math.log(self.gain) + a * math.log(target))
         self.gain = g
-        x = lin * g
+        x = lin * (g * self.input_scale if self.mode == "fixed" else g)
         if rng is not None:
             e = np.clip(x, 0.0, 1.0) * self.full_well_e
             e = e + np.sqrt(e) * rng.standard_normal(e.shape)
