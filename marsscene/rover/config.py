@@ -18,6 +18,16 @@ __all__ = ["CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig", "RunConf
 _PHYSICS_HZ = 500.0  # scene.xml timestep 0.002 s
 
 
+def _read_doc(path: str | Path, what: str) -> Any:
+    """A ``.json`` or ``.toml`` file's contents (one-line :class:`ConfigError` if unreadable)."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+        return json.loads(text) if p.suffix == ".json" else tomllib.loads(text)
+    except (OSError, ValueError) as err:
+        raise ConfigError(f"cannot read {what} {p}: {err}") from None
+
+
 def _check_rate(key: str, rate_hz: float) -> None:
     check_range(key, rate_hz, 0.0, _PHYSICS_HZ, lo_open=True)
     ratio = _PHYSICS_HZ / rate_hz
@@ -116,12 +126,7 @@ class NoiseConfig:
     @classmethod
     def from_file(cls, path: str | Path) -> NoiseConfig:
         """Read a ``.toml`` (optionally with a ``[noise]`` table) or ``.json`` noise config."""
-        p = Path(path)
-        try:
-            text = p.read_text(encoding="utf-8")
-            doc: Any = json.loads(text) if p.suffix == ".json" else tomllib.loads(text)
-        except (OSError, ValueError) as err:
-            raise ConfigError(f"cannot read noise config {p}: {err}") from None
+        doc = _read_doc(path, "noise config")
         if isinstance(doc, dict) and "noise" in doc:
             doc = doc["noise"]
         return dataclass_from_mapping(cls, doc, "noise")
@@ -224,11 +229,7 @@ class RunConfig:
         16
         """
         p = Path(path)
-        try:
-            text = p.read_text(encoding="utf-8")
-            doc: Any = json.loads(text) if p.suffix == ".json" else tomllib.loads(text)
-        except (OSError, ValueError) as err:
-            raise ConfigError(f"cannot read run config {p}: {err}") from None
+        doc = _read_doc(p, "run config")
         if not isinstance(doc, dict):
             raise ConfigError(f"{p}: a run config is a table of tables")
         unknown = sorted(set(doc) - {"run", "lidar", "camera", "noise"})
