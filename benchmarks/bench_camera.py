@@ -19,6 +19,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -69,22 +70,31 @@ def _drive(shadows: bool, size: tuple[int, int]) -> dict[str, float]:
             "rgbd_ms": 1e3 * float(np.median(times["rgbd"]))}
 
 
-def _quality() -> dict[str, float]:
+def rgbd_vo_of_run(run: Path) -> tuple[Any, list[Any]]:
+    """The OpenCV RGB-D VO of a run folder's camera frames (tests/runtime/vision.py) and the
+    RGB frames."""
     import numpy as np
     from PIL import Image
 
     from marsscene.runtime import RoverConfig, read_tum
     from tests.runtime.vision import camera_poses, rgbd_vo
 
-    intr = json.loads((_RUN / "camera/intrinsics.json").read_text())
-    rows = [r.split(",") for r in (_RUN / "camera/stamps.csv").read_text().splitlines()[1:]]
+    intr = json.loads((run / "camera/intrinsics.json").read_text())
+    rows = [r.split(",") for r in (run / "camera/stamps.csv").read_text().splitlines()[1:]]
     t = np.array([float(r[0]) for r in rows])
-    rgb = [np.asarray(Image.open(_RUN / "camera" / r[1])) for r in rows]
-    depth = [np.asarray(Image.open(_RUN / "camera" / r[2])).astype(np.float32) / 1000
+    rgb = [np.asarray(Image.open(run / "camera" / r[1])) for r in rows]
+    depth = [np.asarray(Image.open(run / "camera" / r[2])).astype(np.float32) / 1000
              for r in rows]
-    gt = read_tum(_RUN / "gt.tum")
+    gt = read_tum(run / "gt.tum")
     idx = np.searchsorted(gt.timestamps_s, t - 1e-9)
     vo = rgbd_vo(rgb, depth, intr, camera_poses(gt.xyz_m[idx], gt.quat_xyzw[idx], RoverConfig()))
+    return vo, rgb
+
+
+def _quality() -> dict[str, float]:
+    import numpy as np
+
+    vo, rgb = rgbd_vo_of_run(_RUN)
     mean = np.array([im.mean() / 255 for im in rgb])
     sat = np.array([(im.max(axis=-1) >= 255).mean() for im in rgb])
     return {"frames": len(rgb), "path_m": vo.path_m,

@@ -18,7 +18,6 @@ shortens the drive; ``MARSSCENE_BENCH_ELEVATIONS=2,-3`` picks elevations;
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import tempfile
@@ -91,20 +90,9 @@ def _drive() -> dict[str, float]:
 
 def _quality() -> dict[str, float]:
     import numpy as np
-    from PIL import Image
+    from bench_camera import rgbd_vo_of_run
 
-    from marsscene.runtime import RoverConfig, read_tum
-    from tests.runtime.vision import camera_poses, rgbd_vo
-
-    intr = json.loads((_RUN / "camera/intrinsics.json").read_text())
-    rows = [r.split(",") for r in (_RUN / "camera/stamps.csv").read_text().splitlines()[1:]]
-    t = np.array([float(r[0]) for r in rows])
-    rgb = [np.asarray(Image.open(_RUN / "camera" / r[1])) for r in rows]
-    depth = [np.asarray(Image.open(_RUN / "camera" / r[2])).astype(np.float32) / 1000
-             for r in rows]
-    gt = read_tum(_RUN / "gt.tum")
-    idx = np.searchsorted(gt.timestamps_s, t - 1e-9)
-    vo = rgbd_vo(rgb, depth, intr, camera_poses(gt.xyz_m[idx], gt.quat_xyzw[idx], RoverConfig()))
+    vo, rgb = rgbd_vo_of_run(_RUN)
     mean = np.array([im.mean() / 255 for im in rgb])
     sat = np.array([(im.max(axis=-1) >= 255).mean() for im in rgb])
     return {"corners_median": float(np.median(vo.corners_per_frame)),

@@ -62,7 +62,6 @@ class Lidar:
         ).reshape(-1, 3)
         self.ring = np.tile(spec.rings(), spec.horizontal_samples).astype(np.uint16)
         self.t_s = spec.firing_time_s().T.reshape(-1)
-        self.column = np.repeat(np.arange(spec.horizontal_samples), spec.channels)
         n = len(self.dirs_sensor)
         self._geomid = np.zeros(n, dtype=np.int32)
         self._dist = np.zeros(n, dtype=np.float64)

@@ -71,7 +71,6 @@ class TerrainCaster:
         self._small_scene: Any = None
         self._centre = np.array([np.inf, np.inf])
         self._small_centre = np.array([np.inf, np.inf])
-        self.rebuilds = 0
 
     def _window(self, centre_xy: NDArray[np.float64]) -> None:
         hf, h = self.hf, self.half_m
@@ -88,7 +87,6 @@ class TerrainCaster:
         near = _inside(self._big, centre_xy, h)
         rv, rf = rock_mesh(self._big[near], detailed=True)
         self._scene = _embree_scene([(verts, faces), (rv, rf), self.static])
-        self.rebuilds += 1
         log.debug("lidar window %d x %d posts, %d rocks at (%.1f, %.1f)", r1 - r0, c1 - c0,
                   int(near.sum()), *centre_xy)
 

@@ -64,10 +64,13 @@ def test_display_layers_rescale_lights_and_neutralise_exposure(scene_dir, name, 
         neutral = UsdGeom.Camera(disp.GetPrimAtPath(f"/World/Cameras/{cam}"))
         assert physical.ComputeLinearExposureScale() == pytest.approx(math.pi / e, rel=1e-6)
         assert neutral.ComputeLinearExposureScale() == pytest.approx(1.0)
-    # a horizontal grey card's irradiance from the sun, in the display units: pi E_dir / E
+    # a horizontal card's irradiance from the display sun is pi times the direct share of the
+    # global horizontal irradiance (and the sky brings the rest: a grey card renders at albedo)
     el = math.radians(lt.sun_elevation_deg)
     direct = _intensity(disp, "/World/Lights/Sun") / sun_factor * math.sin(el)
-    assert direct < math.pi  # direct + diffuse = pi: albedo 0.18 renders at 0.18
+    share = lt.direct_normal_w_m2 * math.sin(el) / lt.global_horizontal_w_m2
+    assert 0.0 < share < 1.0
+    assert direct == pytest.approx(math.pi * share, rel=1e-4)
 
 
 def test_display_layers_are_deterministic(scene_dir, tmp_path):
