@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from pathlib import Path
@@ -251,17 +250,38 @@ def _prepare(scene_dir: Path, run: Any, route_path: Path | None, waypoints_path:
 
 def _drive(sim: Any, route: Any, seconds: float | None, out_dir: Path, seed: int,
            lookahead: float) -> tuple[Any, float]:
-    """Drive with a progress bar; the result and the wall time (s)."""
+    """Drive with a progress line; the result and the wall time (s). Ctrl-C or SIGTERM stop the
+    drive with the run folder finished up to there (exit code 130)."""
+    import signal
+
+    from marsscene.cli._progress import DriveMeter
     from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import DriveInterrupted
     from marsscene.sim.driver import drive as run_drive
     from marsscene.sim.pursuit import PursuitConfig
 
-    limit = seconds if seconds is not None else 2.0 * route.length_m / 0.1 + 60.0
+    def terminate(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
     t0 = time.perf_counter()
-    with click.progressbar(length=math.ceil(limit), label="driving (sim s)",
-                           file=sys.stderr) as bar:
+    meter = DriveMeter()
+    try:  # only the main thread may set handlers
+        previous: Any = signal.signal(signal.SIGTERM, terminate)
+    except ValueError:
+        previous = None
+    try:
         res = run_drive(sim, route=route, seconds=seconds, out_dir=out_dir,
                         rng=stage_rng(seed, "sensors"),
-                        pursuit=PursuitConfig(lookahead_m=lookahead),
-                        progress=lambda t, lim: bar.update(1))
+                        pursuit=PursuitConfig(lookahead_m=lookahead), progress=meter)
+    except DriveInterrupted as stop:
+        meter.close()
+        s = stop.result.summary
+        click.echo(f"marsscene: interrupted after {s['path_length_m']:.1f} m and "
+                   f"{s['sim_time_s']:.1f} sim s; {out_dir} holds the drive up to there "
+                   f"(`marsscene bag {out_dir}` and `marsscene export` read it)", err=True)
+        sys.exit(130)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+    meter.close()
     return res, time.perf_counter() - t0

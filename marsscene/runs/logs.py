@@ -21,13 +21,14 @@ from __future__ import annotations
 
 import io
 import json
+import os
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CsvLog", "ply_bytes", "png_bytes", "write_json"]
+__all__ = ["CsvLog", "TumLog", "ply_bytes", "png_bytes", "write_file", "write_json"]
 
 
 #: One LiDAR point as the run folder's PLY files and the bag's PointCloud2 hold it.
@@ -54,8 +55,44 @@ class CsvLog:
             f"{t_s:.6f}," + ",".join(v if isinstance(v, str) else _num(v) for v in values) + "\n"
         )
 
+    def flush(self) -> None:
+        self._fh.flush()
+
     def close(self) -> None:
         self._fh.close()
+
+
+class TumLog:
+    """Append poses to a TUM file as they happen (the bytes of
+    :func:`marsscene.runs.tum.write_tum`), so a long drive holds no trajectory in memory and
+    an interrupted one leaves the poses up to the interruption."""
+
+    def __init__(self, path: Path, header: str) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._fh = open(path, "w", encoding="utf-8", newline="\n")
+        self._fh.write("".join(f"# {h}\n" for h in header.splitlines()))
+
+    def row(self, t_s: float, xyz_m: Any, quat_wxyz: Any) -> None:
+        q = np.asarray(quat_wxyz, dtype=np.float64)
+        q = q / (np.linalg.norm(q) or 1.0)
+        x, y, z = (float(v) for v in xyz_m)
+        line = f"{t_s:.6f} {x:.6f} {y:.6f} {z:.6f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f} {q[0]:.9f}"
+        self._fh.write(line.replace("-0.000000000 ", "0.000000000 ") + "\n")
+
+    def flush(self) -> None:
+        self._fh.flush()
+
+    def close(self) -> None:
+        self._fh.close()
+
+
+def write_file(path: Path, data: bytes) -> None:
+    """Write ``path`` whole or not at all (a temporary sibling renamed over it), so a killed
+    drive never leaves a truncated image or scan behind."""
+    tmp = path.with_name(f".{path.name}.part")
+    tmp.write_bytes(data)
+    os.replace(tmp, path)
 
 
 def ply_bytes(
@@ -110,7 +147,7 @@ class ImageWriter:
 
     @staticmethod
     def _write(path: Path, image: NDArray[Any]) -> None:
-        path.write_bytes(png_bytes(image))
+        write_file(path, png_bytes(image))
 
     def submit(self, path: Path, image: NDArray[Any]) -> None:
         while len(self._pending) >= self._max:

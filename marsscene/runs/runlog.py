@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,24 +19,35 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.errors import RuntimeSimError
+from marsscene.errors import MarsSceneWarning, RuntimeSimError
 from marsscene.rover.config import RoverConfig
 from marsscene.runs.tum import Trajectory, read_tum
 
-__all__ = ["CameraStream", "RunLog", "read_image", "read_ply"]
+__all__ = ["CameraStream", "IncompleteRunWarning", "RunLog", "read_image", "read_numeric_csv",
+           "read_ply"]
 
 _REQUIRED = ("run.json", "gt.tum", "odom.tum", "cmd.csv", "wheels.csv", "imu.csv")
 
 
-def _read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
-    lines = path.read_text(encoding="utf-8").splitlines()
+class IncompleteRunWarning(MarsSceneWarning):
+    """A run folder whose drive was interrupted or killed: readers use its complete prefix."""
+
+
+def _read_csv(path: Path, complete_lines: bool = False) -> tuple[list[str], list[list[str]]]:
+    text = path.read_text(encoding="utf-8")
+    if complete_lines and not text.endswith("\n"):  # the writer was killed mid-line
+        text = text[: text.rfind("\n") + 1]
+    lines = text.splitlines()
     if not lines:
         raise RuntimeSimError(f"{path}: empty log (no header)")
     return lines[0].split(","), [ln.split(",") for ln in lines[1:] if ln.strip()]
 
 
-def _numeric_csv(path: Path, columns: int) -> NDArray[np.float64]:
-    head, rows = _read_csv(path)
+def read_numeric_csv(path: Path, columns: int, *, complete_lines: bool = False
+                     ) -> NDArray[np.float64]:
+    """A numeric log of ``columns`` columns after its header line, as an (N, columns) array;
+    ``complete_lines=True`` ignores a last line without its newline."""
+    head, rows = _read_csv(path, complete_lines)
     if len(head) != columns or any(len(r) != columns for r in rows):
         raise RuntimeSimError(f"{path}: expected {columns} columns per row ({','.join(head)})")
     try:
@@ -66,10 +78,21 @@ class CameraStream:
         return np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
 
 
-def _camera_stream(name: str, folder: Path, fallback: dict[str, Any] | None) -> CameraStream:
-    head, rows = _read_csv(folder / "stamps.csv")
+def _written_prefix(rows: list[list[str]], folder: Path, columns: int) -> list[list[str]]:
+    """Rows of an interrupted drive up to the first whose files were not written yet."""
+    for i, r in enumerate(rows):
+        if len(r) < columns or not all((folder / f).is_file() for f in r[1:columns] if f):
+            return rows[:i]
+    return rows
+
+
+def _camera_stream(name: str, folder: Path, fallback: dict[str, Any] | None,
+                   incomplete: bool = False) -> CameraStream:
+    head, rows = _read_csv(folder / "stamps.csv", incomplete)
     if head[:2] != ["t", "rgb"]:
         raise RuntimeSimError(f"{folder / 'stamps.csv'}: expected columns t,rgb[,depth]")
+    if incomplete:
+        rows = _written_prefix(rows, folder, len(head))
     stamps = np.array([float(r[0]) for r in rows], dtype=np.float64)
     rgb = tuple(folder / r[1] for r in rows)
     depth = tuple(folder / r[2] for r in rows if len(r) > 2 and r[2])
@@ -143,13 +166,26 @@ class RunLog:
         rover = {k: v for k, v in self.meta.get("rover", {}).items()
                  if k in RoverConfig.__dataclass_fields__}
         self.rover = RoverConfig(**rover)
-        self.gt: Trajectory = read_tum(self.path / "gt.tum")
-        self.odom: Trajectory = read_tum(self.path / "odom.tum")
-        self.cmd = _numeric_csv(self.path / "cmd.csv", 3)
-        self.wheels = _numeric_csv(self.path / "wheels.csv", 11)
-        self.imu = _numeric_csv(self.path / "imu.csv", 7)
+        #: "complete", "interrupted" (Ctrl-C: finished up to there) or "running" (killed)
+        self.status: str = str((self.meta.get("summary") or {}).get("status", "complete"))
+        cut = self.incomplete = self.status != "complete"
+        gt = read_tum(self.path / "gt.tum", complete_lines=cut)
+        odom = read_tum(self.path / "odom.tum", complete_lines=cut)
+        n = min(len(gt), len(odom))
+        self.gt: Trajectory = gt.head(n)
+        self.odom: Trajectory = odom.head(n)
+        self.cmd = read_numeric_csv(self.path / "cmd.csv", 3, complete_lines=cut)
+        self.wheels = read_numeric_csv(self.path / "wheels.csv", 11, complete_lines=cut)
+        self.imu = read_numeric_csv(self.path / "imu.csv", 7, complete_lines=cut)
         true = self.path / "imu_true.csv"
-        self.imu_true = _numeric_csv(true, 7) if true.is_file() else None
+        self.imu_true = (read_numeric_csv(true, 7, complete_lines=cut) if true.is_file()
+                         else None)
+        if cut:
+            how = ("was interrupted" if self.status == "interrupted"
+                   else "stopped without finishing (killed?)")
+            warnings.warn(f"{self.path}: the drive {how}; using the "
+                          f"{float(self.gt.timestamps_s[-1]):.1f} sim s it logged",
+                          IncompleteRunWarning, stacklevel=2)
 
     @property
     def lidar(self) -> tuple[NDArray[np.float64], tuple[Path, ...]] | None:
@@ -157,7 +193,9 @@ class RunLog:
         stamps = self.path / "lidar" / "stamps.csv"
         if not stamps.is_file():
             return None
-        _, rows = _read_csv(stamps)
+        _, rows = _read_csv(stamps, self.incomplete)
+        if self.incomplete:
+            rows = _written_prefix(rows, stamps.parent, 2)
         files = tuple(self.path / "lidar" / r[1] for r in rows)
         missing = [p for p in files if not p.is_file()]
         if missing:
@@ -170,9 +208,9 @@ class RunLog:
         root = self.path / "camera"
         if not (root / "stamps.csv").is_file():
             return []
-        main = _camera_stream("navcam", root, None)
+        main = _camera_stream("navcam", root, None, self.incomplete)
         extra = [
-            _camera_stream(p.name, p, main.intrinsics)
+            _camera_stream(p.name, p, main.intrinsics, self.incomplete)
             for p in sorted(root.iterdir())
             if p.is_dir() and (p / "stamps.csv").is_file()
         ]
@@ -181,5 +219,3 @@ class RunLog:
             if base is not None and "baseline_m" not in cam.intrinsics:
                 cam.intrinsics.setdefault("stereo_baseline_m", base)
         return [main, *extra]
-
-

@@ -73,17 +73,29 @@ class Trajectory:
         q = np.asarray(quat_wxyz, dtype=np.float64).reshape(-1, 4)
         return cls(timestamps_s, xyz_m, q[:, [1, 2, 3, 0]])
 
+    def head(self, n: int) -> Trajectory:
+        """The first ``n`` poses."""
+        return self if len(self) == n else Trajectory(
+            self.timestamps_s[:n], self.xyz_m[:n], self.quat_xyzw[:n])
+
     def path_length_m(self) -> float:
         return float(np.linalg.norm(np.diff(self.xyz_m, axis=0), axis=1).sum())
 
 
-def read_tum(path: str | os.PathLike[str]) -> Trajectory:
-    """Read a TUM file; malformed lines raise :class:`RuntimeSimError` naming the line."""
+def read_tum(path: str | os.PathLike[str], *, complete_lines: bool = False) -> Trajectory:
+    """Read a TUM file; malformed lines raise :class:`RuntimeSimError` naming the line.
+
+    ``complete_lines=True`` ignores a last line without its newline (a file whose writer was
+    killed mid-line).
+    """
     p = Path(path)
     try:
-        lines = p.read_text(encoding="utf-8").splitlines()
+        text_all = p.read_text(encoding="utf-8")
     except OSError as err:
         raise RuntimeSimError(f"cannot read TUM file {p}: {err.strerror or err}") from None
+    if complete_lines and not text_all.endswith("\n"):
+        text_all = text_all[: text_all.rfind("\n") + 1]
+    lines = text_all.splitlines()
     rows = []
     for lineno, line in enumerate(lines, start=1):
         text = line.strip()

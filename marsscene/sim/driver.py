@@ -3,6 +3,11 @@
 Every sensor is sampled on one simulation clock. The loop advances the physics in ticks of the
 greatest common divisor of all sensor periods; the controller (pure pursuit on the ground-truth
 pose, the MarsLab protocol) runs at ``run.control_hz``.
+
+With a run folder, every log streams to disk as it is sampled (:mod:`marsscene.sim.run_writer`):
+memory stays flat however long the drive, and an interrupted drive (Ctrl-C, or SIGTERM turned
+into one by the command line) ends in :class:`DriveInterrupted` after writing a complete run
+folder up to that moment (``summary.status = "interrupted"``).
 """
 
 from __future__ import annotations
@@ -10,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -17,16 +23,39 @@ import numpy as np
 
 from marsscene._validate import plain
 from marsscene.errors import RuntimeSimError
-from marsscene.runs.tum import Trajectory
+from marsscene.runs.runlog import read_numeric_csv
+from marsscene.runs.tum import Trajectory, read_tum
 from marsscene.sensors.camera_world import read_rock_catalog
 from marsscene.sensors.imu import imu_measure
 from marsscene.sensors.lidar import Lidar
 from marsscene.sensors.odometry import WheelOdometry, measure_wheels
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
 from marsscene.sim.route import Route, cross_track_m
-from marsscene.sim.run_writer import RunWriter
+from marsscene.sim.run_writer import GT_HEADER, ODOM_HEADER, RunWriter, rewrite_trimmed
 
-__all__ = ["DriveResult", "drive"]
+__all__ = ["DriveInterrupted", "DriveProgress", "DriveResult", "drive"]
+
+
+@dataclass(frozen=True)
+class DriveProgress:
+    """Where a drive stands, passed to ``drive(progress=...)`` once per simulated second.
+
+    ``route_done_m`` is the progress along the route (the follower's nearest route point), and
+    ``route_length_m`` the route's length; both are None without a route.
+    """
+
+    sim_time_s: float
+    limit_s: float
+    distance_m: float
+    route_done_m: float | None = None
+    route_length_m: float | None = None
+
+    @property
+    def fraction(self) -> float:
+        """Share of the drive done (route progress, else sim time over the limit), 0..1."""
+        if self.route_length_m:
+            return min(1.0, max(0.0, (self.route_done_m or 0.0) / self.route_length_m))
+        return min(1.0, self.sim_time_s / self.limit_s) if self.limit_s > 0 else 1.0
 
 
 class DriveResult:
@@ -45,6 +74,15 @@ class DriveResult:
         self.lidar_scans, self.images = lidar, images
         self.imu: np.ndarray = np.zeros((0, 7))
         self.stereo_images: list[tuple[np.ndarray, np.ndarray]] = []
+
+
+class DriveInterrupted(KeyboardInterrupt):
+    """A drive stopped by Ctrl-C (or SIGTERM via the command line); the run folder was
+    finished up to that moment. ``result`` is the :class:`DriveResult` of the prefix."""
+
+    def __init__(self, result: DriveResult):
+        super().__init__(f"drive interrupted at {result.summary['sim_time_s']:.2f} sim s")
+        self.result = result
 
 
 def _period(sim: Any, rate_hz: float) -> int:
@@ -82,12 +120,16 @@ class _Loop:
                                rocks=read_rock_catalog(Path(sim.scene_dir)))
         self.stereo = self.renderer is not None and self.renderer.stereo_ids is not None
         self.writer = RunWriter(writer_out, sim, lidar=self.lidar is not None,
-                                camera=self.renderer is not None, stereo=self.stereo)
+                                camera=self.renderer is not None, stereo=self.stereo,
+                                pursuit=self.follower.config if self.follower else None)
         pos0, _ = sim.pose()
         self.odo = WheelOdometry(sim.rover, pos0[0], pos0[1], pos0[2], sim.yaw_rad())
+        self.streamed = writer_out is not None  # else the rows are kept here
         self.gt_rows: list[np.ndarray] = []
         self.od_rows: list[np.ndarray] = []
         self.cmd_rows: list[tuple[float, float, float]] = []
+        self.distance_m, self._last_xy = 0.0, (float(pos0[0]), float(pos0[1]))
+        self.n_control = 0
         self.imu_rows: list[np.ndarray] = []
         self.scans: list[dict[str, Any]] = []
         self.images: list[tuple[np.ndarray, np.ndarray | None]] = []
@@ -100,20 +142,25 @@ class _Loop:
         """Log ground truth and odometry, command the rover; True once the route is done."""
         sim = self.sim
         pos, quat = sim.pose()
-        self.gt_rows.append(np.concatenate([[t], pos, quat]))
         rates, steer = measure_wheels(sim.wheel_rates(), sim.steer_angles(), sim.run.noise,
                                       rng=self.rng)
         if k > 0:
             self.odo.update(rates, steer, self.periods["control"] * sim.dt_physics_s)
         opos, oquat = self.odo.pose()
-        self.od_rows.append(np.concatenate([[t], opos, oquat]))
         if self.follower is not None:
             v, w = self.follower.command(pos[0], pos[1], sim.yaw_rad())
         else:
             v, w = self.command(t) if callable(self.command) else self.command
         sim.apply(v, w)
-        self.cmd_rows.append((t, v, w))
-        self.writer.control(t, v, w, rates, steer)
+        self.distance_m += math.hypot(pos[0] - self._last_xy[0], pos[1] - self._last_xy[1])
+        self._last_xy = (float(pos[0]), float(pos[1]))
+        if self.streamed:
+            self.writer.control(t, v, w, rates, steer, (pos, quat), (opos, oquat))
+        else:
+            self.gt_rows.append(np.concatenate([[t], pos, quat]))
+            self.od_rows.append(np.concatenate([[t], opos, oquat]))
+            self.cmd_rows.append((t, v, w))
+        self.n_control += 1
         return self.follower is not None and self.follower.done
 
     def imu(self, t: float) -> None:
@@ -160,12 +207,19 @@ class _Loop:
             self.images.append((rgb, depth))
         self.n_cam += 1
 
-    def run(self, limit_s: float, progress: Callable[[float, float], None] | None) -> None:
+    def report(self, t: float, limit_s: float) -> DriveProgress:
+        f = self.follower
+        return DriveProgress(t, limit_s, self.distance_m,
+                             float(f.s[f.index]) if f is not None else None,
+                             float(f.s[-1]) if f is not None else None)
+
+    def run(self, limit_s: float, progress: Callable[[DriveProgress], None] | None) -> None:
         """Step the physics in ticks of the sensors' common period until done or the limit."""
         sim, periods = self.sim, self.periods
         tick = math.gcd(*periods.values())
         steps_limit = round(limit_s / sim.dt_physics_s)
         k, next_report = 0, 1.0
+        self.t_s = 0.0
         while k <= steps_limit:
             t = k * sim.dt_physics_s
             if k % periods["control"] == 0 and self.control(k, t):
@@ -176,13 +230,33 @@ class _Loop:
                 self.scan(t)
             if self.renderer is not None and k % periods["camera"] == 0:
                 self.frame(t)
-            if progress is not None and t >= next_report:
-                progress(t, limit_s)
+            if t >= next_report:
+                self.writer.flush()
+                if progress is not None:
+                    progress(self.report(t, limit_s))
                 next_report += 1.0
+            self.t_s = t
             sim.advance(tick)
             k += tick
 
-    def result(self, route: Route | None) -> DriveResult:
+    def trajectories(self) -> tuple[Trajectory, Trajectory, np.ndarray]:
+        """Ground truth, odometry and commands, read back from the run folder when streamed
+        (cut to their common length: an interruption may fall between two rows)."""
+        if not self.streamed:
+            gt_a, od_a = np.array(self.gt_rows), np.array(self.od_rows)
+            gt = Trajectory.from_wxyz(gt_a[:, 0], gt_a[:, 1:4], gt_a[:, 4:8])
+            odom = Trajectory.from_wxyz(od_a[:, 0], od_a[:, 1:4], od_a[:, 4:8])
+            return gt, odom, np.array(self.cmd_rows).reshape(-1, 3)
+        out = self.writer.out
+        assert out is not None
+        gt, odom = read_tum(out / "gt.tum"), read_tum(out / "odom.tum")
+        n = min(len(gt), len(odom))
+        for name, traj, head in (("gt", gt, GT_HEADER), ("odom", odom, ODOM_HEADER)):
+            if len(traj) > n:
+                rewrite_trimmed(out / f"{name}.tum", traj.head(n), head)
+        return gt.head(n), odom.head(n), read_numeric_csv(out / "cmd.csv", 3)
+
+    def result(self, route: Route | None, status: str) -> DriveResult:
         """Close the writers and the renderer; the trajectories and the summary."""
         self.collect_scan()
         if self._lidar_pool is not None:
@@ -192,10 +266,9 @@ class _Loop:
         if self.renderer is not None:
             summary_camera = {"exposure_gain_last": self.renderer.exposure.gain}
             self.renderer.close()
-        gt_a, od_a = np.array(self.gt_rows), np.array(self.od_rows)
-        gt = Trajectory.from_wxyz(gt_a[:, 0], gt_a[:, 1:4], gt_a[:, 4:8])
-        odom = Trajectory.from_wxyz(od_a[:, 0], od_a[:, 1:4], od_a[:, 4:8])
+        gt, odom, cmd = self.trajectories()
         summary: dict[str, Any] = {
+            "status": status,
             "sim_time_s": round(float(gt.timestamps_s[-1]), 6),
             "poses": len(gt),
             "path_length_m": round(gt.path_length_m(), 6),
@@ -208,13 +281,14 @@ class _Loop:
             ct = cross_track_m(route, gt.xyz_m[:, :2])
             summary["cross_track_rms_m"] = round(float(np.sqrt(np.mean(ct**2))), 6)
             summary["cross_track_max_m"] = round(float(ct.max()), 6)
-        self.writer.finish(self.sim, gt, odom, summary,
-                           self.follower.config if self.follower is not None else None)
-        res = DriveResult(gt, odom, np.array(self.cmd_rows), summary, self.scans, self.images)
+        self.writer.finish(summary)
+        res = DriveResult(gt, odom, cmd, summary, self.scans, self.images)
         res.stereo_images = self.stereo_images
         if self.keep and self.imu_rows:
             res.imu = np.array(self.imu_rows)
         return res
+
+
 
 
 def drive(
@@ -227,7 +301,7 @@ def drive(
     rng: np.random.Generator,
     pursuit: PursuitConfig | None = None,
     keep_sensors: bool = False,
-    progress: Callable[[float, float], None] | None = None,
+    progress: Callable[[DriveProgress], None] | None = None,
 ) -> DriveResult:
     """Drive ``sim`` and log every sensor.
 
@@ -247,10 +321,21 @@ def drive(
     keep_sensors : bool
         Keep LiDAR scans, images and IMU samples in memory in the result.
     progress : callable, optional
-        ``progress(t_s, limit_s)`` called once per simulated second.
+        ``progress(DriveProgress)`` called once per simulated second.
+
+    Raises
+    ------
+    DriveInterrupted
+        On Ctrl-C (a :class:`KeyboardInterrupt`), after finishing the run folder up to the
+        interruption; its ``result`` holds the prefix.
     """
     limit_s = _time_limit_s(route, command, seconds)
     out = Path(out_dir) if out_dir is not None else None
     loop = _Loop(sim, route, command, pursuit, rng, keep_sensors, out)
-    loop.run(limit_s, progress)
-    return loop.result(route)
+    try:
+        loop.run(limit_s, progress)
+    except KeyboardInterrupt:
+        if loop.n_control == 0:
+            raise
+        raise DriveInterrupted(loop.result(route, "interrupted")) from None
+    return loop.result(route, "complete")

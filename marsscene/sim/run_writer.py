@@ -1,6 +1,12 @@
-"""The run folder as a drive writes it (layout in :mod:`marsscene.runs.logs`): CSV logs opened
-up front and appended per sample, LiDAR PLYs and camera PNGs per frame, and the trajectories
-and ``run.json`` at the end."""
+"""The run folder as a drive writes it (layout in :mod:`marsscene.runs.logs`).
+
+Everything streams to disk as it happens, so a drive of any length holds no growing logs in
+memory and an interrupted one leaves a usable prefix: ``run.json`` is written first with
+``summary.status = "running"``; the trajectories and CSV logs are appended per sample and
+flushed once per simulated second; LiDAR PLYs and camera PNGs are written whole or not at all;
+``run.json`` is rewritten at the end with the summary and ``status`` ``"complete"`` or
+``"interrupted"``.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
-from marsscene.runs.logs import CsvLog, ImageWriter, ply_bytes, write_json
+from marsscene.runs.logs import CsvLog, ImageWriter, TumLog, ply_bytes, write_file, write_json
 from marsscene.runs.tum import Trajectory, write_tum
 
 __all__ = ["RunWriter"]
@@ -28,13 +34,19 @@ _FRAMES = {
 class RunWriter:
     """Writes one drive's run folder ``out``; every method is a no-op without a folder."""
 
-    def __init__(self, out: Path | None, sim: Any, *, lidar: bool, camera: bool, stereo: bool):
+    def __init__(self, out: Path | None, sim: Any, *, lidar: bool, camera: bool, stereo: bool,
+                 pursuit: Any = None):
         self.out = out
         self.logs: dict[str, CsvLog] = {}
+        self.poses: dict[str, TumLog] = {}
         self.images = ImageWriter()  # camera PNGs are encoded beside the simulation
         if out is None:
             return
         out.mkdir(parents=True, exist_ok=True)
+        self._meta = _meta(sim, pursuit)
+        write_json(out / "run.json", {"summary": {"status": "running"}, **self._meta})
+        self.poses["gt"] = TumLog(out / "gt.tum", GT_HEADER)
+        self.poses["odom"] = TumLog(out / "odom.tum", ODOM_HEADER)
         self.logs["cmd"] = CsvLog(out / "cmd.csv", ["t", "v", "omega"])
         self.logs["wheels"] = CsvLog(out / "wheels.csv", [
             "t", *[f"rate_{j[-2:]}" for j in DRIVE_JOINTS],
@@ -53,8 +65,13 @@ class RunWriter:
                     write_json(out / "camera" / side / "intrinsics.json",
                                sim.camera_intrinsics(side))
 
-    def control(self, t: float, v: float, w: float, rates: Any, steer: Any) -> None:
+    def control(self, t: float, v: float, w: float, rates: Any, steer: Any,
+                gt: tuple[Any, Any], odom: tuple[Any, Any]) -> None:
+        """One control period: ground truth and odometry ``(xyz_m, quat_wxyz)``, command and
+        wheels."""
         if self.logs:
+            self.poses["gt"].row(t, *gt)
+            self.poses["odom"].row(t, *odom)
             self.logs["cmd"].row(t, (v, w))
             self.logs["wheels"].row(t, (*rates, *steer))
 
@@ -67,8 +84,8 @@ class RunWriter:
         if self.out is None:
             return
         name = f"{index:06d}.ply"
-        (self.out / "lidar" / name).write_bytes(
-            ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"]))
+        write_file(self.out / "lidar" / name,
+                   ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"]))
         self.logs["lidar"].row(t, (name, len(scan["range_m"])))
 
     def camera(self, t: float, index: int, rgb: Any, depth: Any) -> None:
@@ -93,33 +110,50 @@ class RunWriter:
             self.images.submit(self.out / "camera" / side / "rgb" / name, img)
             self.logs[side].row(t, ("rgb/" + name,))
 
+    def flush(self) -> None:
+        """Push the logs to the operating system (a killed drive keeps them up to here)."""
+        for log in self.logs.values():
+            log.flush()
+        for pose in self.poses.values():
+            pose.flush()
+
     def close(self) -> None:
         self.images.close()
         for log in self.logs.values():
             log.close()
+        for pose in self.poses.values():
+            pose.close()
 
-    def finish(self, sim: Any, gt: Trajectory, odom: Trajectory, summary: dict[str, Any],
-               pursuit: Any) -> None:
-        """Write the trajectories and ``run.json``."""
-        if self.out is None:
-            return
-        run = sim.run
-        write_tum(self.out / "gt.tum", gt, header="ground truth base_link in map (world) frame")
-        write_tum(self.out / "odom.tum", odom,
-                  header="wheel odometry base_link in odom frame (= map at t=0)")
-        write_json(self.out / "run.json", {
-            "summary": summary,
-            "rover": asdict(sim.rover),
-            "noise": asdict(run.noise),
-            "rates_hz": {
-                "physics": 1.0 / sim.dt_physics_s,
-                "control": run.control_hz,
-                "imu": run.imu_hz,
-                "lidar": run.lidar.spec.rate_hz if run.lidar else None,
-                "camera": run.camera.rate_hz if run.camera else None,
-            },
-            "lidar": run.lidar.spec.to_dict() if run.lidar else None,
-            "camera": asdict(run.camera) if run.camera else None,
-            "pursuit": asdict(pursuit) if pursuit is not None else None,
-            "frames": _FRAMES,
-        })
+    def finish(self, summary: dict[str, Any]) -> None:
+        """Rewrite ``run.json`` with the drive's summary (``summary["status"]`` says how it
+        ended)."""
+        if self.out is not None:
+            write_json(self.out / "run.json", {"summary": summary, **self._meta})
+
+
+GT_HEADER = "ground truth base_link in map (world) frame"
+ODOM_HEADER = "wheel odometry base_link in odom frame (= map at t=0)"
+
+
+def _meta(sim: Any, pursuit: Any) -> dict[str, Any]:
+    run = sim.run
+    return {
+        "rover": asdict(sim.rover),
+        "noise": asdict(run.noise),
+        "rates_hz": {
+            "physics": 1.0 / sim.dt_physics_s,
+            "control": run.control_hz,
+            "imu": run.imu_hz,
+            "lidar": run.lidar.spec.rate_hz if run.lidar else None,
+            "camera": run.camera.rate_hz if run.camera else None,
+        },
+        "lidar": run.lidar.spec.to_dict() if run.lidar else None,
+        "camera": asdict(run.camera) if run.camera else None,
+        "pursuit": asdict(pursuit) if pursuit is not None else None,
+        "frames": _FRAMES,
+    }
+
+
+def rewrite_trimmed(path: Path, traj: Trajectory, header: str) -> None:
+    """Rewrite a streamed TUM file cut to ``traj`` (a drive interrupted between two rows)."""
+    write_tum(path, traj, header=header)
