@@ -1,26 +1,37 @@
-"""ROS 2 bag writing and dataset export for a 60 s drive with 640 x 480 RGB-D and LiDAR at 10 Hz.
+"""ROS 2 bag size (MB per minute of drive) and write time: raw vs compressed images, chunk codecs.
 
-Issue 11 target: writing the bag adds < 20 % to the drive's wall time. The drive runs on a
-100 m x 100 m procedural scene (0.25 m posts, rocks) at 0.5 m/s, 0.05 rad/s, with a
-640 x 480 RGB-D camera and a 16 x 360 LiDAR at 10 Hz; then the run folder is written as an
-MCAP bag, a sqlite3 bag and a TUM RGB-D folder. Set BENCH_BAG_SECONDS for a shorter drive.
+A 60 s drive (BENCH_BAG_SECONDS) with the default 640 x 480 RGB-D camera and the default LiDAR
+(os1-128, 10 Hz; BENCH_BAG_LIDAR=simple for the 16 x 360 model of issue 11) on a 100 m x 100 m
+procedural scene at 0.5 m/s, 0.05 rad/s; or an existing run folder (BENCH_BAG_RUN=path: no
+drive). Then, per topic group (state: clock, TF, odometry, IMU, joints, URDF; camera: RGB, depth,
+camera infos [, depth cloud]; LiDAR: cloud + scan), a bag of that group alone for each image
+mode and chunk compression: MB/min (the state bag is subtracted from the sensor ones), write
+time and the compression ratio against the uncompressed bag; then whole bags (default
+settings, raw images without compression as before issue 23, sqlite3) and the TUM RGB-D
+export. Team target (issue 23): <= 120 MB per minute of drive with the default settings.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 from _measure import measure
 
 SIM_S = float(os.environ.get("BENCH_BAG_SECONDS", "60"))
+LIDAR = os.environ.get("BENCH_BAG_LIDAR", "os1-128")
 _ROOT = Path(tempfile.gettempdir()) / "marsscene_bench_bag"
-_SCENE, _RUN = _ROOT / "scene", _ROOT / "run"
+_SCENE = _ROOT / "scene"
+_RUN = Path(os.environ["BENCH_BAG_RUN"]) if "BENCH_BAG_RUN" in os.environ else _ROOT / "run"
+GROUPS = {"state": [], "camera": ["camera"], "lidar": ["lidar"]}
+CODECS = ("none", "lz4", "zstd_fast", "zstd")
 
 
 def _build() -> None:
@@ -42,7 +53,7 @@ def _drive() -> dict[str, float]:
 
     shutil.rmtree(_RUN, ignore_errors=True)
     run = RunConfig(camera=CameraConfig(width_px=640, height_px=480),
-                    lidar=LidarConfig(model="simple"))
+                    lidar=LidarConfig(model=LIDAR))
     sim = RoverSim(_SCENE, run=run, start_xy_m=(-20.0, -10.0))
     t0 = time.perf_counter()
     drive(sim, command=(0.5, 0.05), seconds=SIM_S, out_dir=_RUN, rng=stage_rng(0, "sensors"))
@@ -53,21 +64,15 @@ def _size_mb(path: Path) -> float:
     return sum(p.stat().st_size for p in path.rglob("*") if p.is_file()) / 1e6
 
 
-def _bag(storage: str) -> dict[str, float]:
+def _bag(name: str, **kw: Any) -> dict[str, float]:
     from marsscene.runs.export.bag import write_bag
 
     t0 = time.perf_counter()
-    res = write_bag(_RUN, _ROOT / f"bag_{storage}", storage=storage, overwrite=True)
-    return {"wall_s": time.perf_counter() - t0, "mb": res.size_bytes / 1e6,
-            "messages": sum(res.counts.values())}
-
-
-def _bag_mcap() -> dict[str, float]:
-    return _bag("mcap")
-
-
-def _bag_sqlite() -> dict[str, float]:
-    return _bag("sqlite3")
+    res = write_bag(_RUN, _ROOT / name, overwrite=True, **kw)
+    wall = time.perf_counter() - t0
+    mb = res.size_bytes / 1e6
+    shutil.rmtree(res.path)
+    return {"wall_s": wall, "mb": mb, "messages": sum(res.counts.values())}
 
 
 def _tum() -> dict[str, float]:
@@ -78,17 +83,58 @@ def _tum() -> dict[str, float]:
     return {"wall_s": time.perf_counter() - t0, "mb": _size_mb(out)}
 
 
+def _minutes() -> float:
+    from marsscene.runs.runlog import RunLog
+
+    t = RunLog(_RUN).gt.timestamps_s
+    return float(t[-1] - t[0]) / 60.0
+
+
+def _groups(minutes: float) -> None:
+    images = (("compressed jpeg", {"images": "compressed", "image_codec": "jpeg"}),
+              ("compressed png", {"images": "compressed", "image_codec": "png"}),
+              ("jpeg + cloud", {"images": "compressed", "depth_cloud": True}),
+              ("raw + cloud", {"images": "raw"}))
+    print(f"{'group':>7} {'images':>16} {'compression':>11} {'MB/min':>8} {'ratio':>6} "
+          f"{'write s':>8}")
+    state: dict[str, float] = {}
+    for group, sensors in GROUPS.items():
+        modes = images if group == "camera" else (("-", {}),)
+        for label, kw in modes:
+            base = 0.0
+            for codec in CODECS:
+                _, _, b = measure(functools.partial(_bag, f"g_{group}", sensors=sensors,
+                                                    compression=codec, **kw))
+                mb = b["mb"] - (state[codec] if group != "state" else 0.0)
+                if group == "state":
+                    state[codec] = b["mb"]
+                base = base or mb
+                print(f"{group:>7} {label:>16} {codec:>11} {mb / minutes:8.1f} "
+                      f"{base / mb:6.2f} {b['wall_s']:8.1f}", flush=True)
+
+
 def main() -> None:
     _ROOT.mkdir(parents=True, exist_ok=True)
-    wall, _, _ = measure(_build)
-    print(f"scene (100 m, 0.25 m posts): {wall:.1f} s")
-    _, peak, d = measure(_drive)
-    print(f"drive {SIM_S:.0f} sim s, RGB-D 640x480 + LiDAR 16x360 @ 10 Hz: {d['wall_s']:.1f} s "
-          f"wall, peak {peak:.0f} MB, run folder {_size_mb(_RUN):.0f} MB")
-    for name, fn in (("bag mcap", _bag_mcap), ("bag sqlite3", _bag_sqlite)):
-        _, peak, b = measure(fn)
-        print(f"{name:>12}: {b['wall_s']:.1f} s ({100 * b['wall_s'] / d['wall_s']:.1f} % of the "
-              f"drive), {b['mb']:.0f} MB, {b['messages']:.0f} messages, peak {peak:.0f} MB")
+    drive_s = 0.0
+    if "BENCH_BAG_RUN" not in os.environ:
+        wall, _, _ = measure(_build)
+        print(f"scene (100 m, 0.25 m posts): {wall:.1f} s")
+        _, peak, d = measure(_drive)
+        drive_s = d["wall_s"]
+        print(f"drive {SIM_S:.0f} sim s, RGB-D 640x480 + LiDAR {LIDAR} @ 10 Hz: "
+              f"{drive_s:.1f} s wall, peak {peak:.0f} MB, run folder {_size_mb(_RUN):.0f} MB")
+    minutes = _minutes()
+    print(f"run {_RUN}: {60 * minutes:.1f} s of drive, folder {_size_mb(_RUN):.0f} MB")
+    _groups(minutes)
+    whole = (("default (jpeg, zstd)", "mcap", {}),
+             ("raw + cloud, none", "mcap", {"images": "raw", "compression": "none"}),
+             ("default, sqlite3", "sqlite3", {}))
+    for name, storage, kw in whole:
+        _, peak, b = measure(functools.partial(_bag, "bag_whole", storage=storage, **kw))
+        share = f" ({100 * b['wall_s'] / drive_s:.1f} % of the drive)" if drive_s else ""
+        print(f"bag {name:>20}: {b['wall_s']:.1f} s{share}, {b['mb']:.0f} MB = "
+              f"{b['mb'] / minutes:.0f} MB/min, {b['messages']:.0f} messages, "
+              f"peak {peak:.0f} MB", flush=True)
     _, peak, t = measure(_tum)
     print(f"    tum-rgbd: {t['wall_s']:.1f} s, {t['mb']:.0f} MB, peak {peak:.0f} MB")
 

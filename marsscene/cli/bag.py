@@ -19,6 +19,26 @@ bag_options = compose(
                  show_default=True, help="Depth image: metres (NaN = no return) or mm (0)."),
     click.option("--cloud-stride", type=click.IntRange(min=1), default=4, show_default=True,
                  help="Pixel stride of the organised /rover/depth/points cloud."),
+    click.option("--bag-images", type=click.Choice(["compressed", "raw", "both"]),
+                 default="compressed", show_default=True,
+                 help="Camera images as image_transport .../compressed and "
+                      ".../compressedDepth topics, raw sensor_msgs/Image, or both."),
+    click.option("--bag-image-format", type=click.Choice(["jpeg", "png"]), default="jpeg",
+                 show_default=True,
+                 help="Compressed colour/mono images: JPEG (image_transport's default) or "
+                      "lossless PNG (the run's files, ~4x larger)."),
+    click.option("--jpeg-quality", type=click.IntRange(1, 100), default=95, show_default=True,
+                 help="JPEG quality (image_transport's default 95)."),
+    click.option("--depth-cloud/--no-depth-cloud", default=None,
+                 help="Write /rover/depth/points (default: only with raw images)."),
+    click.option("--bag-compression",
+                 type=click.Choice(["zstd", "zstd_fast", "zstd_small", "lz4", "none"]),
+                 default="zstd", show_default=True,
+                 help="MCAP chunk compression (rosbag2 presets zstd_fast/zstd_small); "
+                      "sqlite3: zstd message compression."),
+    click.option("--ros-distro", type=click.Choice(["jazzy", "humble"]), default="jazzy",
+                 show_default=True,
+                 help="Message definitions and metadata.yaml version (jazzy: 9, humble: 5)."),
 )
 
 
@@ -38,7 +58,13 @@ def write_run_bag(run_dir: Path, out: Path | None, *, overwrite: bool, **options
         res = write_bag(run_dir, out, overwrite=overwrite, progress=progress,
                         storage=options["bag_storage"], sensors=options.get("sensors"),
                         depth_encoding=options["depth_encoding"],
-                        cloud_stride_px=options["cloud_stride"])
+                        cloud_stride_px=options["cloud_stride"],
+                        images=options.get("bag_images", "compressed"),
+                        image_codec=options.get("bag_image_format", "jpeg"),
+                        jpeg_quality=options.get("jpeg_quality", 95),
+                        depth_cloud=options.get("depth_cloud"),
+                        compression=options.get("bag_compression", "zstd"),
+                        ros_distro=options.get("ros_distro", "jazzy"))
     n = sum(res.counts.values())
     click.echo(f"     bag: {res.path} ({len(res.counts)} topics, {n} messages, "
                f"{res.size_bytes / 1e6:.1f} MB)")
@@ -62,6 +88,8 @@ def bag(run_dir: Path, out_dir: Path | None, overwrite: bool, sensors: tuple[str
     Examples:
       marsscene bag runs/r1
       marsscene bag runs/r1 --bag-storage sqlite3 --out runs/r1/bag_sqlite --overwrite
+      marsscene bag runs/r1 --bag-images both --bag-image-format png --bag-compression none
+      marsscene bag runs/r1 --ros-distro humble --out runs/r1/bag_humble
     """
     with user_errors():
         write_run_bag(run_dir, out_dir, overwrite=overwrite, sensors=sensors or None, **options)

@@ -219,7 +219,7 @@ def test_stereo_drive_becomes_stereo_bag_topics(drive_run, tmp_path) -> None:
     from marsscene.runs.export.bag import write_bag
 
     bag_dir = tmp_path / "bag"
-    write_bag(drive_run, bag_dir, sensors=("camera", "stereo"))
+    write_bag(drive_run, bag_dir, sensors=("camera", "stereo"), images="raw")
     intr = json.loads((drive_run / "camera/right/intrinsics.json").read_text())
     rows = (drive_run / "camera/left/stamps.csv").read_text().splitlines()[1:]
     first_left = np.asarray(Image.open(drive_run / "camera/left" / rows[0].split(",")[1]))

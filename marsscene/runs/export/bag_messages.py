@@ -16,18 +16,19 @@ __all__ = ["MessageBuilder"]
 
 
 class MessageBuilder:
-    """ROS 2 Jazzy message builders on one ``rosbags`` typestore, and the queue of messages.
+    """ROS 2 message builders on one ``rosbags`` typestore (Jazzy or Humble), and the queue.
 
     ``topic`` registers a topic (in write order for equal stamps), ``add`` queues a message,
     ``write`` builds, serialises (CDR) and writes them in stamp order.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, distro: str = "jazzy") -> None:
         try:
             from rosbags.typesys import Stores, get_typestore
         except ImportError:  # pragma: no cover - exercised without the extra only
             raise missing_dependency("rosbags", "ros") from None
-        self.store = get_typestore(Stores.ROS2_JAZZY)
+        self.store = get_typestore(Stores.ROS2_HUMBLE if distro == "humble" else Stores.ROS2_JAZZY)
+        self.distro = distro
         self.T: Any = self.store.types
         self.topics: dict[str, tuple[str, bool]] = {}  # topic -> (msgtype, latched)
         self.events: list[tuple[int, int, int, Callable[..., Any], tuple[Any, ...]]] = []
@@ -92,6 +93,13 @@ class MessageBuilder:
             is_bigendian=0, step=len(data) // h, data=data,
         )
 
+    def compressed(self, t_s: float, frame: str, fmt_data: tuple[str, bytes]) -> Any:
+        """``sensor_msgs/CompressedImage`` from a ``(format, data)`` pair (:mod:`.bag_images`)."""
+        return self.T["sensor_msgs/msg/CompressedImage"](
+            header=self.header(t_s, frame), format=fmt_data[0],
+            data=np.frombuffer(fmt_data[1], dtype=np.uint8),
+        )
+
     def camera_info(self, t_s: float, frame: str, cam: CameraStream, tx: float) -> Any:
         k = cam.k
         p = np.hstack([k, [[tx], [0.0], [0.0]]])
@@ -119,8 +127,9 @@ class MessageBuilder:
             row_step=rec.dtype.itemsize * shape[1], data=data, is_dense=False,
         )
 
-    def write(self, path: Path, storage: str, progress: Callable[[int, int], None] | None
-              ) -> dict[str, int]:
+    def write(self, path: Path, storage: str, compression: str,
+              progress: Callable[[int, int], None] | None) -> dict[str, int]:
+        """Write the queued messages in stamp order (:mod:`.bag_writer` sets the storage)."""
         from rosbags.interfaces import (
             Qos,
             QosDurability,
@@ -129,17 +138,17 @@ class MessageBuilder:
             QosReliability,
             QosTime,
         )
-        from rosbags.rosbag2 import StoragePlugin, Writer
+
+        from marsscene.runs.export.bag_writer import finish_metadata, open_writer
 
         forever = QosTime(sec=2147483647, nsec=4294967295)
         latched = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE,
                       QosDurability.TRANSIENT_LOCAL, forever, forever, QosLiveliness.AUTOMATIC,
                       forever, False)
-        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
         counts = dict.fromkeys(self.topics, 0)
         names = list(self.topics)
         self.events.sort(key=lambda e: e[:3])
-        with Writer(path, version=9, storage_plugin=plugin) as w:
+        with open_writer(path, storage, compression, self.distro) as w:
             conns = [
                 w.add_connection(name, mt, typestore=self.store,
                                  offered_qos_profiles=[latched] if lat else [])
@@ -151,4 +160,5 @@ class MessageBuilder:
                 counts[names[order]] += 1
                 if progress is not None and (i % 200 == 0 or i == len(self.events) - 1):
                     progress(i + 1, len(self.events))
+        finish_metadata(path, self.distro)
         return counts

@@ -8,6 +8,7 @@ the message is written. No ``rosbags`` import here (that stays in
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -16,13 +17,32 @@ import numpy as np
 from marsscene.errors import RuntimeSimError
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.runs.export import bag_data as bd
+from marsscene.runs.export import bag_images as bi
 from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
 from marsscene.runs.runlog import CameraStream, RunLog, read_image, read_ply
 
 if TYPE_CHECKING:
     from marsscene.runs.export.bag_messages import MessageBuilder
 
-__all__ = ["add_camera", "add_lidar", "add_state", "add_stereo"]
+__all__ = ["ImageOptions", "add_camera", "add_lidar", "add_state", "add_stereo"]
+
+
+@dataclass(frozen=True)
+class ImageOptions:
+    """How camera images go into the bag.
+
+    ``images``: ``"raw"`` (``sensor_msgs/Image``), ``"compressed"`` (image_transport's
+    ``compressed`` / ``compressedDepth`` sub-topics) or ``"both"``; ``codec``: ``"png"`` or
+    ``"jpeg"`` for colour and mono; ``depth_cloud``: write ``/rover/depth/points`` (stride
+    ``cloud_stride_px``).
+    """
+
+    images: str = "compressed"
+    codec: str = "jpeg"
+    jpeg_quality: int = bi.JPEG_QUALITY
+    depth_encoding: str = "32FC1"
+    depth_cloud: bool = False
+    cloud_stride_px: int = 4
 
 
 def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo: bool) -> None:
@@ -97,26 +117,47 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
             bag.add("/rover/imu", row[0], bag.imu, row[0], row, 0.0, 0.0)
 
 
-def add_camera(bag: MessageBuilder, cam: CameraStream, encoding: str, stride: int) -> None:
+def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> None:
+    """RGB, depth, camera infos and (``opts.depth_cloud``) the organised depth cloud."""
     frame = camera_frame(cam.name)
-    bag.topic("/rover/rgb/image_raw", "sensor_msgs/msg/Image")
+    raw, packed = opts.images in ("raw", "both"), opts.images in ("compressed", "both")
+    rgb_topic = "/rover/rgb/image_raw"
+    if raw:
+        bag.topic(rgb_topic, "sensor_msgs/msg/Image")
+    if packed:
+        bag.topic(rgb_topic + "/compressed", "sensor_msgs/msg/CompressedImage")
     bag.topic("/rover/rgb/camera_info", "sensor_msgs/msg/CameraInfo")
 
     def rgb(i: int, t: float) -> Any:
         return bag.image(t, frame, read_image(cam.rgb_files[i]), "rgb8")
 
+    def rgb_packed(i: int, t: float) -> Any:
+        return bag.compressed(t, frame, bi.compressed_image(cam.rgb_files[i], opts.codec,
+                                                            jpeg_quality=opts.jpeg_quality))
+
     for i, t in enumerate(cam.stamps_s):
-        bag.add("/rover/rgb/image_raw", t, rgb, i, t)
+        if raw:
+            bag.add(rgb_topic, t, rgb, i, t)
+        if packed:
+            bag.add(rgb_topic + "/compressed", t, rgb_packed, i, t)
         bag.add("/rover/rgb/camera_info", t, bag.camera_info, t, frame, cam, 0.0)
     if not cam.depth_files:
         return
-    bag.topic("/rover/depth/image_raw", "sensor_msgs/msg/Image")
+    encoding, depth_topic = opts.depth_encoding, "/rover/depth/image_raw"
+    if raw:
+        bag.topic(depth_topic, "sensor_msgs/msg/Image")
+    if packed:
+        bag.topic(depth_topic + "/compressedDepth", "sensor_msgs/msg/CompressedImage")
     bag.topic("/rover/depth/camera_info", "sensor_msgs/msg/CameraInfo")
-    bag.topic("/rover/depth/points", "sensor_msgs/msg/PointCloud2")
+    if opts.depth_cloud:
+        bag.topic("/rover/depth/points", "sensor_msgs/msg/PointCloud2")
     dtype = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
     cache: dict[int, np.ndarray] = {}
+    uses = int(raw) + int(opts.depth_cloud)
 
     def depth(i: int) -> np.ndarray:  # the image and the cloud share one PNG decode
+        if uses < 2:
+            return read_image(cam.depth_files[i])
         return cache.pop(i) if i in cache else cache.setdefault(i, read_image(cam.depth_files[i]))
 
     def image(i: int, t: float) -> Any:
@@ -124,30 +165,49 @@ def add_camera(bag: MessageBuilder, cam: CameraStream, encoding: str, stride: in
         arr = bd.depth_m(mm) if encoding == "32FC1" else mm.astype("<u2")
         return bag.image(t, frame, arr, encoding)
 
+    def image_packed(i: int, t: float) -> Any:
+        return bag.compressed(t, frame, bi.compressed_depth(cam.depth_files[i], encoding,
+                                                            bag.distro))
+
     def cloud(i: int, t: float) -> Any:
-        pts = bd.depth_points(depth(i), cam.k, stride)
+        pts = bd.depth_points(depth(i), cam.k, opts.cloud_stride_px)
         return bag.cloud(t, frame, np.ascontiguousarray(pts).view(dtype)[..., 0], pts.shape[:2])
 
     for i, t in enumerate(cam.stamps_s):
-        bag.add("/rover/depth/image_raw", t, image, i, t)
+        if raw:
+            bag.add(depth_topic, t, image, i, t)
+        if packed:
+            bag.add(depth_topic + "/compressedDepth", t, image_packed, i, t)
         bag.add("/rover/depth/camera_info", t, bag.camera_info, t, frame, cam, 0.0)
-        bag.add("/rover/depth/points", t, cloud, i, t)
+        if opts.depth_cloud:
+            bag.add("/rover/depth/points", t, cloud, i, t)
 
 
-def add_stereo(bag: MessageBuilder, cam: CameraStream) -> None:
+def add_stereo(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> None:
     frame = camera_frame(cam.name)
     base = cam.intrinsics.get("baseline_m", cam.intrinsics.get("stereo_baseline_m", 0.0))
     tx = -float(cam.k[0, 0]) * float(base) if cam.name == "right" else 0.0  # ROS P[0,3]
     img, info = f"/rover/stereo/{cam.name}/image_raw", f"/rover/stereo/{cam.name}/camera_info"
-    bag.topic(img, "sensor_msgs/msg/Image")
+    raw, packed = opts.images in ("raw", "both"), opts.images in ("compressed", "both")
+    if raw:
+        bag.topic(img, "sensor_msgs/msg/Image")
+    if packed:
+        bag.topic(img + "/compressed", "sensor_msgs/msg/CompressedImage")
     bag.topic(info, "sensor_msgs/msg/CameraInfo")
 
     def build(i: int, t: float) -> Any:
         arr = read_image(cam.rgb_files[i])
         return bag.image(t, frame, arr, "rgb8" if arr.ndim == 3 else "mono8")
 
+    def build_packed(i: int, t: float) -> Any:
+        return bag.compressed(t, frame, bi.compressed_image(cam.rgb_files[i], opts.codec,
+                                                            jpeg_quality=opts.jpeg_quality))
+
     for i, t in enumerate(cam.stamps_s):
-        bag.add(img, t, build, i, t)
+        if raw:
+            bag.add(img, t, build, i, t)
+        if packed:
+            bag.add(img + "/compressed", t, build_packed, i, t)
         bag.add(info, t, bag.camera_info, t, frame, cam, tx)
 
 

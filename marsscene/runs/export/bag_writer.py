@@ -1,0 +1,146 @@
+"""The rosbag2 writer of a bag: storage, compression and ``metadata.yaml`` per ROS 2 distro.
+
+``rosbags.rosbag2.Writer`` writes the storage (MCAP or sqlite3) and ``metadata.yaml``; this
+module chooses how it compresses and which metadata version it is:
+
+* MCAP: **chunk compression** as rosbag2's MCAP storage plugin does it (``mcap::McapWriter``):
+  ``lz4``, ``zstd`` (level 3, zstd's own default; MCAP's ``Default`` is 1, which gains little
+  on LiDAR floats), ``zstd_fast`` (level -5: rosbag2's storage preset of that name) or
+  ``zstd_small`` (level 19: the preset of that name; slow). Chunks are rosbags' 1 MiB.
+  rosbag2 does not record chunk compression in ``metadata.yaml`` (``compression_format`` and
+  ``compression_mode`` stay empty; each MCAP chunk names its codec); version-9 metadata
+  records the choice in ``custom_data`` (``marsscene.*`` keys).
+* sqlite3: rosbag2's **message** compression (``compression_format: zstd``,
+  ``compression_mode: message``); any ``zstd*`` setting selects it, ``lz4`` is refused (rosbag2
+  has no lz4 compressor plugin).
+* ``distro="jazzy"``: metadata version 9 (rosbag2 on Jazzy and later); ``"humble"``: version 5,
+  the newest that Humble's rosbag2 defines (``bag_metadata.hpp``: ``int version = 5``), with
+  exactly its fields (:data:`HUMBLE_FIELDS`) and the QoS profiles as Humble's YAML string.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from io import StringIO
+from pathlib import Path
+from typing import Any
+
+from marsscene.errors import ExportError
+
+__all__ = ["COMPRESSIONS", "DISTROS", "HUMBLE_FIELDS", "METADATA_VERSION", "check_options",
+           "finish_metadata", "humble_metadata", "open_writer"]
+
+#: ``compression`` -> (MCAP chunk codec, level); ``None``: no compression.
+COMPRESSIONS: dict[str, tuple[str, int] | None] = {
+    "none": None, "lz4": ("lz4", 0), "zstd_fast": ("zstd", -5), "zstd": ("zstd", 3),
+    "zstd_small": ("zstd", 19),
+}
+DISTROS = ("jazzy", "humble")
+METADATA_VERSION = {"jazzy": 9, "humble": 5}
+#: Fields of rosbag2 metadata version 5 (Humble ``metadata_io.cpp``: the keys it encodes).
+HUMBLE_FIELDS = {
+    "bag": ("version", "storage_identifier", "duration", "starting_time", "message_count",
+            "topics_with_message_count", "compression_format", "compression_mode",
+            "relative_file_paths", "files"),
+    "topic": ("topic_metadata", "message_count"),
+    "topic_metadata": ("name", "type", "serialization_format", "offered_qos_profiles"),
+    "file": ("path", "starting_time", "duration", "message_count"),
+}
+
+
+def check_options(storage: str, compression: str, distro: str) -> None:
+    """Refuse settings rosbag2 cannot write or read (:class:`~marsscene.errors.ExportError`)."""
+    if compression not in COMPRESSIONS:
+        raise ExportError(f"compression = {compression!r}; expected one of "
+                          f"{', '.join(COMPRESSIONS)}")
+    if distro not in DISTROS:
+        raise ExportError(f"ros_distro = {distro!r}; expected one of {', '.join(DISTROS)}")
+    if storage == "sqlite3" and compression == "lz4":
+        raise ExportError("compression 'lz4' is MCAP chunk compression; sqlite3 bags take "
+                          "zstd (rosbag2 message compression) or none")
+
+
+def _compressor(codec: str, level: int) -> Callable[[bytes], bytes]:
+    if codec == "lz4":
+        import lz4.frame  # a dependency of rosbags
+
+        return lambda data: bytes(lz4.frame.compress(data))
+    if sys.version_info >= (3, 14):
+        from compression import zstd  # pragma: no cover
+    else:
+        from backports import zstd  # a dependency of rosbags
+
+    return lambda data: zstd.compress(data, level=level)
+
+
+def _chunked_mcap(codec: str, level: int) -> Any:
+    """``rosbags``' MCAP storage with its chunk compressor replaced (same records otherwise)."""
+    from rosbags.rosbag2.enums import CompressionMode
+    from rosbags.rosbag2.storage_mcap import McapWriter
+
+    class ChunkCompressedMcap(McapWriter):
+        def __init__(self, path: Path, compression: CompressionMode) -> None:
+            super().__init__(path, CompressionMode.NONE)
+            self.compression = codec  # the Chunk record's compression string
+            self.compressor = _compressor(codec, level)
+
+    return ChunkCompressedMcap
+
+
+def open_writer(path: Path, storage: str, compression: str, distro: str) -> Any:
+    """A ``rosbags.rosbag2.Writer`` (not yet opened) set up for ``storage`` and ``compression``.
+
+    Humble bags are written as version 8 (QoS as Humble's YAML string) and rewritten to
+    version 5 by :func:`finish_metadata`.
+    """
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+
+    check_options(storage, compression, distro)
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    writer = Writer(path, version=9 if distro == "jazzy" else 8, storage_plugin=plugin)
+    codec = COMPRESSIONS[compression]
+    if codec is not None and storage == "sqlite3":
+        writer.set_compression(CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+    elif codec is not None:
+        writer.STORAGE_PLUGINS = {**Writer.STORAGE_PLUGINS,
+                                  StoragePlugin.MCAP: _chunked_mcap(*codec)}
+    if distro == "jazzy" and storage == "mcap":
+        writer.set_custom_data("marsscene.mcap_chunk_compression", codec[0] if codec else "")
+        writer.set_custom_data("marsscene.mcap_chunk_compression_level",
+                               str(codec[1]) if codec else "")
+        writer.set_custom_data("marsscene.bag_compression", compression)
+    return writer
+
+
+def _dump(doc: Any) -> str:
+    from ruamel.yaml import YAML
+
+    yaml = YAML(typ="safe")
+    yaml.default_flow_style = False
+    out = StringIO()
+    yaml.dump(doc, out)
+    return out.getvalue()
+
+
+def humble_metadata(info: dict[str, Any]) -> dict[str, Any]:
+    """Version-5 ``rosbag2_bagfile_information`` from rosbags' version-8 one (fields selected)."""
+    bag = {k: info[k] for k in HUMBLE_FIELDS["bag"]} | {"version": 5}
+    bag["topics_with_message_count"] = [
+        {"topic_metadata": {k: t["topic_metadata"][k] for k in HUMBLE_FIELDS["topic_metadata"]},
+         "message_count": t["message_count"]}
+        for t in info["topics_with_message_count"]
+    ]
+    bag["files"] = [{k: f[k] for k in HUMBLE_FIELDS["file"]} for f in info["files"]]
+    return bag
+
+
+def finish_metadata(path: Path, distro: str) -> None:
+    """Rewrite ``path/metadata.yaml`` as version 5 for Humble (Jazzy's is rosbags' own)."""
+    if distro != "humble":
+        return
+    from ruamel.yaml import YAML
+
+    meta = path / "metadata.yaml"
+    info = YAML(typ="safe").load(meta.read_text())["rosbag2_bagfile_information"]
+    meta.write_text(_dump({"rosbag2_bagfile_information": humble_metadata(info)}))
