@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import queue
 import threading
-from collections.abc import Iterable, Iterator
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TypeVar
 
-__all__ = ["THREADED_MIN_POSTS", "prefetch", "worth_a_thread"]
+__all__ = ["THREADED_MIN_POSTS", "ordered_map", "prefetch", "worth_a_thread"]
 
 #: Terrains with fewer posts are written on one thread: their textures and tiles take tens of
 #: milliseconds, and in a sweep every core already runs a cell of its own, so a helper thread
@@ -29,6 +31,7 @@ __all__ = ["THREADED_MIN_POSTS", "prefetch", "worth_a_thread"]
 THREADED_MIN_POSTS = 1 << 21
 
 T = TypeVar("T")
+R = TypeVar("R")
 
 _DONE = object()
 
@@ -36,6 +39,28 @@ _DONE = object()
 def worth_a_thread(n_posts: int) -> bool:
     """Whether a terrain of ``n_posts`` posts is built and written with helper threads."""
     return n_posts >= THREADED_MIN_POSTS
+
+
+def ordered_map(fn: Callable[[T], R], items: Iterable[T], *, workers: int, window: int,
+                name: str = "marsscene-map") -> Iterator[R]:
+    """``map(fn, items)`` on ``workers`` threads, yielded in order, at most ``window`` results
+    computed ahead (memory stays bounded). For work that releases the GIL (Pillow, zlib, zstd,
+    numpy). An exception is re-raised at its item; leaving the loop early cancels the rest."""
+    if workers <= 1:
+        yield from map(fn, items)
+        return
+    pending: deque[Future[R]] = deque()
+    with ThreadPoolExecutor(workers, thread_name_prefix=name) as pool:
+        try:
+            for item in items:
+                pending.append(pool.submit(fn, item))
+                if len(pending) >= window:
+                    yield pending.popleft().result()
+            while pending:
+                yield pending.popleft().result()
+        finally:
+            for f in pending:
+                f.cancel()
 
 
 def prefetch(items: Iterable[T], *, depth: int = 2, name: str = "marsscene-prefetch"

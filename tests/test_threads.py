@@ -65,3 +65,44 @@ def test_leaving_the_loop_early_stops_and_joins_the_producer() -> None:
             break
     assert not _live("t-early")
     assert len(produced) <= 5 + 1 + 2 + 1  # stopped within a queue's length of the consumer
+
+
+def test_ordered_map_keeps_order_and_bounds_the_window() -> None:
+    """Results come in input order whatever finishes first, and never more than ``window``
+    items are computed ahead of the consumer."""
+    import random
+
+    from marsscene._threads import ordered_map
+
+    started: list[int] = []
+    lock = threading.Lock()
+    rnd = random.Random(3)
+    delays = [rnd.uniform(0.0, 0.004) for _ in range(60)]
+
+    def work(i: int) -> int:
+        with lock:
+            started.append(i)
+        time.sleep(delays[i])
+        return i * i
+
+    out = []
+    for i, value in enumerate(ordered_map(work, range(60), workers=3, window=5)):
+        with lock:
+            assert len(started) <= i + 5
+        out.append(value)
+    assert out == [i * i for i in range(60)]
+
+
+def test_ordered_map_raises_at_the_failing_item() -> None:
+    from marsscene._threads import ordered_map
+
+    def work(i: int) -> int:
+        if i == 7:
+            raise ValueError("seven")
+        return i
+
+    got = []
+    with pytest.raises(ValueError, match="seven"):
+        for v in ordered_map(work, range(20), workers=2, window=4):
+            got.append(v)
+    assert got == list(range(7))

@@ -278,3 +278,24 @@ def test_bad_options_are_one_line_errors(runner, stereo_run, tmp_path):
     assert meta["version"] == 5
     names = {t["topic_metadata"]["name"] for t in meta["topics_with_message_count"]}
     assert {RGB, "/rover/rgb/image_raw", "/rover/depth/points"} <= names
+
+
+def test_shared_load_once_per_item_and_nothing_kept() -> None:
+    """Two messages built from one file on different threads load it once, and the item is
+    dropped after its second use (a long bag holds no growing cache)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from marsscene.runs.export.bag_topics import _Shared
+
+    loads: list[int] = []
+
+    def load(i: int) -> int:
+        loads.append(i)
+        return i * 10
+
+    shared = _Shared(load, 2)
+    with ThreadPoolExecutor(4) as pool:
+        got = list(pool.map(shared, [i for i in range(200) for _ in range(2)]))
+    assert got == [i * 10 for i in range(200) for _ in range(2)]
+    assert sorted(loads) == list(range(200))
+    assert shared.slots == {}

@@ -3,12 +3,14 @@ messages (the only module that touches ``rosbags`` types; :mod:`.bag` writes the
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from marsscene._threads import ordered_map
 from marsscene.errors import missing_dependency
 from marsscene.runs.runlog import CameraStream
 
@@ -127,6 +129,15 @@ class MessageBuilder:
             row_step=rec.dtype.itemsize * shape[1], data=data, is_dense=False,
         )
 
+    #: Threads that build and serialise messages ahead of the writer (image codecs and file
+    #: reads release the GIL; the writer's chunk compression runs beside them).
+    workers = min(4, os.cpu_count() or 1)
+
+    def _encode(self, event: tuple[Any, ...]) -> tuple[int, int, bytes]:
+        ns, order, _, build, args = event
+        msg = build(*args)
+        return ns, order, self.store.serialize_cdr(msg, msg.__msgtype__)
+
     def write(self, path: Path, storage: str, compression: str,
               progress: Callable[[int, int], None] | None) -> dict[str, int]:
         """Write the queued messages in stamp order (:mod:`.bag_writer` sets the storage)."""
@@ -154,9 +165,10 @@ class MessageBuilder:
                                  offered_qos_profiles=[latched] if lat else [])
                 for name, (mt, lat) in self.topics.items()
             ]
-            for i, (ns, order, _, build, args) in enumerate(self.events):
-                msg = build(*args)
-                w.write(conns[order], ns, self.store.serialize_cdr(msg, msg.__msgtype__))
+            for i, (ns, order, data) in enumerate(ordered_map(
+                    self._encode, self.events, workers=self.workers, window=8 * self.workers,
+                    name="marsscene-bag")):
+                w.write(conns[order], ns, data)
                 counts[names[order]] += 1
                 if progress is not None and (i % 200 == 0 or i == len(self.events) - 1):
                     progress(i + 1, len(self.events))

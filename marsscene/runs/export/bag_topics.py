@@ -8,6 +8,7 @@ the message is written. No ``rosbags`` import here (that stays in
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -152,13 +153,8 @@ def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> No
     if opts.depth_cloud:
         bag.topic("/rover/depth/points", "sensor_msgs/msg/PointCloud2")
     dtype = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
-    cache: dict[int, np.ndarray] = {}
-    uses = int(raw) + int(opts.depth_cloud)
-
-    def depth(i: int) -> np.ndarray:  # the image and the cloud share one PNG decode
-        if uses < 2:
-            return read_image(cam.depth_files[i])
-        return cache.pop(i) if i in cache else cache.setdefault(i, read_image(cam.depth_files[i]))
+    # the image and the cloud share one PNG decode
+    depth = _Shared(lambda i: read_image(cam.depth_files[i]), int(raw) + int(opts.depth_cloud))
 
     def image(i: int, t: float) -> Any:
         mm = depth(i)
@@ -221,10 +217,7 @@ def add_lidar(
     bag.topic("/rover/scan", "sensor_msgs/msg/LaserScan")
     scan_t = bag.T["sensor_msgs/msg/LaserScan"]
     period = 1.0 / float(cfg.get("rate_hz", 10.0))
-    cache: dict[int, np.ndarray] = {}
-
-    def load(i: int) -> np.ndarray:  # the cloud and the scan share one file read
-        return cache.pop(i) if i in cache else cache.setdefault(i, read_ply(files[i]))
+    load = _Shared(lambda i: read_ply(files[i]), 2)  # the cloud and the scan share one read
 
     def laser(i: int, t: float) -> Any:
         s = bd.laser_scan(load(i), cfg)
@@ -239,3 +232,32 @@ def add_lidar(
     for i, t in enumerate(stamps):
         bag.add("/rover/lidar/points", t, cloud, i, t)
         bag.add("/rover/scan", t, laser, i, t)
+
+
+class _Shared:
+    """``load(i)`` once for the ``uses`` messages built from item ``i``, then forgotten.
+
+    Messages are built on several threads (:meth:`MessageBuilder.write`), so the first caller
+    of an index loads it under that index's lock and the others wait for it; the item is
+    dropped when its last user took it, so nothing accumulates over a long run.
+    """
+
+    def __init__(self, load: Any, uses: int) -> None:
+        self.load, self.uses = load, uses
+        self.lock = threading.Lock()
+        self.slots: dict[int, list[Any]] = {}  # i -> [lock, value, times taken]
+
+    def __call__(self, i: int) -> Any:
+        if self.uses < 2:
+            return self.load(i)
+        with self.lock:
+            slot = self.slots.setdefault(i, [threading.Lock(), None, 0])
+        with slot[0]:
+            if slot[2] == 0:
+                slot[1] = self.load(i)
+            slot[2] += 1
+            value = slot[1]
+            if slot[2] >= self.uses:
+                with self.lock:
+                    del self.slots[i]
+        return value
