@@ -133,7 +133,7 @@ class MessageBuilder:
     #: reads release the GIL; the writer's chunk compression runs beside them).
     workers = min(4, os.cpu_count() or 1)
 
-    def _encode(self, event: tuple[Any, ...]) -> tuple[int, int, bytes]:
+    def _encode(self, event: tuple[Any, ...]) -> tuple[int, int, bytes | memoryview]:
         ns, order, _, build, args = event
         msg = build(*args)
         return ns, order, self.store.serialize_cdr(msg, msg.__msgtype__)
