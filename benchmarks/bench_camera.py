@@ -8,7 +8,8 @@ RGB-D VO end-point drift as a fraction of the camera path (the OpenCV front end 
 mean 0.3-0.6, saturation < 2 %, >= 1x real time on the 2-core CPU.
 
 ``MARSSCENE_BENCH_SCENE=path`` uses an already built scene (e.g. on a GPU machine without
-rasterio); ``MARSSCENE_BENCH_SECONDS`` shortens the drive.
+rasterio); ``MARSSCENE_BENCH_SECONDS`` shortens the drive; ``MARSSCENE_BENCH_QUALITY=0``
+skips the image-quality pass (it needs OpenCV).
 """
 
 from __future__ import annotations
@@ -132,7 +133,7 @@ def main() -> None:
               f"{r['wall_s']:.1f} s), RGB {r['rgb_ms']:.0f} ms, RGB + depth (one pass) "
               f"{r['rgbd_ms']:.0f} ms per frame, load {os.getloadavg()[0]:.1f}, camera init "
               f"{r['camera_init_s']:.1f} s, peak {peak:.0f} MB")
-        if i == 0:
+        if i == 0 and os.environ.get("MARSSCENE_BENCH_QUALITY", "1") == "1":
             _, _, q = measure(_quality)
             print(f"camera: quality ({q['frames']} frames, {q['path_m']:.2f} m camera path): "
                   f"corners median {q['corners_median']:.0f} (min {q['corners_min']:.0f}), "

@@ -61,6 +61,8 @@ def main(verbose: int, quiet: int) -> None:
 
 def _register() -> None:
     from marsscene.cli.bag import bag
+    from marsscene.cli.benchmark import benchmark
+    from marsscene.cli.benchmark_vpr import vpr, vpr_eval
     from marsscene.cli.build import build
     from marsscene.cli.drive import drive
     from marsscene.cli.eval import eval_cmd
@@ -77,6 +79,9 @@ def _register() -> None:
     main.add_command(bag)
     main.add_command(export_cmd)
     main.add_command(sweep)
+    main.add_command(benchmark)
+    benchmark.add_command(vpr)
+    benchmark.add_command(vpr_eval)
 
 
 _register()

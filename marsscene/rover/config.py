@@ -173,6 +173,9 @@ class CameraConfig:
     """Override the scene's dust optical depth (lighting is recomputed)."""
     sun_elevation_deg: float | None = None
     sun_azimuth_deg: float | None = None
+    trigger_distance_m: float | None = None
+    """Capture a frame every this many metres driven (horizontal path, checked at the control
+    rate) instead of at ``rate_hz``: place-recognition datasets sample space, not time."""
 
     def __post_init__(self) -> None:
         if not (16 <= int(self.width_px) <= 4096 and 16 <= int(self.height_px) <= 4096):
@@ -197,6 +200,8 @@ class CameraConfig:
             check_range("camera.sun_elevation_deg", self.sun_elevation_deg, -10.0, 90.0)
         if self.sun_azimuth_deg is not None:
             check_range("camera.sun_azimuth_deg", self.sun_azimuth_deg, -360.0, 360.0)
+        if self.trigger_distance_m is not None:
+            check_range("camera.trigger_distance_m", self.trigger_distance_m, 0.01, 1e4)
         _check_rate("camera.rate_hz", self.rate_hz)
 
 

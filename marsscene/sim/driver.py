@@ -110,8 +110,11 @@ class _Loop:
         self.follower = PurePursuit(route, pursuit) if route is not None else None
         self.periods = {"control": _period(sim, run.control_hz), "imu": _period(sim, run.imu_hz)}
         self.renderer = None
+        self.trigger_m = run.camera.trigger_distance_m if run.camera is not None else None
+        self.next_frame_m = 0.0
         if run.camera is not None:
-            self.periods["camera"] = _period(sim, run.camera.rate_hz)
+            if self.trigger_m is None:
+                self.periods["camera"] = _period(sim, run.camera.rate_hz)
             self.renderer = sim.make_renderer(rng=rng.spawn(1)[0])
         self.lidar = None
         if run.lidar is not None:  # its own stream: LiDAR noise never moves IMU/wheel noise
@@ -207,6 +210,16 @@ class _Loop:
             self.images.append((rgb, depth))
         self.n_cam += 1
 
+    def camera_due(self, k: int) -> bool:
+        """A frame at this physics step: every camera period, or (``trigger_distance_m``) at
+        the first control step at or past the next multiple of the trigger distance."""
+        if self.trigger_m is None:
+            return k % self.periods["camera"] == 0
+        if k % self.periods["control"] != 0 or self.distance_m < self.next_frame_m:
+            return False
+        self.next_frame_m = (math.floor(self.distance_m / self.trigger_m) + 1) * self.trigger_m
+        return True
+
     def report(self, t: float, limit_s: float) -> DriveProgress:
         f = self.follower
         return DriveProgress(t, limit_s, self.distance_m,
@@ -228,7 +241,7 @@ class _Loop:
                 self.imu(t)
             if self.lidar is not None and k % periods["lidar"] == 0:
                 self.scan(t)
-            if self.renderer is not None and k % periods["camera"] == 0:
+            if self.renderer is not None and self.camera_due(k):
                 self.frame(t)
             if t >= next_report:
                 self.writer.flush()

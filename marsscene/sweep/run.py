@@ -13,6 +13,7 @@ import logging
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +23,7 @@ from marsscene.sweep.grid import Cell, expand_grid
 from marsscene.sweep.spec import SweepSpec
 from marsscene.sweep.table import write_results
 
-__all__ = ["WORKER_ENV", "Progress", "SweepResult", "local_cluster", "run_sweep"]
+__all__ = ["WORKER_ENV", "Progress", "SweepResult", "local_cluster", "map_cells", "run_sweep"]
 
 log = logging.getLogger("marsscene")
 
@@ -149,7 +150,7 @@ def _seed_affinity(cells: list[Cell], addresses: list[str]) -> dict[str, list[st
     return {c.cell_id: [addresses[groups[c.seed] % len(addresses)]] for c in cells}
 
 
-def _run_dask(cells: list[Cell], root: Path, spec: SweepSpec, force: bool,
+def _run_dask(cells: list[Cell], root: Path, task: Callable[[Cell], dict[str, Any]],
               workers: int | None, scheduler: str | None, timeout_s: float,
               report: Callable[[dict[str, Any]], None], counts: dict[str, int]
               ) -> dict[str, dict[str, Any]]:
@@ -162,7 +163,7 @@ def _run_dask(cells: list[Cell], root: Path, spec: SweepSpec, force: bool,
         counts["capacity"] = max(1, sum(client.nthreads().values()))
         prefer = _seed_affinity(cells, sorted(client.nthreads()))
         futures = {
-            client.submit(run_cell, c, str(root), spec.drive, force=force, pure=False,
+            client.submit(task, c, pure=False,
                           key=f"marsscene-cell-{c.cell_id}-{os.urandom(4).hex()}",
                           workers=prefer[c.cell_id], allow_other_workers=True): c
             for c in cells
@@ -219,11 +220,38 @@ def run_sweep(
     SweepResult
         Rows in grid order; a failed cell has ``status == "failed"`` and its ``error``.
     """
+    cells = expand_grid(spec)
+    root = Path(out_dir).resolve()
+    task = partial(run_cell, out_dir=str(root), drive=spec.drive, force=force)
+    ordered = map_cells(cells, task, root, workers=workers, scheduler=scheduler, serial=serial,
+                        progress=progress, connect_timeout_s=connect_timeout_s)
+    files = write_results(ordered, [k for k, _ in spec.axes], root)
+    return SweepResult(ordered, files)
+
+
+def map_cells(
+    cells: list[Cell],
+    task: Callable[[Cell], dict[str, Any]],
+    out_dir: str | os.PathLike[str],
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    serial: bool = False,
+    progress: Callable[[Progress], None] | None = None,
+    connect_timeout_s: float = 10.0,
+) -> list[dict[str, Any]]:
+    """Run ``task(cell)`` for every cell, serially or on Dask, and return the rows in order.
+
+    The engine under :func:`run_sweep`, for protocols whose cells do more than build and
+    drive (``marsscene.benchmark``): ``task`` must be picklable (a module-level function or a
+    ``functools.partial`` of one), write into ``out_dir`` and return a row dict with
+    ``cell_id`` and ``status``. Parameters as for :func:`run_sweep`; a task that raises (or a
+    lost worker) gives a ``failed`` row.
+    """
     if scheduler is not None and (workers is not None or serial):
         raise SweepError("give at most one of workers / serial and scheduler")
     if workers is not None and workers < 1:
         raise SweepError(f"workers = {workers!r}; must be >= 1")
-    cells = expand_grid(spec)
     root = Path(out_dir).resolve()
     root.mkdir(parents=True, exist_ok=True)
     total = len(cells)
@@ -239,11 +267,12 @@ def run_sweep(
     if serial:
         rows = {}
         for c in cells:
-            rows[c.cell_id] = run_cell(c, root, spec.drive, force=force)
+            try:
+                rows[c.cell_id] = task(c)
+            except Exception as err:  # a task that broke its promise not to raise
+                rows[c.cell_id] = _failed_row(c, err)
             report(rows[c.cell_id])
     else:
-        rows = _run_dask(cells, root, spec, force, workers, scheduler, connect_timeout_s, report,
+        rows = _run_dask(cells, root, task, workers, scheduler, connect_timeout_s, report,
                          counts)
-    ordered = [rows[c.cell_id] for c in cells]
-    files = write_results(ordered, [k for k, _ in spec.axes], root)
-    return SweepResult(ordered, files)
+    return [rows[c.cell_id] for c in cells]

@@ -1,0 +1,78 @@
+"""``marsscene benchmark``: benchmark protocols (``slam``; more subcommands join the group
+from their own modules)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+from marsscene.cli._common import user_errors
+
+
+@click.group(short_help="Benchmark protocols: SLAM (ATE/RPE of baselines and your method).")
+def benchmark() -> None:
+    """Benchmark protocols run on generated scenes (see docs/benchmark.md)."""
+
+
+@benchmark.command(short_help="Scenes x tau x seeds: drive, export, run SLAM methods, score.")
+@click.argument("spec_toml", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              required=True, help="Benchmark folder: cells/, results.csv, table.md, report.md.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="LocalCluster worker processes (default: one per CPU core).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Running Dask scheduler (e.g. tcp://10.0.0.5:8786) instead of a LocalCluster; "
+              "its workers must see --out on a shared filesystem.")
+@click.option("--serial", is_flag=True, help="Run the cells one by one in this process (no Dask).")
+@click.option("--resume", is_flag=True,
+              help="Continue the benchmark in --out: finished builds, drives and methods are "
+              "reused.")
+def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | None,
+         serial: bool, resume: bool) -> None:
+    """Run the SLAM benchmark SPEC_TOML into OUT.
+
+    Every cell (scene x tau x seed) is built, driven along its route with the camera (and, in
+    one tau per scene, the LiDAR), exported as TUM RGB-D / EuRoC (and a ROS 2 bag when a method
+    needs one), and every method is scored: ATE after Umeyama SE(3) alignment (Sim(3) for
+    monocular), RPE per distance, tracked fraction. A method that fails is a row with its
+    status, not an error.
+
+    \b
+    Examples:
+      marsscene benchmark slam docs/examples/benchmark_slam_quick.toml --out bench/quick
+      marsscene benchmark slam paper.toml --out /shared/bench --scheduler tcp://head:8786
+      marsscene benchmark slam paper.toml --out bench/paper --resume
+    """
+    from marsscene.benchmark.slam_run import run_slam_benchmark, slam_cells
+    from marsscene.benchmark.slam_spec import load_slam_spec
+
+    if scheduler is not None and (workers is not None or serial):
+        raise click.UsageError("--scheduler excludes --workers and --serial")
+    if serial and workers is not None:
+        raise click.UsageError("--serial excludes --workers")
+
+    def show(p: Any) -> None:
+        row = p.row
+        methods = ", ".join(
+            f"{m['method']} {m['ate_rmse_m']:.3f} m" if m.get("status") == "ok"
+            else f"{m['method']} {m.get('status')}" for m in row.get("methods", ()))
+        mark = "FAILED" if row["status"] == "failed" else "done"
+        click.echo(f"[{p.done}/{p.total}] {mark} {row['cell_id']}: "
+                   f"{row.get('error') if row['status'] == 'failed' else methods}", err=True)
+
+    with user_errors():
+        spec = load_slam_spec(spec_toml)
+        n = len(slam_cells(spec))
+        where = ("serially" if serial else f"on {scheduler}" if scheduler
+                 else f"on a LocalCluster ({workers or 'one worker per core'})")
+        click.echo(f"benchmark slam: {n} cells x {len(spec.methods)} methods {where}", err=True)
+        res = run_slam_benchmark(spec, out_dir, workers=workers, scheduler=scheduler,
+                                 serial=serial, resume=resume, progress=show)
+    click.echo(f"methods: {res.count('ok')} ok, {res.count('lost')} lost, "
+               f"{res.count('failed')} failed, {res.count('missing')} missing")
+    for f in res.files:
+        click.echo(f"wrote: {f}")
+    if any(c["status"] == "failed" for c in res.cells):
+        raise SystemExit(1)
