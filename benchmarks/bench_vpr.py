@@ -7,7 +7,8 @@ scene). Prints per traversal the frames, wall time and frames per second (640 x 
 every 0.1 m, JPEG), the dataset's size, and the patch-normalised baseline's Recall@N.
 
 ``MARSSCENE_BENCH_VPR_SCENE=dir`` reuses a built scene folder (e.g. on a GPU machine without
-the build's dependencies): it is copied to ``OUT/scene``.
+the build's dependencies): it is copied to ``OUT/scene``. ``MARSSCENE_BENCH_VPR_WORKERS=2``
+drives the two traversals at once (per-traversal rates are then not printed).
 """
 
 from __future__ import annotations
@@ -46,14 +47,23 @@ def main(argv: list[str] | None = None) -> None:
     def progress(split: str, p: object) -> None:
         marks.setdefault(split, [time.perf_counter()]).append(time.perf_counter())
 
+    workers = int(os.environ.get("MARSSCENE_BENCH_VPR_WORKERS", "1"))
     t0 = time.perf_counter()
-    doc = generate_vpr(spec, out, progress=progress)
+    doc = generate_vpr(spec, out, progress=progress, workers=workers)
     total = time.perf_counter() - t0
     for split, info in doc["traversals"].items():
-        wall = marks[split][-1] - marks[split][0]
-        print(f"vpr {spec.name}: {split:8s} tau {info['tau']:.2f} sun "
-              f"{info['sun_elevation_deg']:4.1f} deg: {info['frames']} frames in {wall:.1f} s "
-              f"of driving = {info['frames'] / wall:.1f} frames/s")
+        if split in marks:
+            wall = marks[split][-1] - marks[split][0]
+            print(f"vpr {spec.name}: {split:8s} tau {info['tau']:.2f} sun "
+                  f"{info['sun_elevation_deg']:4.1f} deg: {info['frames']} frames in {wall:.1f} "
+                  f"s of driving = {info['frames'] / wall:.1f} frames/s")
+    import resource
+
+    peak = max(resource.getrusage(who).ru_maxrss for who in
+               (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)) / 1024
+    disk = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
+    print(f"vpr {spec.name}: {workers} worker(s), peak RSS of one process {peak:.0f} MB, "
+          f"output folder {disk / 1e6:.0f} MB")
     size = sum(p.stat().st_size for s in ("database", "queries") for p in (out / s).iterdir())
     frames = sum(t["frames"] for t in doc["traversals"].values())
     print(f"vpr {spec.name}: {frames} frames along {doc['route_length_m']:.0f} m, "

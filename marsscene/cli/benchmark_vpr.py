@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -24,8 +25,11 @@ __all__ = ["vpr", "vpr_eval"]
 @click.option("--resume", is_flag=True,
               help="Reuse traversals already finished in --out (same spec).")
 @click.option("--no-eval", is_flag=True, help="Only write the dataset.")
+@click.option("--workers", type=click.IntRange(1, 2), default=None,
+              help="Drive the two traversals in this many processes at once (default: 2 on a "
+              "machine with 2 or more cores; the same bytes either way).")
 def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, resume: bool,
-        no_eval: bool) -> None:
+        no_eval: bool, workers: int | None) -> None:
     """Generate the VPR dataset of PROTOCOL (`dust`, `day-dark` or a spec TOML) into OUT, then
     score the patch-normalised baseline (vpr-eval).
 
@@ -54,7 +58,12 @@ def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, r
                 meters[split] = DriveMeter()
             meters[split](p)
 
-        doc = generate_vpr(spec, out_dir, overwrite=overwrite, resume=resume,
+        if workers is None:
+            workers = 2 if (os.cpu_count() or 1) >= 2 else 1
+        if workers > 1:
+            click.echo("     vpr: driving the database and the queries traversals in two "
+                       "processes", err=True)
+        doc = generate_vpr(spec, out_dir, overwrite=overwrite, resume=resume, workers=workers,
                            progress=progress)
         for m in meters.values():
             m.close()

@@ -133,6 +133,12 @@ def test_generate_and_evaluate_end_to_end(tmp_path: Path) -> None:
     f = db.files[3]
     assert float(by_file[f"database/{f.name}"][3]) == pytest.approx(db.xy_m[3, 0], abs=1e-3)
     assert not list((out / "traversals").rglob("*.png"))  # the run's PNGs became the JPEGs
+    # two worker processes give the same dataset, byte for byte
+    generate_vpr(spec, tmp_path / "ds2", workers=2)
+    for split in ("database", "queries"):
+        one = {p.name: p.read_bytes() for p in (out / split).iterdir()}
+        two = {p.name: p.read_bytes() for p in (tmp_path / "ds2" / split).iterdir()}
+        assert one == two
     # resume reuses both traversals (same bytes, no new drive)
     before = {p.name: p.stat().st_mtime_ns for p in (out / "database").iterdir()}
     generate_vpr(spec, out, resume=True)
