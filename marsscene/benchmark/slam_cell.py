@@ -92,8 +92,10 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     if scene.route.file is not None:
         route_doc["file_sha256"] = hashlib.sha256(Path(scene.route.file).read_bytes()).hexdigest()
     bag = (lidar and spec.needs_bag()) or bool(spec.sensors.get("bag", False))
+    run = spec.run_config(lidar=lidar)
     key = _digest({"scene": scene_hash, "route": route_doc, "seconds": scene.seconds,
                    "sensors": {k: v for k, v in spec.sensors.items() if lidar or k != "lidar"},
+                   "noise": dataclasses.asdict(run.noise),  # the profile's values, defaults too
                    "lidar": lidar, "bag": bag})
     done = None if force else _read_json(final / DRIVE_FILE)
     if done is not None and done.get("key") == key:
@@ -103,7 +105,6 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     from marsscene.seeding import stage_rng
     from marsscene.sim.driver import drive
 
-    run = spec.run_config(lidar=lidar)
     with replacing_dir(final) as tmp:
         t0 = time.perf_counter()
         sim, route = _route(scene, cell_dir / "scene", run)

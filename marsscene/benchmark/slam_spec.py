@@ -6,6 +6,8 @@
     seeds = [7]                     # scene seeds (one cell per scene x tau x seed)
     tau = [0.5, 6.0]                # dust optical depths of the camera runs
     lidar_tau = 0.5                 # the one tau whose cell also logs the LiDAR (default: first)
+    [sensors]
+    noise_profile = "ln200s"        # IMU + wheel noise profile (default ln200s; "none" = exact)
     [sensors.camera]                # a run config's tables (``marsscene drive --run-config``)
     width_px = 320
     [sensors.lidar]                 # omit for no LiDAR
@@ -33,10 +35,13 @@ from marsscene._validate import check_choice, check_range, dataclass_from_mappin
 from marsscene.config import SceneConfig
 from marsscene.errors import ConfigError
 
-__all__ = ["METHOD_KINDS", "MethodSpec", "RouteSpec", "SceneSpec", "SlamSpec", "load_slam_spec",
-           "slam_spec_from_dict"]
+__all__ = ["BENCHMARK_NOISE_PROFILE", "METHOD_KINDS", "MethodSpec", "RouteSpec", "SceneSpec",
+           "SlamSpec", "load_slam_spec", "slam_spec_from_dict"]
 
 #: Built-in adapters (``marsscene.benchmark.slam_methods``) plus the two for "your method".
+#: Noise profile of a benchmark's drives unless ``sensors.noise_profile`` or
+#: ``[sensors.noise] profile`` says otherwise: a Mars-rover class IMU and wheel odometry.
+BENCHMARK_NOISE_PROFILE = "ln200s"
 METHOD_KINDS = ("wheel-odometry", "kiss-icp", "open3d-rgbd", "opencv-mono", "tum-file", "command")
 _FRAMES = ("base", "camera", "lidar")
 _SENSOR_OF = {"wheel-odometry": "none", "kiss-icp": "lidar", "open3d-rgbd": "camera",
@@ -211,10 +216,14 @@ class SlamSpec:
         object.__setattr__(self, "lidar_tau", lidar_tau)
         check_range("benchmark.min_tracked_fraction", self.min_tracked_fraction, 0.0, 1.0)
         check_range("benchmark.rpe_distance_m", self.rpe_distance_m, 0.1, 1e4)
-        unknown = sorted(set(self.sensors) - {"camera", "lidar", "noise", "noise_seed", "bag"})
+        unknown = sorted(set(self.sensors) - {"camera", "lidar", "noise", "noise_seed",
+                                              "noise_profile", "bag"})
         if unknown:
             raise ConfigError(f"unknown sensors key(s) {unknown}; allowed: camera, lidar, noise "
-                              "(tables), noise_seed, bag")
+                              "(tables), noise_seed, noise_profile, bag")
+        if not isinstance(self.sensors.get("noise_profile", ""), str):
+            raise ConfigError(f"sensors.noise_profile = {self.sensors['noise_profile']!r}; "
+                              "must be a profile name (a string)")
         if not isinstance(self.sensors.get("bag", False), bool):
             raise ConfigError(f"sensors.bag = {self.sensors['bag']!r}; must be true or false")
         seed = self.sensors.get("noise_seed", 0)
@@ -233,9 +242,13 @@ class SlamSpec:
 
         kinds: dict[str, Any] = {"camera": CameraConfig, "lidar": LidarConfig,
                                  "noise": NoiseConfig}
+        given = {k: v for k, v in self.sensors.items() if k in kinds and (lidar or k != "lidar")}
+        noise = given.get("noise", {})
+        if isinstance(noise, dict) and "profile" not in noise:  # a realistic IMU by default
+            given["noise"] = {"profile": self.sensors.get("noise_profile",
+                                                          BENCHMARK_NOISE_PROFILE), **noise}
         tables: dict[str, Any] = {
-            k: dataclass_from_mapping(kinds[k], v, f"sensors.{k}")
-            for k, v in self.sensors.items() if k in kinds and (lidar or k != "lidar")}
+            k: dataclass_from_mapping(kinds[k], v, f"sensors.{k}") for k, v in given.items()}
         return RunConfig(**tables)
 
     @property

@@ -11,12 +11,14 @@ import click
 
 from marsscene.cli._common import user_errors
 from marsscene.cli.bag import bag_options, write_run_bag
+from marsscene.rover.config import noise_profiles
 from marsscene.rover.lidar import lidar_models
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
 
 
 _LIDAR_MODELS = tuple(lidar_models())
+_NOISE_PROFILES = tuple(noise_profiles())
 
 
 def _read_waypoints(path: Path) -> Any:
@@ -102,6 +104,10 @@ def _size(text: str) -> tuple[int, int]:
               help="TOML/JSON run config: [run], [lidar] (e.g. model = \"vlp16\"), [camera], "
               "[noise] tables; options given on the command line win.")
 @click.option("--noise-config", type=_PATH, help="TOML/JSON noise config ([noise] table).")
+@click.option("--noise-profile", type=click.Choice(_NOISE_PROFILES), default=None,
+              help="Named IMU + wheel-odometry noise profile from datasheets (docs/runtime.md); "
+              "keys set in --noise-config / --run-config still win. Default: the config's "
+              "profile, else none (noise-free).")
 @click.option(
     "--seed",
     type=click.IntRange(min=0),
@@ -147,6 +153,7 @@ def drive(
     lidar_model: str | None,
     run_config: Path | None,
     noise_config: Path | None,
+    noise_profile: str | None,
     seed: int,
     lookahead: float,
     max_slope: float,
@@ -178,7 +185,7 @@ def drive(
         raise click.ClickException(f"{out_dir / 'bag'} exists; pass --overwrite to replace it")
     with user_errors():
         run = _run_config(run_config, noise_config, lidar, lidar_model, camera or stereo,
-                          camera_size=camera_size,
+                          camera_size=camera_size, noise_profile=noise_profile,
                           rate_hz=camera_hz, stereo=stereo, exposure=exposure,
                           exposure_gain=exposure_gain, sensor_noise=camera_noise,
                           shadows=not no_shadows, tau=tau, sun_elevation_deg=sun_elevation)
@@ -203,7 +210,7 @@ def drive(
 
 def _run_config(run_config: Path | None, noise_config: Path | None, lidar: bool,
                 lidar_model: str | None, camera: bool, *, camera_size: str,
-                **camera_kw: Any) -> Any:
+                noise_profile: str | None = None, **camera_kw: Any) -> Any:
     """The drive's :class:`~marsscene.rover.config.RunConfig`: the run config file (if any),
     then the command-line options over it."""
     import dataclasses
@@ -213,6 +220,8 @@ def _run_config(run_config: Path | None, noise_config: Path | None, lidar: bool,
     run = RunConfig.from_file(run_config) if run_config else RunConfig()
     if noise_config:
         run = dataclasses.replace(run, noise=NoiseConfig.from_file(noise_config))
+    if noise_profile:
+        run = dataclasses.replace(run, noise=run.noise.with_profile(noise_profile))
     if lidar or lidar_model:
         base = run.lidar if run.lidar is not None else LidarConfig()
         lid = dataclasses.replace(base, model=lidar_model) if lidar_model else base

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import copy
+import functools
 import json
 import math
 import tomllib
 from dataclasses import asdict, dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +16,9 @@ from marsscene._validate import check_choice, check_range, dataclass_from_mappin
 from marsscene.errors import ConfigError
 from marsscene.rover.lidar import LidarConfig
 
-__all__ = ["CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig", "RunConfig"]
+__all__ = [
+    "CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig", "RunConfig", "noise_profiles",
+]
 
 _PHYSICS_HZ = 500.0  # scene.xml timestep 0.002 s
 
@@ -91,30 +96,79 @@ class RoverConfig:
         check_choice("rover.wheel_collision", self.wheel_collision, ("cylinder", "sphere"))
 
 
+def noise_profiles() -> dict[str, dict[str, Any]]:
+    """The named noise profiles (``data/noise_profiles.toml``), each with its ``source``."""
+    return copy.deepcopy(_noise_profiles())
+
+
+@functools.cache
+def _noise_profiles() -> dict[str, dict[str, Any]]:
+    text = resources.files("marsscene.rover").joinpath("data/noise_profiles.toml").read_text()
+    return tomllib.loads(text)
+
+
+#: NoiseConfig fields a profile sets (NaN in the dataclass = "take the profile's value").
+_PROFILE_KEYS = (
+    "gyro_noise_density_rad_s_rthz", "gyro_bias_walk_rad_s2_rthz", "gyro_turn_on_bias_rad_s",
+    "accel_noise_density_m_s2_rthz", "accel_bias_walk_m_s3_rthz", "accel_turn_on_bias_m_s2",
+    "wheel_rate_sigma_rad_s", "slip_mean", "slip_sigma", "steer_sigma_rad",
+)
+
+
 @dataclass(frozen=True, kw_only=True)
 class NoiseConfig:
-    """Sensor noise (zero-mean Gaussian unless a bias is given), drawn from a seeded rng.
+    """Sensor noise drawn from a seeded rng, starting from a named profile.
 
-    Wheel odometry measures each wheel rate as ``w * (1 + slip) + n`` with
-    ``slip ~ N(slip_mean, slip_sigma)`` and ``n ~ N(0, wheel_rate_sigma)`` per sample and wheel.
+    ``profile`` names a table of ``data/noise_profiles.toml`` (``none``: all zero, the
+    default; ``ln200s``: Mars-rover class; ``adis16495``: MEMS research-rover class); every
+    profile field left unset (NaN) takes the profile's value, a field given overrides it.
+    ``dataclasses.replace`` keeps resolved values: switch profiles with :meth:`with_profile`.
+
+    IMU, per axis: ``true + bias + n`` with white noise of density ``*_noise_density_*`` plus
+    ``*_sigma_*`` per sample, and a bias = the fixed ``*_bias_*`` + a per-run turn-on bias
+    ``N(0, *_turn_on_bias_*)`` + a random walk of density ``*_bias_walk_*``
+    (:class:`marsscene.sensors.imu.ImuNoise`). Wheel odometry measures each wheel rate as
+    ``w * (1 + slip) + n`` with ``slip ~ N(slip_mean, slip_sigma)`` and
+    ``n ~ N(0, wheel_rate_sigma_rad_s)`` per sample and wheel.
     """
 
-    wheel_rate_sigma_rad_s: float = 0.0
-    slip_mean: float = 0.0
-    slip_sigma: float = 0.0
-    steer_sigma_rad: float = 0.0
+    profile: str = "none"
+    wheel_rate_sigma_rad_s: float = math.nan
+    slip_mean: float = math.nan
+    slip_sigma: float = math.nan
+    steer_sigma_rad: float = math.nan
     accel_sigma_m_s2: float = 0.0
     gyro_sigma_rad_s: float = 0.0
     accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gyro_bias_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    gyro_noise_density_rad_s_rthz: float = math.nan
+    """White rate noise, rad/s/sqrt(Hz) (ARW; EuRoC ``gyroscope_noise_density``)."""
+    gyro_bias_walk_rad_s2_rthz: float = math.nan
+    """Bias random walk, rad/s^2/sqrt(Hz) (EuRoC ``gyroscope_random_walk``)."""
+    gyro_turn_on_bias_rad_s: float = math.nan
+    """1-sigma constant bias drawn once per run (bias repeatability)."""
+    accel_noise_density_m_s2_rthz: float = math.nan
+    accel_bias_walk_m_s3_rthz: float = math.nan
+    accel_turn_on_bias_m_s2: float = math.nan
 
     def __post_init__(self) -> None:
+        profiles = _noise_profiles()
+        if not isinstance(self.profile, str) or self.profile not in profiles:
+            raise ConfigError(f"noise.profile = {self.profile!r} is unknown; known profiles: "
+                              f"{', '.join(profiles)}")
+        base = profiles[self.profile]
+        for key in _PROFILE_KEYS:
+            value = getattr(self, key)
+            if isinstance(value, float) and math.isnan(value):
+                object.__setattr__(self, key, float(base[key]))
         check_range("noise.wheel_rate_sigma_rad_s", self.wheel_rate_sigma_rad_s, 0.0, 10.0)
         check_range("noise.slip_mean", self.slip_mean, -0.5, 0.9)
         check_range("noise.slip_sigma", self.slip_sigma, 0.0, 1.0)
         check_range("noise.steer_sigma_rad", self.steer_sigma_rad, 0.0, 1.0)
         check_range("noise.accel_sigma_m_s2", self.accel_sigma_m_s2, 0.0, 10.0)
         check_range("noise.gyro_sigma_rad_s", self.gyro_sigma_rad_s, 0.0, 10.0)
+        for key in _PROFILE_KEYS[:6]:
+            check_range(f"noise.{key}", getattr(self, key), 0.0, 1.0)
         for key in ("accel_bias_m_s2", "gyro_bias_rad_s"):
             value = tuple(getattr(self, key))
             if len(value) != 3:
@@ -130,6 +184,22 @@ class NoiseConfig:
         if isinstance(doc, dict) and "noise" in doc:
             doc = doc["noise"]
         return dataclass_from_mapping(cls, doc, "noise")
+
+    def with_profile(self, name: str) -> NoiseConfig:
+        """The same config on profile ``name``: fields that differ from the current profile's
+        values (explicit overrides) are kept, the rest come from ``name``."""
+        base = NoiseConfig(profile=self.profile)
+        over = {k: v for k, v in asdict(self).items()
+                if k != "profile" and v != getattr(base, k)}
+        return NoiseConfig(profile=name, **over)
+
+    def white_sigmas(self, rate_hz: float) -> tuple[float, float]:
+        """Per-sample white-noise sigma (gyro rad/s, accel m/s^2) at an IMU rate of ``rate_hz``:
+        ``sqrt(sigma^2 + density^2 * rate)``."""
+        return (math.hypot(self.gyro_sigma_rad_s,
+                           self.gyro_noise_density_rad_s_rthz * math.sqrt(rate_hz)),
+                math.hypot(self.accel_sigma_m_s2,
+                           self.accel_noise_density_m_s2_rthz * math.sqrt(rate_hz)))
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

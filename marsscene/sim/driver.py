@@ -26,7 +26,7 @@ from marsscene.errors import RuntimeSimError
 from marsscene.runs.runlog import read_numeric_csv
 from marsscene.runs.tum import Trajectory, read_tum
 from marsscene.sensors.camera_world import read_rock_catalog
-from marsscene.sensors.imu import imu_measure
+from marsscene.sensors.imu import ImuNoise
 from marsscene.sensors.lidar import Lidar
 from marsscene.sensors.odometry import WheelOdometry, measure_wheels
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
@@ -140,6 +140,7 @@ class _Loop:
         self.n_lidar = self.n_cam = 0
         self._lidar_pool: ThreadPoolExecutor | None = None
         self._pending: tuple[float, Future[dict[str, Any]]] | None = None
+        self.imu_noise = ImuNoise(run.noise, run.imu_hz, rng=rng)  # draws the turn-on biases
 
     def control(self, k: int, t: float) -> bool:
         """Log ground truth and odometry, command the rover; True once the route is done."""
@@ -168,7 +169,7 @@ class _Loop:
 
     def imu(self, t: float) -> None:
         acc_true, gyr_true = self.sim.imu_true()
-        acc, gyr = imu_measure(acc_true, gyr_true, self.sim.run.noise, rng=self.rng)
+        acc, gyr = self.imu_noise.measure(acc_true, gyr_true)
         self.writer.imu(t, acc, gyr, acc_true, gyr_true)
         if self.keep:
             self.imu_rows.append(np.concatenate([[t], acc, gyr]))
@@ -289,6 +290,7 @@ class _Loop:
             "camera_frames": self.n_cam,
             "goal_reached": bool(self.follower.done) if self.follower is not None else None,
             **summary_camera,
+            "imu_bias": _imu_bias(self.imu_noise),
         }
         if route is not None:
             ct = cross_track_m(route, gt.xyz_m[:, :2])
@@ -302,6 +304,11 @@ class _Loop:
         return res
 
 
+def _imu_bias(imu: ImuNoise) -> dict[str, list[float]]:
+    """The run's IMU biases: turn-on (constant part) and at the end (after the random walk)."""
+    return {k: [float(x) for x in v] for k, v in (
+        ("gyro_start_rad_s", imu.gyro_turn_on_rad_s), ("gyro_end_rad_s", imu.gyro_bias_rad_s),
+        ("accel_start_m_s2", imu.accel_turn_on_m_s2), ("accel_end_m_s2", imu.accel_bias_m_s2))}
 
 
 def drive(

@@ -19,6 +19,7 @@ from marsscene.errors import RuntimeSimError
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.runs.export import bag_data as bd
 from marsscene.runs.export import bag_images as bi
+from marsscene.runs.export.datasets import imu_noise_declared
 from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
 from marsscene.runs.runlog import CameraStream, RunLog, read_image, read_ply
 
@@ -107,9 +108,10 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
         bag.add("/rover/joint_states", t, joints, i, t)
     for row in run.cmd:
         bag.add("/rover/cmd_vel", row[0], cmd, row)
-    noise = run.meta.get("noise", {})
-    g_var = float(noise.get("gyro_sigma_rad_s", 0.0)) ** 2
-    a_var = float(noise.get("accel_sigma_m_s2", 0.0)) ** 2
+    # per-sample white-noise variance of the simulated profile: density^2 * rate (+ sigma^2)
+    nd = imu_noise_declared(run)
+    g_var = nd["gyroscope_noise_density"] ** 2 * nd["rate_hz"]
+    a_var = nd["accelerometer_noise_density"] ** 2 * nd["rate_hz"]
     for row in run.imu:
         bag.add("/rover/imu_noisy", row[0], bag.imu, row[0], row, g_var, a_var)
     if run.imu_true is not None:

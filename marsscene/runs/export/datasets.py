@@ -18,6 +18,7 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,7 +30,7 @@ from marsscene.runs.export.frames import camera_frame, frame_in_base, static_tra
 from marsscene.runs.logs import png_bytes
 from marsscene.runs.runlog import CameraStream, RunLog, read_image
 
-__all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset"]
+__all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset", "imu_noise_declared"]
 
 FORMATS = ("tum-rgbd", "euroc")
 #: TUM RGB-D depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored as 0).
@@ -162,23 +163,22 @@ def _euroc(
     (imu / "data.csv").write_text(_lines(rows, "#timestamp [ns],w_RS_S_x [rad s^-1],"
                                   "w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],"
                                   "a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n"))
-    nd = _noise_density(run)
+    nd = imu_noise_declared(run)
     (imu / "sensor.yaml").write_text(
-        "sensor_type: imu\ncomment: marsscene IMU (body = base_link), white noise + constant "
-        "bias\n" + _t_bs(np.eye(4)) + f"rate_hz: {_rate(run.imu[:, 0]):g}\n"
-        f"gyroscope_noise_density: {nd[0]:.9g}\ngyroscope_random_walk: 0.0\n"
-        f"accelerometer_noise_density: {nd[1]:.9g}\naccelerometer_random_walk: 0.0\n"
+        f"sensor_type: imu\ncomment: marsscene IMU (body = base_link), noise profile "
+        f"{nd['profile']}: white noise, per-run turn-on bias, bias random walk\n"
+        + _t_bs(np.eye(4)) + f"rate_hz: {_rate(run.imu[:, 0]):g}\n"
+        + "".join(f"{k}: {nd[k]:.9g}\n" for k in _EUROC_IMU_KEYS)
     )
     gt = mav / "state_groundtruth_estimate0"
     gt.mkdir()
     v = np.gradient(run.gt.xyz_m, run.gt.timestamps_s, axis=0) if len(run.gt) > 1 else \
         np.zeros_like(run.gt.xyz_m)
-    noise = run.meta.get("noise", {})
-    bias = (*noise.get("gyro_bias_rad_s", (0, 0, 0)), *noise.get("accel_bias_m_s2", (0, 0, 0)))
+    bias = _true_bias(run)
     rows = [
-        f"{round(t * 1e9)}," + ",".join(f"{x:.9g}" for x in (*p, q[3], *q[:3], *vel, *bias))
-        for t, p, q, vel in zip(run.gt.timestamps_s, run.gt.xyz_m, run.gt.quat_xyzw, v,
-                                strict=True)
+        f"{round(t * 1e9)}," + ",".join(f"{x:.9g}" for x in (*p, q[3], *q[:3], *vel, *b))
+        for t, p, q, vel, b in zip(run.gt.timestamps_s, run.gt.xyz_m, run.gt.quat_xyzw, v, bias,
+                                   strict=True)
     ]
     (gt / "data.csv").write_text(_lines(rows, _EUROC_GT_HEAD))
     name = "stereo_inertial" if len(cams) == 2 else "mono_inertial"
@@ -187,11 +187,8 @@ def _euroc(
     if len(cams) == 2:
         text += "Stereo.ThDepth: 60.0\n" + _cv_mat("Stereo.T_c1_c2",
                                                    np.linalg.inv(t_b_c[0]) @ t_b_c[1])
-    text += _cv_mat("IMU.T_b_c1", t_b_c[0]) + (
-        f"IMU.InsertKFsWhenLost: 0\nIMU.NoiseGyro: {max(nd[0], 1e-5):.9g}\n"
-        f"IMU.NoiseAcc: {max(nd[1], 1e-4):.9g}\nIMU.GyroWalk: 1e-06\nIMU.AccWalk: 1e-05\n"
-        f"IMU.Frequency: {_rate(run.imu[:, 0]):.1f}\n"
-    )
+    text += _cv_mat("IMU.T_b_c1", t_b_c[0]) + "IMU.InsertKFsWhenLost: 0\n" + _orb_imu(nd) + (
+        f"IMU.Frequency: {_rate(run.imu[:, 0]):.1f}\n")
     (out / f"orbslam3_{name}.yaml").write_text(text + _ORB_TAIL)
 
 
@@ -207,12 +204,72 @@ def _rate(stamps: NDArray[np.float64]) -> float:
     return float(1.0 / np.median(np.diff(stamps))) if len(stamps) > 1 else 0.0
 
 
-def _noise_density(run: RunLog) -> tuple[float, float]:
-    """Continuous-time white-noise densities: sigma_discrete / sqrt(rate) (per sqrt(Hz))."""
+#: EuRoC imu0/sensor.yaml noise keys (Kalibr convention: continuous-time densities).
+_EUROC_IMU_KEYS = ("gyroscope_noise_density", "gyroscope_random_walk",
+                   "accelerometer_noise_density", "accelerometer_random_walk")
+#: ORB-SLAM3 key, EuRoC key, floor used only where the simulated value is 0 (profile none).
+_ORB_IMU = (("IMU.NoiseGyro", "gyroscope_noise_density", 1e-5),
+            ("IMU.NoiseAcc", "accelerometer_noise_density", 1e-4),
+            ("IMU.GyroWalk", "gyroscope_random_walk", 1e-6),
+            ("IMU.AccWalk", "accelerometer_random_walk", 1e-5))
+
+
+def imu_noise_declared(run: RunLog) -> dict[str, Any]:
+    """The simulated IMU noise of a run in the EuRoC/Kalibr convention (from ``run.json``).
+
+    White-noise densities (rad/s/sqrt(Hz), m/s^2/sqrt(Hz)) combine the profile's density with
+    any per-sample sigma: ``sqrt(density^2 + sigma^2 / rate)``; random walks are the bias
+    random-walk densities (rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)). Keys: ``profile``, ``rate_hz``
+    and :data:`_EUROC_IMU_KEYS`. Runs from before noise profiles read as profile ``none``.
+    """
     noise, rate = run.meta.get("noise", {}), _rate(run.imu[:, 0])
-    root = math.sqrt(rate) if rate > 0 else 1.0
-    return (float(noise.get("gyro_sigma_rad_s", 0.0)) / root,
-            float(noise.get("accel_sigma_m_s2", 0.0)) / root)
+
+    def get(key: str) -> float:
+        return float(noise.get(key, 0.0))
+
+    def density(nd_key: str, sigma_key: str) -> float:
+        per_rate = get(sigma_key) ** 2 / rate if rate > 0 else get(sigma_key) ** 2
+        return math.sqrt(get(nd_key) ** 2 + per_rate)
+
+    return {
+        "profile": str(noise.get("profile", "none")),
+        "rate_hz": rate,
+        "gyroscope_noise_density": density("gyro_noise_density_rad_s_rthz", "gyro_sigma_rad_s"),
+        "gyroscope_random_walk": get("gyro_bias_walk_rad_s2_rthz"),
+        "accelerometer_noise_density": density("accel_noise_density_m_s2_rthz",
+                                               "accel_sigma_m_s2"),
+        "accelerometer_random_walk": get("accel_bias_walk_m_s3_rthz"),
+    }
+
+
+def _orb_imu(nd: dict[str, Any]) -> str:
+    """ORB-SLAM3's IMU noise (the same densities as imu0/sensor.yaml); a zero is floored."""
+    out = ""
+    for key, euroc, floor in _ORB_IMU:
+        value = nd[euroc]
+        if value <= 0.0:
+            out += (f"# {key}: the simulated value is 0 (profile {nd['profile']}); ORB-SLAM3 "
+                    f"needs > 0, so a small floor is declared\n")
+        out += f"{key}: {value if value > 0.0 else floor:.9g}\n"
+    return out
+
+
+def _true_bias(run: RunLog) -> NDArray[np.float64]:
+    """IMU bias (gyro xyz, accel xyz) at each ground-truth stamp: the run's turn-on bias, and
+    for a walking bias the mean of the walk given its start and end (linear between them)."""
+    summary = run.meta.get("summary", {}).get("imu_bias")
+    noise = run.meta.get("noise", {})
+    start = np.array([*noise.get("gyro_bias_rad_s", (0, 0, 0)),
+                      *noise.get("accel_bias_m_s2", (0, 0, 0))], np.float64)
+    end = start
+    if summary:
+        start = np.array([*summary["gyro_start_rad_s"], *summary["accel_start_m_s2"]])
+        end = np.array([*summary["gyro_end_rad_s"], *summary["accel_end_m_s2"]])
+    t = run.gt.timestamps_s
+    t_imu = run.imu[:, 0] if len(run.imu) else t
+    span = float(t_imu[-1] - t_imu[0]) if len(t_imu) > 1 else 0.0
+    f = np.clip((t - t_imu[0]) / span, 0.0, 1.0) if span > 0 else np.zeros(len(t))
+    return start + f[:, None] * (end - start)
 
 
 def _t_bs(m: NDArray[np.float64]) -> str:
