@@ -13,6 +13,8 @@ from marsscene.cli._common import user_errors
 
 __all__ = ["vpr", "vpr_eval"]
 
+BASELINES = ("sift-vlad", "patch-normalised")
+
 
 @click.command(short_help="Generate a VPR dataset (database + queries traversals, frames every "
                "0.1 m) and score the baseline.")
@@ -25,13 +27,15 @@ __all__ = ["vpr", "vpr_eval"]
 @click.option("--resume", is_flag=True,
               help="Reuse traversals already finished in --out (same spec).")
 @click.option("--no-eval", is_flag=True, help="Only write the dataset.")
+@click.option("--baseline", type=click.Choice(BASELINES), default="sift-vlad",
+              show_default=True, help="The classical baseline scored after generation.")
 @click.option("--workers", type=click.IntRange(1, 2), default=None,
               help="Drive the two traversals in this many processes at once (default: 2 on a "
               "machine with 2 or more cores; the same bytes either way).")
 def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, resume: bool,
-        no_eval: bool, workers: int | None) -> None:
+        no_eval: bool, baseline: str, workers: int | None) -> None:
     """Generate the VPR dataset of PROTOCOL (`dust`, `day-dark` or a spec TOML) into OUT, then
-    score the patch-normalised baseline (vpr-eval).
+    score a classical baseline (vpr-eval): VLAD over RootSIFT, or patch-normalised thumbnails.
 
     \b
     Examples:
@@ -71,11 +75,12 @@ def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, r
     click.echo(f"     vpr: {out_dir}: {t['database']['frames']} database and "
                f"{t['queries']['frames']} query frames along {doc['route_length_m']:.1f} m")
     if not no_eval:
-        _evaluate(out_dir, None, (spec.radius_m,), out_dir / "results" / "patch-normalised")
+        _evaluate(out_dir, None, (spec.radius_m,), out_dir / "results" / baseline,
+                  baseline=baseline)
 
 
 def _evaluate(dataset: Path, descriptors: Path | None, radii: tuple[float, ...],
-              out: Path, method: str | None = None) -> None:
+              out: Path, method: str | None = None, baseline: str = "sift-vlad") -> None:
     from marsscene.benchmark.vpr_eval import (
         load_descriptors,
         pairs_figure,
@@ -89,10 +94,17 @@ def _evaluate(dataset: Path, descriptors: Path | None, radii: tuple[float, ...],
     with user_errors():
         db, q = read_split(dataset, "database"), read_split(dataset, "queries")
         if descriptors is None:
-            click.echo(f"    eval: patch-normalised thumbnails of {len(db.files)} + "
-                       f"{len(q.files)} images", err=True)
-            d_db, d_q = patch_normalised(db.files), patch_normalised(q.files)
-            name = method or "patch-normalised"
+            n = len(db.files) + len(q.files)
+            with click.progressbar(length=n, label=f"{baseline} descriptors ({n} images)",
+                                   file=sys.stderr) as bar:
+                if baseline == "sift-vlad":
+                    from marsscene.benchmark.vpr_vlad import sift_vlad
+
+                    d_db, d_q = sift_vlad(db.files, q.files, tick=lambda: bar.update(1))
+                else:
+                    d_db, d_q = patch_normalised(db.files), patch_normalised(q.files)
+                    bar.update(n)
+            name = method or baseline
         else:
             d_db, d_q = load_descriptors(descriptors, db), load_descriptors(descriptors, q)
             name = method or descriptors.name
@@ -109,14 +121,16 @@ def _evaluate(dataset: Path, descriptors: Path | None, radii: tuple[float, ...],
 @click.argument("dataset", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--descriptors", type=click.Path(exists=True, file_okay=False, path_type=Path),
               default=None, help="database.npy + queries.npy, or <split>/<image>.npy per image "
-              "(default: the patch-normalised baseline).")
+              "(default: the --baseline).")
+@click.option("--baseline", type=click.Choice(BASELINES), default="sift-vlad",
+              show_default=True, help="Classical baseline scored without --descriptors.")
 @click.option("--radius-m", "radii", type=click.FloatRange(min=0.0, min_open=True),
               multiple=True, default=(2.0,), show_default=True,
               help="Positive radius (repeatable).")
 @click.option("--method", default=None, help="Name in the table (default: the folder name).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               default=None, help="Results folder (default: DATASET/results/<method>).")
-def vpr_eval(dataset: Path, descriptors: Path | None, radii: tuple[float, ...],
+def vpr_eval(dataset: Path, descriptors: Path | None, baseline: str, radii: tuple[float, ...],
              method: str | None, out_dir: Path | None) -> None:
     """Score place-recognition descriptors on DATASET (from `marsscene benchmark vpr`): a query
     is recognised at N when one of its N nearest database descriptors (L2) lies within the
@@ -127,5 +141,6 @@ def vpr_eval(dataset: Path, descriptors: Path | None, radii: tuple[float, ...],
       marsscene benchmark vpr-eval vpr/dust
       marsscene benchmark vpr-eval vpr/dust --descriptors boq_descs --radius-m 2 --radius-m 5
     """
-    name = method or (descriptors.name if descriptors is not None else "patch-normalised")
-    _evaluate(dataset, descriptors, radii, out_dir or dataset / "results" / name, name)
+    name = method or (descriptors.name if descriptors is not None else baseline)
+    _evaluate(dataset, descriptors, radii, out_dir or dataset / "results" / name, name,
+              baseline=baseline)

@@ -157,7 +157,46 @@ def test_generate_and_evaluate_end_to_end(tmp_path: Path) -> None:
     lines = (out / "results" / "gps" / "recall.csv").read_text().splitlines()
     assert lines[1].split(",")[2] == "1.000000"  # R@1 at 2 m
     assert (out / "results" / "gps" / "pairs.png").stat().st_size > 10_000
-    res = CliRunner().invoke(main, ["benchmark", "vpr-eval", str(out)])
+    res = CliRunner().invoke(main, ["benchmark", "vpr-eval", str(out), "--baseline",
+                                    "patch-normalised"])
     assert res.exit_code == 0 and "patch-normalised" in res.output
     doc2 = json.loads((out / "dataset.json").read_text())
     assert doc2["traversals"]["queries"]["tau"] == 0.05
+
+
+def test_vlad_properties() -> None:
+    """Unit norm; identical descriptor sets give identical vectors; descriptors sitting on
+    their words leave no residual; the order of an image's descriptors does not matter."""
+    from marsscene.benchmark.vpr_vlad import vlad
+
+    rng = np.random.default_rng(2)
+    centres = rng.normal(size=(8, 128)).astype(np.float32)
+    a = rng.normal(size=(40, 128)).astype(np.float32)
+    out = vlad([a, a[::-1].copy(), centres.copy(), np.zeros((0, 128), np.float32)], centres)
+    assert np.linalg.norm(out[0]) == pytest.approx(1.0, abs=1e-5)
+    np.testing.assert_allclose(out[0], out[1], atol=1e-6)
+    assert not out[2].any() and not out[3].any()
+
+
+def test_sift_vlad_finds_the_same_places(tmp_path: Path) -> None:
+    """VLAD over RootSIFT on real frames: each query is a database frame re-encoded at a lower
+    JPEG quality and brightened, so its nearest database descriptor is its own frame."""
+    pytest.importorskip("cv2")
+    from PIL import Image, ImageEnhance
+
+    from marsscene.benchmark.vpr_vlad import sift_vlad
+
+    src = Path(__file__).resolve().parents[2] / "docs" / "img"
+    frames = [src / f"camera_{n}.png" for n in ("ground_texture", "low_sun_13deg",
+                                                 "low_sun_2deg", "low_sun_5deg", "tau_sun")]
+    db, q = [], []
+    for i, f in enumerate(frames):
+        with Image.open(f) as im:
+            im = im.convert("RGB")
+            im.save(tmp_path / f"db{i}.jpg", quality=95)
+            ImageEnhance.Brightness(im).enhance(1.3).save(tmp_path / f"q{i}.jpg", quality=60)
+        db.append(tmp_path / f"db{i}.jpg")
+        q.append(tmp_path / f"q{i}.jpg")
+    d_db, d_q = sift_vlad(tuple(db), tuple(q), words=16)
+    ranked = retrieve(d_db, d_q, k=1)
+    assert ranked[:, 0].tolist() == list(range(len(frames)))
