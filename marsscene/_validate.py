@@ -13,7 +13,7 @@ from marsscene.errors import ConfigError
 
 T = TypeVar("T")
 
-__all__ = ["check_choice", "check_range", "dataclass_from_mapping", "plain"]
+__all__ = ["check_choice", "check_range", "dataclass_from_mapping", "load_toml", "plain"]
 
 
 def plain(value: Any) -> Any:
@@ -97,3 +97,17 @@ def dataclass_from_mapping(cls: type[T], mapping: Mapping[str, Any], section: st
         return cls(**kwargs)
     except TypeError as err:
         raise ConfigError(f"[{section or 'config'}]: {err}") from None
+
+
+def load_toml(path: Any, *, what: str = "config file") -> dict[str, Any]:
+    """A TOML file as a mapping; a missing file or bad TOML is a one-line ConfigError."""
+    import tomllib
+    from pathlib import Path
+
+    p = Path(path)
+    try:
+        return tomllib.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(f"{what} not found: {p}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise ConfigError(f"{p}: not valid TOML ({err})") from None

@@ -21,12 +21,11 @@ import dataclasses
 import hashlib
 import json
 import os
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from marsscene._validate import dataclass_from_mapping
+from marsscene._validate import dataclass_from_mapping, load_toml
 from marsscene.assets.config import AssetConfig
 from marsscene.craters.config import CraterConfig
 from marsscene.errors import ConfigError
@@ -53,12 +52,7 @@ def read_config_toml(path: str | os.PathLike[str], *, what: str = "config file")
     """A TOML config as a mapping, with relative ``terrain.dem_path``, ``terrain.ortho_path``
     and ``assets.files`` resolved against the file's folder (one-line errors)."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"{what} not found: {p}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise ConfigError(f"{p}: not valid TOML ({err})") from None
+    data = load_toml(p, what=what)
     terrain = data.get("terrain")
     if isinstance(terrain, dict):
         for key in ("dem_path", "ortho_path"):

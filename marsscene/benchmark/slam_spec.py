@@ -26,12 +26,11 @@ docs/benchmark.md documents every key. Every error is a one-line
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from marsscene._validate import check_choice, check_range, dataclass_from_mapping
+from marsscene._validate import check_choice, check_range, dataclass_from_mapping, load_toml
 from marsscene.config import SceneConfig
 from marsscene.errors import ConfigError
 
@@ -325,10 +324,5 @@ def slam_spec_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
 def load_slam_spec(path: str | Path) -> SlamSpec:
     """Read and check a benchmark TOML (relative config / route paths resolve against it)."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"benchmark spec not found: {p}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise ConfigError(f"{p}: not valid TOML ({err})") from None
+    data = load_toml(p, what="benchmark spec")
     return slam_spec_from_dict(data, base_dir=p.parent.resolve(), source=str(p))

@@ -42,7 +42,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from marsscene._validate import check_range, dataclass_from_mapping
+from marsscene._validate import check_range, dataclass_from_mapping, load_toml
 from marsscene.benchmark.slam_spec import SceneSpec
 from marsscene.errors import ConfigError
 from marsscene.rover.config import CameraConfig
@@ -158,11 +158,7 @@ def load_vpr_spec(name_or_path: str | Path) -> VprSpec:
         text = resources.files("marsscene.benchmark").joinpath(
             f"data/vpr_{str(name_or_path).replace('-', '_')}.toml").read_text("utf-8")
         return vpr_spec_from_dict(tomllib.loads(text), source=f"protocol {name_or_path}")
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"VPR spec not found: {p} (shipped protocols: "
-                          f"{', '.join(PROTOCOLS)})") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise ConfigError(f"{p}: not valid TOML ({err})") from None
+    if not p.exists() and p.suffix != ".toml":
+        raise ConfigError(f"VPR spec not found: {p} (shipped protocols: {', '.join(PROTOCOLS)})")
+    data = load_toml(p, what="VPR spec")
     return vpr_spec_from_dict(data, base_dir=p.parent.resolve(), source=str(p))

@@ -33,3 +33,15 @@ def compose(*decorators: Callable[[F], F]) -> Callable[[F], F]:
         return func
 
     return wrap
+
+
+#: ``--workers`` / ``--scheduler`` / ``--serial``: where the cells of a sweep or a benchmark run.
+dask_options = compose(
+    click.option("--workers", type=click.IntRange(min=1), default=None,
+                 help="LocalCluster worker processes (default: one per CPU core)."),
+    click.option("--scheduler", default=None, metavar="ADDRESS",
+                 help="Running Dask scheduler (e.g. tcp://10.0.0.5:8786) instead of a "
+                 "LocalCluster; its workers must see --out on a shared filesystem."),
+    click.option("--serial", is_flag=True,
+                 help="Run the cells one by one in this process (no Dask)."),
+)

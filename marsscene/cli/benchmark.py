@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from marsscene.cli._common import user_errors
+from marsscene.cli._common import dask_options, user_errors
 
 
 @click.group(short_help="Benchmark protocols: SLAM (ATE/RPE of baselines and your method).")
@@ -20,12 +20,7 @@ def benchmark() -> None:
 @click.argument("spec_toml", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               required=True, help="Benchmark folder: cells/, results.csv, table.md, report.md.")
-@click.option("--workers", type=click.IntRange(min=1), default=None,
-              help="LocalCluster worker processes (default: one per CPU core).")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="Running Dask scheduler (e.g. tcp://10.0.0.5:8786) instead of a LocalCluster; "
-              "its workers must see --out on a shared filesystem.")
-@click.option("--serial", is_flag=True, help="Run the cells one by one in this process (no Dask).")
+@dask_options
 @click.option("--resume", is_flag=True,
               help="Continue the benchmark in --out: finished builds, drives and methods are "
               "reused.")

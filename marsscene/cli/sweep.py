@@ -7,19 +7,14 @@ from typing import Any
 
 import click
 
-from marsscene.cli._common import user_errors
+from marsscene.cli._common import dask_options, user_errors
 
 
 @click.command(short_help="Run a grid of scene variants (seeds x tau x sun x rocks) on Dask.")
 @click.argument("sweep_toml", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               required=True, help="Sweep folder: one sub-folder per cell + results.csv.")
-@click.option("--workers", type=click.IntRange(min=1), default=None,
-              help="LocalCluster worker processes (default: one per CPU core).")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="Running Dask scheduler (e.g. tcp://10.0.0.5:8786) instead of a LocalCluster; "
-              "its workers must see --out on a shared filesystem.")
-@click.option("--serial", is_flag=True, help="Run the cells one by one in this process (no Dask).")
+@dask_options
 @click.option("--force", is_flag=True, help="Rebuild cells that are already finished.")
 def sweep(sweep_toml: Path, out_dir: Path, workers: int | None, scheduler: str | None,
           serial: bool, force: bool) -> None:
