@@ -218,7 +218,8 @@ class CameraConfig:
     rate_hz: float = 10.0
     depth: bool = True
     shadows: bool = True
-    """Sun shadow map (1024 texels over +-20 m around the camera: 3.9 cm texels)."""
+    """Sun shadow map (3072 texels over +-20 m around the camera: 1.3 cm texels, locked to the
+    world)."""
     terrain_window_m: float = 60.0
     """Render a full-resolution terrain window this wide around the rover (speed)."""
     texture_tile_m: float = 8.0

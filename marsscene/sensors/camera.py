@@ -34,21 +34,21 @@ from marsscene.sensors.camera_world import ALBEDO_SCALE, CameraWorld
 from marsscene.sensors.exposure import Exposure
 from marsscene.sensors.offscreen import OffscreenView
 
-__all__ = ["MastCamera", "scene_lighting"]
+__all__ = ["MastCamera", "scene_lighting", "shadow_light_position"]
 
 #: Fixed-exposure mode: linear 1.0 is a surface of albedo ALBEDO_SCALE under this irradiance.
 FIXED_REFERENCE_W_M2 = 600.0
 #: Longest exposure of the auto mode, as a gain in the fixed mode's units (e.g. 1 ms at gain 1
 #: up to 100 ms, a 10 Hz frame's whole period): twilight far below the horizon stays dark.
 MAX_EXPOSURE_GAIN = 100.0
+#: The sun's shadow map (rocks' and the rover's shadows; the terrain's come from
+#: camera_shadow): an orthographic box of +-_SHADOW_CLIP_M around the ground ahead of the
+#: camera with _SHADOW_MAP_PX texels a side, 1.3 cm texels. At 1024 (3.9 cm) the rover's mast
+#: cast a saw-tooth strip at the bottom of the image (a texel is ~7 px at 3 m) and a 2 deg sun
+#: stretched texels 1 / sin(elevation) along the ground into blocky rock-shadow ends; 4096
+#: costs ~25 % more per frame on llvmpipe, 3072 ~10-15 % (docs/camera.md)
 _SHADOW_CLIP_M = 20.0
-_SHADOW_MAP_PX = 1024  # 3.9 cm texels over +-20 m; 2048 costs ~10-15 % more on llvmpipe
-#: Below this sun elevation the shadow map has _SHADOW_MAP_LOW_SUN_PX texels a side: a texel
-#: stretches 1 / sin(elevation) along the ground, so rock and rover shadows get saw-tooth
-#: edges (a 3.9 cm texel is 1.1 m long at 2 deg)
-_LOW_SUN_DEG = 10.0
-_SHADOW_MAP_LOW_SUN_PX = 2048
-_SHADOW_SNAP_M = 4.0
+_SHADOW_MAP_PX = 3072
 _SKY_ZFAR_FRACTION = 0.45
 
 
@@ -172,8 +172,7 @@ class MastCamera:
         vis.map.znear = 0.05 / extent
         vis.map.zfar = 4.0
         vis.map.shadowclip = _SHADOW_CLIP_M / extent
-        vis.quality.shadowsize = (_SHADOW_MAP_PX if lt.sun_elevation_deg >= _LOW_SUN_DEG
-                                  else _SHADOW_MAP_LOW_SUN_PX)
+        vis.quality.shadowsize = _SHADOW_MAP_PX
         vis.quality.offsamples = 0
         vis.global_.offwidth = max(int(cam.width_px), 640)
         vis.global_.offheight = max(int(cam.height_px), 480)
@@ -215,15 +214,9 @@ class MastCamera:
         self.data.qpos[: sim.data.qpos.size] = sim.data.qpos
         mujoco.mj_kinematics(self.model, self.data)
         mujoco.mj_camlight(self.model, self.data)  # this frame's camera pose (cam_xpos)
-        # shadow map: a box of +-_SHADOW_CLIP_M around the ground ahead of the camera, its
-        # centre snapped to a world lattice: the shadow texels stay fixed to the ground between
-        # snaps, so shadow edges do not shimmer from frame to frame (features stay put)
-        cam_pos = self.data.cam_xpos[self.camera_id]
-        fwd = -self.data.cam_xmat[self.camera_id].reshape(3, 3)[:, 2]
-        ahead = cam_pos + 0.5 * _SHADOW_CLIP_M * np.r_[fwd[:2], 0.0]
-        centre = np.round(ahead / _SHADOW_SNAP_M) * _SHADOW_SNAP_M
-        s = np.asarray(self.lighting.sun_direction_enu)
-        self.model.light_pos[self.sun_id] = centre + 2.0 * _SHADOW_CLIP_M * s
+        self.model.light_pos[self.sun_id] = shadow_light_position(
+            self.data.cam_xpos[self.camera_id], self.data.cam_xmat[self.camera_id],
+            self.lighting.sun_direction_enu)
         mujoco.mj_camlight(self.model, self.data)
 
     def _show_window_rocks(self) -> None:
@@ -272,6 +265,36 @@ class MastCamera:
 
     def close(self) -> None:
         self.view.close()
+
+
+def shadow_light_position(cam_pos: Any, cam_xmat: Any, sun_direction: Any) -> NDArray[np.float64]:
+    """World position of the sun's shadow-map camera for a mast camera at ``cam_pos``.
+
+    The map is a box of +-_SHADOW_CLIP_M centred on the ground half that distance ahead of the
+    camera, seen from 2 _SHADOW_CLIP_M up the sun's direction. The position is moved across
+    the sun (by less than a texel) so that it falls on the map's texel lattice: MuJoCo's light
+    view (``mjr_lookAt`` with ``mjr_orthoVec`` up) then puts every texel on a world-fixed
+    lattice, so shadow edges neither shimmer nor jump between frames as the rover moves.
+    """
+    fwd = -np.asarray(cam_xmat, dtype=np.float64).reshape(3, 3)[:, 2]
+    ahead = np.asarray(cam_pos, dtype=np.float64) + 0.5 * _SHADOW_CLIP_M * np.r_[fwd[:2], 0.0]
+    s = np.asarray(sun_direction, dtype=np.float64)
+    s = s / np.linalg.norm(s)
+    eye = ahead + 2.0 * _SHADOW_CLIP_M * s
+    # the light view's axes, as mjr_lookAt builds them for forward f = -s
+    f = -s
+    up = np.cross(f, [-1.0, 0.0, 0.0])
+    if up @ up <= 0.01:
+        up = np.cross(f, [0.0, 1.0, 0.0])
+    side = np.cross(f, up)
+    side /= np.linalg.norm(side)
+    upv = np.cross(side, f)
+    upv /= np.linalg.norm(upv)
+    texel = 2.0 * _SHADOW_CLIP_M / (_SHADOW_MAP_PX - 2)  # mjr_render's viewport: size - 2
+    for axis in (side, upv):
+        c = axis @ eye
+        eye = eye + (np.round(c / texel) * texel - c) * axis
+    return eye
 
 
 def _forward_xy(sim: Any) -> tuple[float, float]:
