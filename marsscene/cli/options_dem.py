@@ -45,7 +45,9 @@ _OPTIONS = compose(
                  help="Elevation band of a multi-band DEM (1-based)."),
     click.option("--lod/--no-lod", "lod", default=None, help="Two-level terrain: full "
                  "resolution (--focus-post-m) over a focus square, --post-m (with --dem: the "
-                 "DEM's posts) outside."),
+                 "DEM's posts, averaged coarser if a large crop needs it) outside. Default: "
+                 "two levels only when one grid would be too large (a procedural terrain or a "
+                 "DEM crop; the build says so); --no-lod insists on one grid."),
     click.option("--focus-xy", "focus_xy_m", type=(float, float), default=None, metavar="X Y",
                  help="Centre of the full-resolution focus square (m); implies --lod."),
     click.option("--focus-size-m", "focus_size_m", type=click.FloatRange(min=0, min_open=True),

@@ -163,20 +163,28 @@ def resolve_lod(config: SceneConfig, dem: DEM | None = None) -> tuple[SceneConfi
     A procedural terrain whose full-resolution grid would hold more than
     :data:`~marsscene.terrain.synth.MAX_POSTS` posts gets two levels: its ``post_m`` inside the
     ``focus_size_m`` square, and the smallest whole multiple of it outside that keeps the outer
-    grid under :data:`AUTO_OUTER_POSTS`. Everything else keeps one grid (a DEM's size is only
-    known once it is read: ask for ``--lod`` there).
+    grid under :data:`AUTO_OUTER_POSTS`. A DEM scene is decided from the DEM's header by
+    :func:`marsscene.pipeline.dem_lod.resolve_dem_lod`: a crop that one grid would refuse gets
+    the DEM's posts in the focus square and the DEM averaged to the smallest whole multiple of
+    them outside (and ``lod = true`` without ``post_m`` gets that outer level when the DEM's own
+    posts would be refused). Everything else keeps one grid.
     """
     import math
 
     from marsscene.terrain.synth import MAX_POSTS
 
     tcfg = config.terrain
+    if dem is not None or tcfg.source != "procedural":
+        from marsscene.pipeline.dem_lod import LodBudget, resolve_dem_lod
+
+        return resolve_dem_lod(config, dem, LodBudget(MAX_POSTS, AUTO_OUTER_POSTS,
+                                                      AUTO_FOCUS_POSTS_PER_SIDE))
     if tcfg.lod != "auto":
         return config, None
     post = tcfg.post_m if tcfg.post_m is not None else 0.25
     w, h = tcfg.effective_size_m
     posts = (round(w / post) + 1) * (round(h / post) + 1)
-    if dem is not None or tcfg.source != "procedural" or posts <= MAX_POSTS:
+    if posts <= MAX_POSTS:
         return config.replace(terrain=dataclasses.replace(tcfg, lod=False)), None
     k = max(2, math.ceil(math.sqrt(posts / AUTO_OUTER_POSTS)))
     focus = min(tcfg.focus_size_m, w, h, AUTO_FOCUS_POSTS_PER_SIDE * post)

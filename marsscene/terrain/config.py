@@ -74,8 +74,10 @@ class TerrainConfig:
     """Two-level terrain (:mod:`marsscene.terrain.lod`): ``focus_post_m`` posts over the focus
     square, ``post_m`` posts over the whole footprint outside it (with a DEM: the DEM's posts,
     snapped to a whole multiple of ``focus_post_m``). ``"auto"`` (default): one grid unless a
-    procedural terrain's full-resolution grid would exceed the post budget, then two levels
-    (the build says so; see :func:`marsscene.pipeline.terrain.resolve_lod`)."""
+    procedural terrain's full-resolution grid would exceed the post budget, or a DEM crop's
+    grid would be refused (too many posts, or over ``max_memory_gb``; decided from the DEM's
+    header), then two levels (the build says so; see
+    :func:`marsscene.pipeline.terrain.resolve_lod`)."""
     focus_xy_m: tuple[float, float] | None = None
     """Centre of the full-resolution focus square (in m, scene frame); default the origin."""
     focus_size_m: float = 1000.0
