@@ -125,7 +125,7 @@ def _check_focus_posts(plan: FocusPlan) -> None:
         raise MemoryBudgetError(
             f"a {side:g} m focus square at {plan.fine_post_m:g} m posts has {n * n:,} posts; "
             f"the limit is {MAX_POSTS:,}: shrink terrain.focus_size_m (--focus-size-m) or "
-            "raise terrain.focus_post_m")
+            "raise terrain.focus_post_m (--focus-post-m)")
 
 
 def lod_world(tcfg: TerrainConfig, seed: int, *, dem_hf: Heightfield | None = None,

@@ -90,7 +90,7 @@ def plan_focus(coarse: Heightfield, *, center_xy_m: tuple[float, float] | None, 
         x0, y0, x1, y1 = coarse.bounds_xy_m
         raise ConfigError(f"the {cells * pc:g} m focus square around ({cx:g}, {cy:g}) m must lie "
                           f"inside the footprint [{x0:g}, {x1:g}] x [{y0:g}, {y1:g}] m: move "
-                          "--focus-xy or shrink terrain.focus_size_m")
+                          "--focus-xy or shrink terrain.focus_size_m (--focus-size-m)")
     x0, y0 = ox + col0 * pc, oy + row0 * pc
     side = cells * pc
     return FocusPlan((x0, y0, x0 + side, y0 + side), fine_post_m, pc, row0, col0, cells)

@@ -39,7 +39,7 @@ def _check_posts(rows: int, cols: int) -> None:
             f"a {rows} x {cols} grid ({rows * cols:,} posts) needs about {est_gb:.1f} GB; "
             f"the limit is {MAX_POSTS:,} posts: raise post_m (--post-m), crop the DEM, or "
             "build a level-of-detail terrain (terrain.lod = true, --lod, with --focus-size-m and "
-            '--focus-xy; terrain.lod = "auto" does it for procedural terrain; --preset '
+            '--focus-xy; terrain.lod = "auto", the default, does it by itself; --preset '
             "main-crater is such a scene)"
         )
 
