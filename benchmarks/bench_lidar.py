@@ -1,7 +1,9 @@
 """LiDAR: ray-cast speed per sensor model, and KISS-ICP (default configuration) on drives.
 
 Run: ``python benchmarks/bench_lidar.py`` (cast timings + the default-scene route of issue 21
-per model), or
+per model), ``python benchmarks/bench_lidar.py cast`` (cast timings only: the terrain alone,
+Embree vs the numpy march, then whole scans as a drive makes them: catalogue rocks, static
+geoms, motion distortion, noise; and the time to build the Embree window), or
 ``python benchmarks/bench_lidar.py drive SCENE LENGTH_M [MODEL]`` with SCENE one of
 ``default``, ``mars-base``, ``main-crater``, ``grand-canyon`` (a square loop of LENGTH_M around
 the scene centre, authored by the route planner). Each drive is what a user types:
@@ -74,6 +76,41 @@ def cast_timings() -> None:
         print(f"{model:8s} {len(dirs):6d} {t_fast * 1e3:10.1f} {t_slow * 1e3:9.0f} {p95:22.1f}")
 
 
+def scan_timings(repeats: int = 10) -> None:
+    """ms per whole scan of each model as the drive casts it (default scene, rover moving)."""
+    import numpy as np
+
+    from marsscene.rover.config import RunConfig
+    from marsscene.rover.lidar import LidarConfig
+    from marsscene.sensors.camera_world import read_rock_catalog
+    from marsscene.sensors.lidar import Lidar
+    from marsscene.sim.rover_sim import RoverSim
+
+    scene = _scene("default")
+    sim = RoverSim(scene, run=RunConfig())
+    rocks = read_rock_catalog(scene)
+    sim.apply(0.5, 0.1)
+    sim.advance(700)
+    twist = sim.site_twist(sim.lidar_site)
+    print(f"{'model':8s} {'rays':>6s} {'returns':>8s} {'build s':>8s} "
+          f"{'scan ms (median, min)':>22s}")
+    for model in MODELS:
+        lidar = Lidar(LidarConfig(model=model), rng=np.random.default_rng(0), rocks=rocks)
+        t0 = time.perf_counter()
+        scan = lidar.prepare(sim.model, sim.data, sim.lidar_site, sim.heightfield,
+                             twist=twist)()  # builds the window
+        build = time.perf_counter() - t0
+        times = []
+        for _ in range(repeats):
+            cast = lidar.prepare(sim.model, sim.data, sim.lidar_site, sim.heightfield,
+                                 twist=twist)
+            t0 = time.perf_counter()
+            cast()
+            times.append(time.perf_counter() - t0)
+        print(f"{model:8s} {len(lidar.t_s):6d} {len(scan['range_m']):8d} {build:8.2f} "
+              f"{np.median(times) * 1e3:12.1f}, {min(times) * 1e3:5.1f}")
+
+
 def _loop_waypoints(side_m: float) -> str:
     h = side_m / 2.0
     return "\n".join(f"{x:.1f} {y:.1f}" for x, y in
@@ -113,6 +150,7 @@ def drive(scene: str, length_m: float, model: str = "os1-64", camera: bool = Fal
 
 def main() -> None:
     cast_timings()
+    scan_timings()
     for model in MODELS:
         drive("default", 40.0, model)
 
@@ -120,5 +158,8 @@ def main() -> None:
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "drive":
         drive(sys.argv[2], float(sys.argv[3]), *(sys.argv[4:5] or ["os1-64"]))
+    elif len(sys.argv) > 1 and sys.argv[1] == "cast":
+        cast_timings()
+        scan_timings()
     else:
         main()

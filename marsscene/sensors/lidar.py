@@ -1,5 +1,7 @@
-"""A ray-cast spinning 3D LiDAR: the terrain by :func:`~marsscene.sensors.raycast.ray_heightfield`
-(exact, vectorised) and rocks by MuJoCo rays (``mj_multiRay``).
+"""A ray-cast spinning 3D LiDAR: with ``embreex`` the terrain, the catalogue rocks and the static
+geoms in one Embree scene (:class:`~marsscene.sensors.raycast.TerrainCaster`), else the terrain
+by :func:`~marsscene.sensors.raycast.ray_heightfield` (exact, vectorised) and the geoms by
+MuJoCo rays (``mj_multiRay``).
 
 The sensor is a :class:`~marsscene.rover.lidar.LidarSpec` (a named datasheet model, see
 ``marsscene/rover/data/lidar_models.toml``). One :meth:`Lidar.scan` is one revolution that starts
@@ -63,6 +65,12 @@ class Lidar:
         self.ring = np.tile(spec.rings(), spec.horizontal_samples).astype(np.uint16)
         self.t_s = spec.firing_time_s().T.reshape(-1)
         n = len(self.dirs_sensor)
+        # a column's world directions are cos(e) R [cos a, sin a, 0] + sin(e) R [0, 0, 1]
+        self._cos_sin_azim = np.stack([np.cos(azim), np.sin(azim)], axis=1)  # (columns, 2)
+        self._cos_elev = np.cos(elev).astype(np.float32)[None, :, None]
+        self._sin_elev = np.sin(elev).astype(np.float32)[None, :, None]
+        t_col = self.t_s.reshape(spec.horizontal_samples, -1)
+        self._column_times = bool(np.all(t_col == t_col[:, :1]))  # one time per column
         self._geomid = np.zeros(n, dtype=np.int32)
         self._dist = np.zeros(n, dtype=np.float64)
         self._normal = np.zeros((n, 3), dtype=np.float64)
@@ -162,35 +170,65 @@ class Lidar:
             caster = self.caster(terrain, model, data)  # built here: it reads the model
 
             def cast() -> dict[str, NDArray[Any]]:
-                origins, dirs = self._world_rays(rot, origin, twist)
-                dist, normals = caster.cast(origins if origins is not None else origin, dirs,
-                                            self.spec.range_m)
-                return self._returns(dist, normals, dirs)
+                dirs = self._world_dirs32(rot, twist)
+                idx, dist, normals = caster.cast_hits(self._origins32(origin, twist), dirs,
+                                                      self.spec.range_m)
+                return self._returns(idx, dist, normals, dirs[idx])
 
             return cast
         origins, dirs = self._world_rays(rot, origin, twist)
         dist, normals = self._mujoco_rays(model, data, origin, origins, dirs, terrain)
-        return lambda: self._returns(dist, normals, dirs)
+        rmin, rmax = self.spec.range_m
+        idx = np.flatnonzero(np.isfinite(dist) & (dist >= rmin) & (dist <= rmax))
+        return lambda: self._returns(idx, dist[idx], normals[idx], dirs[idx])
 
-    def _returns(self, dist: NDArray[np.float64], normals: NDArray[np.float64],
-                 dirs: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
-        """The scan's returns: range limits, dropouts, range noise, intensity."""
+    def _origins32(self, origin: NDArray[np.float64], twist: NDArray[np.float64] | None
+                   ) -> NDArray[np.float32]:
+        """:meth:`_world_rays`' origins as float32: (3,) or (n, 3) with motion distortion."""
+        if twist is None or not self.spec.motion_distortion:
+            return origin.astype(np.float32)
+        if not self._column_times:
+            return (origin[None, :] + self.t_s[:, None] * twist[None, 3:]).astype(np.float32)
+        t_col = self.t_s.reshape(self.spec.horizontal_samples, -1)[:, 0]
+        per_col = (origin[None, :] + t_col[:, None] * twist[None, 3:]).astype(np.float32)
+        return np.repeat(per_col, self.spec.channels, axis=0)
+
+    def _world_dirs32(self, rot: NDArray[np.float64], twist: NDArray[np.float64] | None
+                      ) -> NDArray[np.float32]:
+        """:meth:`_world_rays`' directions as float32 (n, 3), from two vectors per column
+        (the rotated azimuth and the rotated vertical) instead of a matrix per ray."""
+        if twist is None or not self.spec.motion_distortion:
+            r_col = rot[None]
+        else:
+            t_col = self.t_s.reshape(self.spec.horizontal_samples, -1)[:, 0]
+            r_col = rotation_about(t_col[:, None] * twist[None, :3]) @ rot  # (columns, 3, 3)
+        cs = self._cos_sin_azim
+        u = (r_col[:, :, 0] * cs[:, :1] + r_col[:, :, 1] * cs[:, 1:]).astype(np.float32)
+        w = np.broadcast_to(r_col[:, :, 2], u.shape).astype(np.float32)
+        out = u[:, None, :] * self._cos_elev  # (columns, beams, 3), fresh: casts may overlap
+        out += w[:, None, :] * self._sin_elev
+        return out.reshape(-1, 3)
+
+    def _returns(self, idx: NDArray[np.intp], dist: NDArray[np.float64],
+                 normals: NDArray[np.float64], dirs: NDArray[np.floating[Any]]
+                 ) -> dict[str, NDArray[Any]]:
+        """The scan's returns from the rays ``idx`` (ascending) that hit within range, their
+        distances, unit normals and directions: dropouts, range noise, intensity."""
         spec = self.spec
-        rmin, rmax = spec.range_m
-        hit = np.isfinite(dist) & (dist >= rmin) & (dist <= rmax)
-        if spec.dropout_probability > 0:
+        if spec.dropout_probability > 0:  # one draw per ray, hit or not
             assert self.rng is not None
-            hit &= self.rng.random(hit.size) >= spec.dropout_probability
-        r = dist[hit]
+            keep = self.rng.random(len(self.t_s))[idx] >= spec.dropout_probability
+            idx, dist, normals, dirs = idx[keep], dist[keep], normals[keep], dirs[keep]
+        r = dist
         if spec.range_noise_sigma_m > 0:
             assert self.rng is not None
             r = np.maximum(r + spec.range_noise_sigma_m * self.rng.standard_normal(r.size), 0.0)
-        cos_inc = np.abs(np.einsum("ij,ij->i", normals[hit], dirs[hit]))
+        cos_inc = np.abs(np.einsum("ij,ij->i", normals, dirs.astype(np.float64)))
         intensity = np.clip(cos_inc, 0.0, 1.0) * np.exp(-2.0 * spec.dust_extinction_per_m * r)
         return {
-            "xyz_m": (self.dirs_sensor[hit] * r[:, None]).astype(np.float32),
+            "xyz_m": (self.dirs_sensor[idx] * r[:, None]).astype(np.float32),
             "intensity": intensity.astype(np.float32),
-            "ring": self.ring[hit],
-            "t_s": self.t_s[hit],
+            "ring": self.ring[idx],
+            "t_s": self.t_s[idx],
             "range_m": r.astype(np.float32),
         }

@@ -8,7 +8,7 @@ base, turned by a yaw from its id, the way the camera draws them
 
 Rocks smaller than :data:`SMALL_ROCK_M` matter only near the sensor (a 0.1 m rock spans less
 than one beam spacing of a 64-beam unit beyond ~20 m): the caster keeps them within
-:data:`SMALL_ROCK_REACH_M` of the sensor.
+:data:`SMALL_ROCK_REACH_M` of the sensor (at least).
 """
 
 from __future__ import annotations
@@ -19,12 +19,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["SMALL_ROCK_M", "SMALL_ROCK_MARGIN_M", "SMALL_ROCK_REACH_M", "rock_mesh",
-           "static_geom_mesh"]
+__all__ = ["SMALL_ROCK_M", "SMALL_ROCK_REACH_M", "rock_mesh", "static_geom_mesh"]
 
 SMALL_ROCK_M = 0.3
 SMALL_ROCK_REACH_M = 40.0
-SMALL_ROCK_MARGIN_M = 10.0
 _VARIANTS = 8
 _JITTER = 0.22  # log-normal radial jitter of the template vertices (as the camera's rocks)
 _GOLDEN = 0.6180339887
