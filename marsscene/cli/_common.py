@@ -45,3 +45,13 @@ dask_options = compose(
     click.option("--serial", is_flag=True,
                  help="Run the cells one by one in this process (no Dask)."),
 )
+
+
+def dask_where(workers: int | None, scheduler: str | None, serial: bool) -> str:
+    """Check the :data:`dask_options` together and say where the cells will run."""
+    if scheduler is not None and (workers is not None or serial):
+        raise click.UsageError("--scheduler excludes --workers and --serial")
+    if serial and workers is not None:
+        raise click.UsageError("--serial excludes --workers")
+    return ("serially" if serial else f"on {scheduler}" if scheduler
+            else f"on a LocalCluster ({workers or 'one worker per core'})")

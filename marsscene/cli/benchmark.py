@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from marsscene.cli._common import dask_options, user_errors
+from marsscene.cli._common import dask_options, dask_where, user_errors
 
 
 @click.group(short_help="Benchmark protocols: SLAM (ATE/RPE of baselines and your method).")
@@ -43,10 +43,7 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
     from marsscene.benchmark.slam_run import run_slam_benchmark, slam_cells
     from marsscene.benchmark.slam_spec import load_slam_spec
 
-    if scheduler is not None and (workers is not None or serial):
-        raise click.UsageError("--scheduler excludes --workers and --serial")
-    if serial and workers is not None:
-        raise click.UsageError("--serial excludes --workers")
+    where = dask_where(workers, scheduler, serial)
 
     def show(p: Any) -> None:
         row = p.row
@@ -60,8 +57,6 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
     with user_errors():
         spec = load_slam_spec(spec_toml)
         n = len(slam_cells(spec))
-        where = ("serially" if serial else f"on {scheduler}" if scheduler
-                 else f"on a LocalCluster ({workers or 'one worker per core'})")
         click.echo(f"benchmark slam: {n} cells x {len(spec.methods)} methods {where}", err=True)
         res = run_slam_benchmark(spec, out_dir, workers=workers, scheduler=scheduler,
                                  serial=serial, resume=resume, progress=show)

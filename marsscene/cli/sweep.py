@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from marsscene.cli._common import dask_options, user_errors
+from marsscene.cli._common import dask_options, dask_where, user_errors
 
 
 @click.command(short_help="Run a grid of scene variants (seeds x tau x sun x rocks) on Dask.")
@@ -32,10 +32,7 @@ def sweep(sweep_toml: Path, out_dir: Path, workers: int | None, scheduler: str |
     """
     from marsscene.sweep import expand_grid, load_sweep, run_sweep
 
-    if scheduler is not None and (workers is not None or serial):
-        raise click.UsageError("--scheduler excludes --workers and --serial")
-    if serial and workers is not None:
-        raise click.UsageError("--serial excludes --workers")
+    where = dask_where(workers, scheduler, serial)
 
     def show(p: Any) -> None:
         row = p.row
@@ -48,8 +45,6 @@ def sweep(sweep_toml: Path, out_dir: Path, workers: int | None, scheduler: str |
     with user_errors():
         spec = load_sweep(sweep_toml)
         n = len(expand_grid(spec))
-        where = ("serially" if serial else f"on {scheduler}" if scheduler
-                 else f"on a LocalCluster ({workers or 'one worker per core'})")
         click.echo(f"sweep: {n} cells {where}", err=True)
         res = run_sweep(spec, out_dir, workers=workers, scheduler=scheduler, serial=serial,
                         force=force, progress=show)

@@ -24,14 +24,14 @@ import numpy as np
 from marsscene._validate import plain
 from marsscene.errors import RuntimeSimError
 from marsscene.runs.runlog import read_numeric_csv
-from marsscene.runs.tum import Trajectory, read_tum
+from marsscene.runs.tum import Trajectory, read_tum, write_tum
 from marsscene.sensors.camera_world import read_rock_catalog
 from marsscene.sensors.imu import ImuNoise
 from marsscene.sensors.lidar import Lidar
 from marsscene.sensors.odometry import WheelOdometry, measure_wheels
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
 from marsscene.sim.route import Route, cross_track_m
-from marsscene.sim.run_writer import GT_HEADER, ODOM_HEADER, RunWriter, rewrite_trimmed
+from marsscene.sim.run_writer import GT_HEADER, ODOM_HEADER, RunWriter
 
 __all__ = ["DriveInterrupted", "DriveProgress", "DriveResult", "drive"]
 
@@ -267,7 +267,7 @@ class _Loop:
         n = min(len(gt), len(odom))
         for name, traj, head in (("gt", gt, GT_HEADER), ("odom", odom, ODOM_HEADER)):
             if len(traj) > n:
-                rewrite_trimmed(out / f"{name}.tum", traj.head(n), head)
+                write_tum(out / f"{name}.tum", traj.head(n), header=head)  # cut mid-period
         return gt.head(n), odom.head(n), read_numeric_csv(out / "cmd.csv", 3)
 
     def result(self, route: Route | None, status: str) -> DriveResult:

@@ -18,7 +18,6 @@ import numpy as np
 
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.runs.logs import CsvLog, ImageWriter, TumLog, ply_bytes, write_file, write_json
-from marsscene.runs.tum import Trajectory, write_tum
 
 __all__ = ["RunWriter"]
 
@@ -152,8 +151,3 @@ def _meta(sim: Any, pursuit: Any) -> dict[str, Any]:
         "pursuit": asdict(pursuit) if pursuit is not None else None,
         "frames": _FRAMES,
     }
-
-
-def rewrite_trimmed(path: Path, traj: Trajectory, header: str) -> None:
-    """Rewrite a streamed TUM file cut to ``traj`` (a drive interrupted between two rows)."""
-    write_tum(path, traj, header=header)
