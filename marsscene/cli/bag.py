@@ -15,8 +15,9 @@ from marsscene.cli._common import compose, user_errors
 bag_options = compose(
     click.option("--bag-storage", type=click.Choice(["mcap", "sqlite3"]), default="mcap",
                  show_default=True, help="rosbag2 storage plugin."),
-    click.option("--depth-encoding", type=click.Choice(["32FC1", "16UC1"]), default="32FC1",
-                 show_default=True, help="Depth image: metres (NaN = no return) or mm (0)."),
+    click.option("--depth-encoding", type=click.Choice(["16UC1", "32FC1"]), default="16UC1",
+                 show_default=True,
+                 help="Depth image: mm (0 = no return; lossless) or metres (NaN = no return)."),
     click.option("--cloud-stride", type=click.IntRange(min=1), default=4, show_default=True,
                  help="Pixel stride of the organised /rover/depth/points cloud."),
     click.option("--bag-images", type=click.Choice(["compressed", "raw", "both"]),

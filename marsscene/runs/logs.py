@@ -116,16 +116,27 @@ def ply_bytes(
     return head + rec.tobytes()
 
 
+#: zlib's ``Z_RLE`` strategy (Pillow's ``compress_type``).
+_Z_RLE = 3
+
+
 def png_bytes(image: NDArray[Any]) -> bytes:
-    """PNG of an RGB uint8 (H, W, 3) or a uint16 (H, W) image (zlib level 1: ~4x faster than 6)."""
+    """PNG of an RGB uint8 (H, W, 3) or a uint16 (H, W) image, tuned for speed on renders.
+
+    Measured on 640 x 480 navcam frames (2 cores, 2026-11): 8-bit images use zlib's run-length
+    strategy (13.5 ms, 284 kB; level 1 default strategy: 15.2 ms, 323 kB; level 6: ~4x
+    slower); 16-bit depth uses level 4 (8.3 ms, 96 kB; level 1: 5.4 ms, 116 kB), which also
+    makes the bag's lossless ``16UC1`` compressedDepth (these very bytes) 17 % smaller.
+    """
     from PIL import Image
 
     buf = io.BytesIO()
     if image.dtype == np.uint16:
         img = Image.fromarray(np.ascontiguousarray(image, dtype="<u2"))
+        img.save(buf, format="PNG", compress_level=4)
     else:
         img = Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8))
-    img.save(buf, format="PNG", compress_level=1)
+        img.save(buf, format="PNG", compress_level=1, compress_type=_Z_RLE)
     return buf.getvalue()
 
 

@@ -39,6 +39,7 @@ class RunWriter:
         self.logs: dict[str, CsvLog] = {}
         self.poses: dict[str, TumLog] = {}
         self.images = ImageWriter()  # camera PNGs are encoded beside the simulation
+        self._made: set[Path] = set()
         if out is None:
             return
         out.mkdir(parents=True, exist_ok=True)
@@ -91,15 +92,22 @@ class RunWriter:
         if self.out is None:
             return
         name = f"{index:06d}.png"
-        (self.out / "camera" / "rgb").mkdir(parents=True, exist_ok=True)
-        self.images.submit(self.out / "camera" / "rgb" / name, rgb)
+        self.images.submit(self._dir("camera", "rgb") / name, rgb)
         dname = ""
         if depth is not None:
-            (self.out / "camera" / "depth").mkdir(parents=True, exist_ok=True)
             mm = np.clip(np.round(depth * 1000.0), 0, 65535).astype(np.uint16)
-            self.images.submit(self.out / "camera" / "depth" / name, mm)
+            self.images.submit(self._dir("camera", "depth") / name, mm)
             dname = "depth/" + name
         self.logs["camera"].row(t, ("rgb/" + name, dname))
+
+    def _dir(self, *parts: str) -> Path:
+        """``out/parts...``, made on first use (not one mkdir call per frame)."""
+        assert self.out is not None
+        path = self.out.joinpath(*parts)
+        if path not in self._made:
+            path.mkdir(parents=True, exist_ok=True)
+            self._made.add(path)
+        return path
 
     def stereo(self, t: float, index: int, pair: Any) -> None:
         if self.out is None:

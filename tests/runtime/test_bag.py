@@ -51,7 +51,8 @@ def _pose(tf: Any) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def mcap_bag(stereo_run: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return write_bag(stereo_run, tmp_path_factory.mktemp("bags") / "bag", images="raw").path
+    return write_bag(stereo_run, tmp_path_factory.mktemp("bags") / "bag", images="raw",
+                     depth_encoding="32FC1").path
 
 
 @pytest.fixture(scope="module")
@@ -217,15 +218,15 @@ def test_lidar_cloud_and_scan_equal_the_ply_scans(bag_msgs, stereo_run):
 
 def test_sqlite3_storage_same_messages_and_deterministic_bytes(stereo_run, mcap_bag, bag_msgs,
                                                                  tmp_path):
-    sq = write_bag(stereo_run, tmp_path / "sq", storage="sqlite3", depth_encoding="16UC1",
-                   images="raw")
+    sq = write_bag(stereo_run, tmp_path / "sq", storage="sqlite3", images="raw")  # 16UC1 default
     msgs, _ = _read_rosbags(sq.path)
     ref, _ = bag_msgs
     assert {t: len(v) for t, v in msgs.items()} == {t: len(v) for t, v in ref.items()}
     assert (sq.path / "sq.db3").is_file()
     _, depth = msgs["/rover/depth/image_raw"][3]
     assert depth.encoding == "16UC1" and depth.step == 160
-    again = write_bag(stereo_run, tmp_path / "again" / "bag", images="raw")  # same bytes
+    again = write_bag(stereo_run, tmp_path / "again" / "bag", images="raw",
+                      depth_encoding="32FC1")  # same bytes
     assert (again.path / "bag.mcap").read_bytes() == (mcap_bag / "bag.mcap").read_bytes()
     assert (again.path / "metadata.yaml").read_bytes() == (mcap_bag / "metadata.yaml").read_bytes()
 

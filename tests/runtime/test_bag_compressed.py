@@ -80,7 +80,7 @@ def test_default_topics_formats_and_no_depth_cloud(default_msgs, stereo_run):
         assert gone not in default_msgs
     assert {m.format for _, _, m in default_msgs[RGB]} == {"rgb8; jpeg compressed bgr8"}
     assert {m.format for _, _, m in default_msgs[LEFT]} == {"mono8; jpeg compressed mono8"}
-    assert {m.format for _, _, m in default_msgs[DEPTH]} == {"32FC1; compressedDepth png"}
+    assert {m.format for _, _, m in default_msgs[DEPTH]} == {"16UC1; compressedDepth png"}
     for topic in (RGB, DEPTH):
         stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec
                   for _, _, m in default_msgs[topic]]
@@ -117,11 +117,13 @@ def test_png_colour_is_the_run_file_and_decodes_exactly(stereo_run, tmp_path):
             assert msg.data.tobytes() == f.read_bytes()  # reused, not re-encoded
 
 
-def test_compressed_depth_32fc1_inverse_depth_within_one_quantisation_step(default_msgs,
-                                                                           stereo_run):
+def test_compressed_depth_32fc1_inverse_depth_within_one_quantisation_step(stereo_run, tmp_path):
+    bag = write_bag(stereo_run, tmp_path / "m", depth_encoding="32FC1", sensors=["camera"])
+    msgs = _raw(bag.path)
+    assert {m.format for _, _, m in msgs[DEPTH]} == {"32FC1; compressedDepth png"}
     cam = RunLog(stereo_run).camera_streams()[0]
     a_ref = np.float32(100.0) * np.float32(101.0)  # depth_quantization z0 = 100 m
-    for (_, _, msg), f in zip(default_msgs[DEPTH], cam.depth_files, strict=True):
+    for (_, _, msg), f in zip(msgs[DEPTH], cam.depth_files, strict=True):
         _, a, b = struct.unpack("<iff", msg.data.tobytes()[:12])
         assert a == a_ref and b == pytest.approx(1.0 - 10100.0 / 65.535, rel=1e-6)
         enc, d = _decode_depth(msg)
@@ -136,8 +138,7 @@ def test_compressed_depth_32fc1_inverse_depth_within_one_quantisation_step(defau
 
 
 def test_compressed_depth_16uc1_is_exact_and_the_run_png(stereo_run, tmp_path):
-    bag = write_bag(stereo_run, tmp_path / "mm", depth_encoding="16UC1", ros_distro="humble",
-                    sensors=["camera"])
+    bag = write_bag(stereo_run, tmp_path / "mm", ros_distro="humble", sensors=["camera"])
     msgs = _raw(bag.path)
     cam = RunLog(stereo_run).camera_streams()[0]
     assert {m.format for _, _, m in msgs[DEPTH]} == {"16UC1; compressedDepth"}  # Humble
@@ -241,7 +242,7 @@ def test_humble_metadata_is_version_5_with_exactly_its_fields(stereo_run, defaul
     assert (meta["compression_format"], meta["compression_mode"]) == expect
     got = _raw(bag.path)  # rosbags reads version 5
     assert {t: len(v) for t, v in got.items()} == counts
-    assert {m.format for _, _, m in got[DEPTH]} == {"32FC1; compressedDepth"}
+    assert {m.format for _, _, m in got[DEPTH]} == {"16UC1; compressedDepth"}
 
 
 def test_same_run_same_bytes_and_cloud_option(stereo_run, default_bag, tmp_path):

@@ -46,7 +46,7 @@ def write_bag(
     storage: str = "mcap",
     overwrite: bool = False,
     sensors: Collection[str] | None = None,
-    depth_encoding: str = "32FC1",
+    depth_encoding: str = "16UC1",
     cloud_stride_px: int = 4,
     images: str = "compressed",
     image_codec: str = "jpeg",
@@ -70,8 +70,10 @@ def write_bag(
     sensors : collection of {"camera", "stereo", "lidar"}, optional
         Sensor topics to write; each one named must be in the run (else
         :class:`~marsscene.errors.RuntimeSimError`). Default: every sensor the run has.
-    depth_encoding : {"32FC1", "16UC1"}
-        ``/rover/depth/image_raw`` in metres (NaN = no return) or millimetres (0 = no return).
+    depth_encoding : {"16UC1", "32FC1"}
+        Depth images in millimetres (0 = no return; the default: lossless, and the
+        compressedDepth PNG is the run's own file) or in metres (NaN = no return, REP-118's
+        float form; its compressedDepth is image_transport's quantised inverse depth).
     cloud_stride_px : int
         Pixel stride of the organised ``/rover/depth/points`` cloud (1 = every pixel).
     images : {"compressed", "raw", "both"}

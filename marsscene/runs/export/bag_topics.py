@@ -42,7 +42,7 @@ class ImageOptions:
     images: str = "compressed"
     codec: str = "jpeg"
     jpeg_quality: int = bi.JPEG_QUALITY
-    depth_encoding: str = "32FC1"
+    depth_encoding: str = "16UC1"
     depth_cloud: bool = False
     cloud_stride_px: int = 4
 
