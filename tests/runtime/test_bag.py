@@ -308,3 +308,31 @@ def test_stereo_placement_from_run_config_or_refused(stereo_run, tmp_path):
     assert y["stereo_left_optical_frame"] == pytest.approx(0.1)
     assert y["stereo_right_optical_frame"] == pytest.approx(-0.1)
     assert "/rover/rgb/image_raw" not in msgs and "/rover/scan" not in msgs
+
+
+def test_odometry_declares_the_simulated_wheel_noise(bag_msgs, stereo_run):
+    """bag_run's wheel encoders carry N(0, 0.05 rad/s) per sample and wheel, nothing else."""
+    msgs, _ = bag_msgs
+    run = RunLog(stereo_run)
+    odom = [m for _, m in msgs["/rover/odom"]]
+    tw = np.array([m.twist.covariance for m in odom]).reshape(-1, 6, 6)
+    pose = np.array([m.pose.covariance for m in odom]).reshape(-1, 6, 6)
+    for k in (1, 2, 3, 4):  # vy vz wx wy: not observed by wheel odometry
+        assert np.all(tw[:, k, k] == 1e6)
+    for k in (2, 3, 4):  # z roll pitch
+        assert np.all(pose[:, k, k] == 1e6)
+    # left-right symmetric wheels, steering straight: v is the mean of the six r * rate,
+    # so var(v) = r^2 sigma^2 / 6 (independent of the module's Jacobian)
+    steer = run.wheels[:, 7:11]
+    straight = np.abs(steer).max(axis=1) < 0.005
+    assert straight.any()
+    expect = run.rover.wheel_radius_m**2 * 0.05**2 / 6
+    np.testing.assert_allclose(tw[straight, 0, 0], expect, rtol=1e-4)
+    assert np.all(tw[:, 5, 5] > 0) and np.all(tw[:, 0, 0] > 0)
+    # dead reckoning from the start: zero at first, then growing in x, y and yaw
+    assert np.all(pose[0][np.ix_([0, 1, 5], [0, 1, 5])] == 0)
+    for k in (0, 1, 5):
+        assert np.all(np.diff(pose[:, k, k]) >= -1e-18) and pose[-1, k, k] > 0
+    np.testing.assert_allclose(pose, pose.transpose(0, 2, 1))
+    truth = np.array([m.pose.covariance for _, m in msgs["/rover/GT_Trajectory"]])
+    assert np.all(truth == 0)

@@ -129,3 +129,45 @@ def depth_points(
     pts = np.stack([x, y, d], axis=-1)
     pts[(mm == 0) | (mm == FAR_MM)] = np.nan
     return pts
+
+
+#: Variance declared for what wheel odometry does not observe (z, roll, pitch; lateral and
+#: vertical velocity, roll and pitch rates), as ROS odometry publishers conventionally do.
+UNOBSERVED_VAR = 1e6
+
+
+def odometry_covariances(
+    run_meta: dict[str, Any], wheels: NDArray[np.float64], twist: NDArray[np.float64],
+    odom_t_s: NDArray[np.float64], odom_yaw_rad: NDArray[np.float64], rover: RoverConfig,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(N, 36) pose and twist covariances of ``/rover/odom`` from the run's simulated noise.
+
+    Row-major 6 x 6 in (x, y, z, roll, pitch, yaw) and (vx, vy, vz, wx, wy, wz), as
+    ``nav_msgs/Odometry`` orders them; computed by :mod:`marsscene.rover.odometry_covariance`
+    (the wheel-encoder noise of ``run.json``'s ``noise``; ``slip_mean`` is a bias, in none).
+    """
+    from dataclasses import fields
+
+    from marsscene.rover.config import NoiseConfig
+    from marsscene.rover.odometry_covariance import pose_covariance, twist_covariance
+
+    known = {f.name for f in fields(NoiseConfig)}
+    meta = run_meta.get("noise", {})
+    kwargs: dict[str, Any] = {k: (tuple(v) if isinstance(v, list) else v)
+                              for k, v in meta.items() if k in known}
+    noise = NoiseConfig(**kwargs)
+    tw = twist_covariance(wheels[:, 1:7], wheels[:, 7:11], noise, rover)
+    n = len(odom_t_s)
+    tw = tw[np.clip(np.arange(n), 0, len(tw) - 1)]
+    pose3 = pose_covariance(odom_t_s, twist[:n, 0], odom_yaw_rad, tw)
+    pose = np.zeros((n, 6, 6))
+    twist6 = np.zeros((n, 6, 6))
+    for k in (2, 3, 4):
+        pose[:, k, k] = UNOBSERVED_VAR
+    for k in (1, 2, 3, 4):
+        twist6[:, k, k] = UNOBSERVED_VAR
+    ix = np.array([0, 1, 5])
+    pose[:, ix[:, None], ix[None, :]] = pose3
+    jx = np.array([0, 5])
+    twist6[:, jx[:, None], jx[None, :]] = tw
+    return pose.reshape(n, 36), twist6.reshape(n, 36)

@@ -64,16 +64,19 @@ class MessageBuilder:
             header=self.header(t_s, parent), child_frame_id=child, transform=tr
         )
 
-    def odometry(self, t_s: float, parent: str, xyz: Any, q: Any, lin: Any, ang: Any) -> Any:
+    def odometry(self, t_s: float, parent: str, xyz: Any, q: Any, lin: Any, ang: Any,
+                 pose_cov: Any = None, twist_cov: Any = None) -> Any:
+        """``nav_msgs/Odometry``; covariances default to zero (ground truth)."""
         point = self.T["geometry_msgs/msg/Point"](x=float(xyz[0]), y=float(xyz[1]),
                                                  z=float(xyz[2]))
         pose = self.T["geometry_msgs/msg/Pose"](position=point, orientation=self.quat(q))
         twist = self.T["geometry_msgs/msg/Twist"](linear=self.vec(lin), angular=self.vec(ang))
         return self.T["nav_msgs/msg/Odometry"](
             header=self.header(t_s, parent), child_frame_id="base_link",
-            pose=self.T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
-            twist=self.T["geometry_msgs/msg/TwistWithCovariance"](twist=twist,
-                                                                  covariance=np.zeros(36)),
+            pose=self.T["geometry_msgs/msg/PoseWithCovariance"](
+                pose=pose, covariance=np.zeros(36) if pose_cov is None else pose_cov),
+            twist=self.T["geometry_msgs/msg/TwistWithCovariance"](
+                twist=twist, covariance=np.zeros(36) if twist_cov is None else twist_cov),
         )
 
     def imu(self, t_s: float, row: Any, gyro_var: float, accel_var: float) -> Any:

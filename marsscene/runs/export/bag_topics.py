@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from marsscene.errors import RuntimeSimError
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
@@ -77,6 +78,9 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     pos, vel, twist = bd.joint_states(run.wheels, run.rover)
     gt_lin, gt_ang = bd.body_twist_from_poses(run.gt)
     od, gt = run.odom, run.gt
+    od_yaw = Rotation.from_quat(od.quat_xyzw).as_euler("xyz")[:, 2]
+    pose_cov, twist_cov = bd.odometry_covariances(run.meta, run.wheels, twist, od.timestamps_s,
+                                                  np.unwrap(od_yaw), run.rover)
     names = [*DRIVE_JOINTS, *STEER_JOINTS]
     js = bag.T["sensor_msgs/msg/JointState"]
     tw = bag.T["geometry_msgs/msg/Twist"]
@@ -87,7 +91,7 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
 
     def odom(i: int, t: float) -> Any:
         return bag.odometry(t, "odom", od.xyz_m[i], od.quat_xyzw[i], (twist[i, 0], 0, 0),
-                            (0, 0, twist[i, 1]))
+                            (0, 0, twist[i, 1]), pose_cov[i], twist_cov[i])
 
     def truth(i: int, t: float) -> Any:
         return bag.odometry(t, "map", gt.xyz_m[i], gt.quat_xyzw[i], gt_lin[i], gt_ang[i])

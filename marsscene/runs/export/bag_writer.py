@@ -74,6 +74,11 @@ def _compressor(codec: str, level: int) -> Callable[[bytes], bytes]:
     return lambda data: zstd.compress(data, level=level)
 
 
+def _returns(data: bytes) -> Callable[[bytes], bytes]:
+    """A stand-in compressor that hands back ``data`` (already compressed)."""
+    return lambda _raw: data
+
+
 #: Chunks compressed at once beside the writer (each 1 MiB; the oldest is waited for beyond).
 _CHUNKS_IN_FLIGHT = 8
 
@@ -114,7 +119,7 @@ def _chunked_mcap(codec: str, level: int) -> Any:
                 chunk, future = self.pending.popleft()
                 data = future.result()
                 live, self.chunk = self.chunk, chunk
-                self.compressor = lambda _raw, data=data: data
+                self.compressor = _returns(data)
                 super().close_chunk()  # writes the Chunk, MessageIndex records, ChunkIndex
                 self.chunk = live
                 wait = False
