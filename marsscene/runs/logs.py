@@ -10,6 +10,7 @@ Run folder layout (all stamps in s on the simulation clock, t = 0 after settling
       wheels.csv          t, measured wheel rates (rad/s) x6, steering angles (rad) x4
       imu.csv             t, ax ay az (m/s^2, specific force incl. gravity), gx gy gz (rad/s)
       imu_true.csv        the same without noise and bias
+      imu_bias.csv        t, gyro bias xyz (rad/s), accel bias xyz (m/s^2) in each imu.csv row
       lidar/stamps.csv    t, file, points
       lidar/NNNNNN.ply    x y z (m, lidar frame) intensity ring
       camera/stamps.csv   t, rgb file, depth file

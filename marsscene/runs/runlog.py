@@ -180,6 +180,9 @@ class RunLog:
         true = self.path / "imu_true.csv"
         self.imu_true = (read_numeric_csv(true, 7, complete_lines=cut) if true.is_file()
                          else None)
+        bias = self.path / "imu_bias.csv"  # t, gyro bias xyz, accel bias xyz (newer runs)
+        self.imu_bias = (read_numeric_csv(bias, 7, complete_lines=cut) if bias.is_file()
+                         else None)
         if cut:
             how = ("was interrupted" if self.status == "interrupted"
                    else "stopped without finishing (killed?)")

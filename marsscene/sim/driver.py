@@ -170,7 +170,8 @@ class _Loop:
     def imu(self, t: float) -> None:
         acc_true, gyr_true = self.sim.imu_true()
         acc, gyr = self.imu_noise.measure(acc_true, gyr_true)
-        self.writer.imu(t, acc, gyr, acc_true, gyr_true)
+        bias = (*self.imu_noise.gyro_bias_rad_s, *self.imu_noise.accel_bias_m_s2)
+        self.writer.imu(t, acc, gyr, acc_true, gyr_true, bias)
         if self.keep:
             self.imu_rows.append(np.concatenate([[t], acc, gyr]))
 

@@ -22,6 +22,7 @@ from marsscene.runs.logs import CsvLog, ImageWriter, TumLog, ply_bytes, write_fi
 __all__ = ["RunWriter"]
 
 _IMU_COLUMNS = ["t", "ax", "ay", "az", "gx", "gy", "gz"]
+_BIAS_COLUMNS = ["t", "bgx", "bgy", "bgz", "bax", "bay", "baz"]
 _FRAMES = {
     "world": "map: x east, y north, z up (REP-103/105)",
     "base_link": "x forward, y left, z up",
@@ -53,6 +54,7 @@ class RunWriter:
             *[f"steer_{j[-2:]}" for j in STEER_JOINTS]])
         self.logs["imu"] = CsvLog(out / "imu.csv", _IMU_COLUMNS)
         self.logs["imu_true"] = CsvLog(out / "imu_true.csv", _IMU_COLUMNS)
+        self.logs["imu_bias"] = CsvLog(out / "imu_bias.csv", _BIAS_COLUMNS)
         if lidar:
             self.logs["lidar"] = CsvLog(out / "lidar" / "stamps.csv", ["t", "file", "points"])
         if camera:
@@ -75,10 +77,13 @@ class RunWriter:
             self.logs["cmd"].row(t, (v, w))
             self.logs["wheels"].row(t, (*rates, *steer))
 
-    def imu(self, t: float, acc: Any, gyr: Any, acc_true: Any, gyr_true: Any) -> None:
+    def imu(self, t: float, acc: Any, gyr: Any, acc_true: Any, gyr_true: Any,
+            bias: Any = None) -> None:
         if self.logs:
             self.logs["imu"].row(t, (*acc, *gyr))
             self.logs["imu_true"].row(t, (*acc_true, *gyr_true))
+            if bias is not None:  # gyro xyz, accel xyz: the bias inside this sample
+                self.logs["imu_bias"].row(t, tuple(bias))
 
     def lidar(self, t: float, index: int, scan: dict[str, Any]) -> None:
         if self.out is None:

@@ -288,6 +288,16 @@ def test_drive_with_a_profile_is_deterministic_and_recorded(ln_runs: list[Path])
     err = imu[:, 4:7] - true[:, 4:7] - np.array(bias["gyro_start_rad_s"])
     sigma = NoiseConfig(profile="ln200s").white_sigmas(100.0)[0]
     assert err.std() == pytest.approx(sigma, rel=0.15)  # white gyro noise at 100 Hz
+    # imu_bias.csv: the bias inside every sample; what is left is white noise, mean 0
+    walk = np.loadtxt(a / "imu_bias.csv", delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(walk[:, 0], imu[:, 0])
+    np.testing.assert_allclose(walk[-1, 1:4], bias["gyro_end_rad_s"], rtol=1e-8)  # CSV digits
+    np.testing.assert_allclose(walk[-1, 4:7], bias["accel_end_m_s2"], rtol=1e-8)
+    step = NoiseConfig(profile="ln200s").gyro_bias_walk_rad_s2_rthz * np.sqrt(0.01)
+    np.testing.assert_allclose(np.diff(walk[:, 1:4], axis=0).std(), step, rtol=0.15)
+    white = imu[:, 4:7] - true[:, 4:7] - walk[:, 1:4]
+    assert white.std() == pytest.approx(sigma, rel=0.15)
+    assert np.abs(white.mean(axis=0)).max() < 4 * sigma / np.sqrt(len(white))
 
 
 def test_exports_declare_the_simulated_noise(ln_runs: list[Path], tmp_path: Path) -> None:
@@ -316,9 +326,13 @@ def test_exports_declare_the_simulated_noise(ln_runs: list[Path], tmp_path: Path
     bias = json.loads((ln_runs[0] / "run.json").read_text())["summary"]["imu_bias"]
     gt = np.loadtxt(out / "mav0/state_groundtruth_estimate0/data.csv", delimiter=",",
                     comments="#")
-    np.testing.assert_allclose(gt[0, 11:14], bias["gyro_start_rad_s"], rtol=1e-6)
-    start, end = np.array(bias["accel_start_m_s2"]), np.array(bias["accel_end_m_s2"])
-    assert np.all(np.abs(gt[-1, 14:17] - end) <= 0.2 * np.abs(end - start) + 1e-12)
+    walk = np.loadtxt(ln_runs[0] / "imu_bias.csv", delimiter=",", skiprows=1)
+    t_gt = gt[:, 0] * 1e-9
+    for k in range(6):  # the logged bias at the ground-truth stamps
+        np.testing.assert_allclose(gt[:, 11 + k], np.interp(t_gt, walk[:, 0], walk[:, 1 + k]),
+                                   rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(gt[0, 11:14], bias["gyro_start_rad_s"],
+                               atol=5 * NoiseConfig(profile="ln200s").gyro_bias_walk_rad_s2_rthz)
     # ROS: /rover/imu_noisy covariances are the per-sample white-noise variances
     calls: dict[str, list[tuple[Any, ...]]] = defaultdict(list)
 

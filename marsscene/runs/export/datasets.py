@@ -255,8 +255,13 @@ def _orb_imu(nd: dict[str, Any]) -> str:
 
 
 def _true_bias(run: RunLog) -> NDArray[np.float64]:
-    """IMU bias (gyro xyz, accel xyz) at each ground-truth stamp: the run's turn-on bias, and
-    for a walking bias the mean of the walk given its start and end (linear between them)."""
+    """IMU bias (gyro xyz, accel xyz) at each ground-truth stamp: from ``imu_bias.csv`` (the
+    bias of every IMU sample) interpolated to the stamps; for older runs, the turn-on bias
+    and, for a walking bias, the mean of the walk given its start and end (linear)."""
+    t = run.gt.timestamps_s
+    if run.imu_bias is not None and len(run.imu_bias):
+        b = run.imu_bias
+        return np.stack([np.interp(t, b[:, 0], b[:, k]) for k in range(1, 7)], axis=1)
     summary = run.meta.get("summary", {}).get("imu_bias")
     noise = run.meta.get("noise", {})
     start = np.array([*noise.get("gyro_bias_rad_s", (0, 0, 0)),
@@ -265,7 +270,6 @@ def _true_bias(run: RunLog) -> NDArray[np.float64]:
     if summary:
         start = np.array([*summary["gyro_start_rad_s"], *summary["accel_start_m_s2"]])
         end = np.array([*summary["gyro_end_rad_s"], *summary["accel_end_m_s2"]])
-    t = run.gt.timestamps_s
     t_imu = run.imu[:, 0] if len(run.imu) else t
     span = float(t_imu[-1] - t_imu[0]) if len(t_imu) > 1 else 0.0
     f = np.clip((t - t_imu[0]) / span, 0.0, 1.0) if span > 0 else np.zeros(len(t))
