@@ -37,6 +37,7 @@ def test_tum_rgbd_export_equals_the_run(bag_run, tmp_path) -> None:
     assert [r[0] for r in rgb] == [r[0] for r in depth]
     for (_, f), src in zip(rgb, cam.rgb_files, strict=True):
         assert (out / f).read_bytes() == src.read_bytes()
+        assert (out / f).samefile(src)  # a hard link: no second copy on disk
     for (_, f), src in zip(depth, cam.depth_files, strict=True):
         tum, mm = read_image(out / f), read_image(src)
         assert tum.dtype == np.uint16

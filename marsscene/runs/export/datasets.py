@@ -95,6 +95,15 @@ def _lines(rows: list[str], head: str) -> str:
     return head + "".join(r + "\n" for r in rows)
 
 
+def _link_or_copy(src: Path, dst: Path) -> None:
+    """``dst`` as a hard link to ``src`` (no second copy of a long run's images on disk), or a
+    copy where the file system cannot link (another device, no hard links)."""
+    try:
+        os.link(src, dst)
+    except OSError:
+        dst.write_bytes(src.read_bytes())
+
+
 def _tum_rgbd(
     run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None]
 ) -> None:
@@ -102,7 +111,7 @@ def _tum_rgbd(
     (out / "depth").mkdir()
     stamps = [f"{t:.6f}" for t in cam.stamps_s]
     for s, rgb, dep in zip(stamps, cam.rgb_files, cam.depth_files, strict=True):
-        (out / "rgb" / f"{s}.png").write_bytes(rgb.read_bytes())
+        _link_or_copy(rgb, out / "rgb" / f"{s}.png")
         mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // 1000)
         (out / "depth" / f"{s}.png").write_bytes(
             png_bytes(np.where(mm > 65535, 0, mm).astype(np.uint16)))
