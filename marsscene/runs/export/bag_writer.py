@@ -20,6 +20,7 @@ module chooses how it compresses and which metadata version it is:
 
 from __future__ import annotations
 
+import struct
 import sys
 from collections.abc import Callable
 from io import StringIO
@@ -79,6 +80,9 @@ def _returns(data: bytes) -> Callable[[bytes], bytes]:
     return lambda _raw: data
 
 
+#: MCAP Message record head: opcode, record length, channel id, sequence, log/publish time.
+_MESSAGE_HEAD = struct.Struct("<BQHIQQ")
+
 #: Chunks compressed at once beside the writer (each 1 MiB; the oldest is waited for beyond).
 _CHUNKS_IN_FLIGHT = 8
 
@@ -107,6 +111,23 @@ def _chunked_mcap(codec: str, level: int) -> Any:
             self.compression = codec  # the Chunk record's compression string
             self.pool = ThreadPoolExecutor(2, thread_name_prefix="marsscene-mcap")
             self.pending: deque[tuple[Any, Future[bytes]]] = deque()
+
+        def write(self, connection: Any, timestamp: int, data: bytes | memoryview) -> None:
+            """rosbags' ``McapWriter.write`` with the Message record packed in one go (the
+            same bytes: opcode, length, channel, sequence 0, log and publish time, data)
+            instead of through a fresh BytesIO per message (~1.4 ms per LiDAR scan)."""
+            self.message_start_time = min(timestamp, self.message_start_time)
+            self.message_end_time = max(timestamp, self.message_end_time)
+            self.channel_stats[connection.id] += 1
+            chunk = self.chunk
+            chunk.message_start_time = min(timestamp, chunk.message_start_time)
+            chunk.message_end_time = max(timestamp, chunk.message_end_time)
+            chunk.msgs[connection.id].append((timestamp, chunk.bio.tell()))
+            chunk.bio.write(_MESSAGE_HEAD.pack(0x05, 22 + len(data), connection.id, 0,
+                                               timestamp, timestamp))
+            chunk.bio.write(data)
+            if chunk.bio.tell() > 2**20:
+                self.close_chunk()
 
         def close_chunk(self) -> None:
             chunk = self.chunk
