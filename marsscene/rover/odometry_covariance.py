@@ -63,11 +63,12 @@ def pose_covariance(
 ) -> NDArray[np.float64]:
     """(N, 3, 3) covariance of the dead-reckoned ``(x, y, yaw)`` at each stamp, 0 at the first.
 
-    Step ``i`` (from stamp ``i`` to ``i + 1``, duration ``dt_i``) moves by ``v_i dt_i`` along
-    ``yaw_i`` with twist error covariance ``twist_cov[i]``. With ``S_k = sum_{j<k} dt_j v_j
-    (-sin yaw_j, cos yaw_j)``, the error after ``k`` steps is ``sum_{i<k} G_ki eta_i`` where
-    ``G_ki = [[dt_i u_i, dt_i (S_k - S_{i+1})], [0, dt_i]]``; its covariance expands into
-    cumulative sums over ``i``.
+    Step ``i`` (from stamp ``i`` to ``i + 1``, duration ``dt_i``) moves by ``v[i + 1] dt_i``
+    along ``yaw_i`` with twist error covariance ``twist_cov[i + 1]``: as the drive does it, the
+    odometry at stamp ``i + 1`` integrates the wheel reading taken at that stamp. With
+    ``S_k = sum_{j<k} dt_j v_{j+1} (-sin yaw_j, cos yaw_j)``, the error after ``k`` steps
+    is ``sum_{i<k} G_ki eta_i`` where ``G_ki = [[dt_i u_i, dt_i (S_k - S_{i+1})], [0, dt_i]]``;
+    its covariance expands into cumulative sums over ``i``.
     """
     t = np.asarray(t_s, dtype=np.float64)
     v = np.asarray(v_m_s, dtype=np.float64)
@@ -77,10 +78,10 @@ def pose_covariance(
     if n < 2:
         return out
     dt = np.diff(t)
-    c = np.asarray(twist_cov, dtype=np.float64)[: n - 1]
+    c = np.asarray(twist_cov, dtype=np.float64)[1:n]
     heading = np.stack([np.cos(yaw[:-1]), np.sin(yaw[:-1])], axis=1)
     normal = np.stack([-heading[:, 1], heading[:, 0]], axis=1)
-    s = np.vstack([np.zeros(2), np.cumsum((dt * v[:-1])[:, None] * normal, axis=0)])  # S_0..S_n-1
+    s = np.vstack([np.zeros(2), np.cumsum((dt * v[1:])[:, None] * normal, axis=0)])  # S_0..S_n-1
     # H_i = G_ki with S_k = 0: columns (dv, domega); rows (x, y, yaw)
     h = np.zeros((n - 1, 3, 2))
     h[:, :2, 0] = dt[:, None] * heading

@@ -171,11 +171,13 @@ class RunLog:
         cut = self.incomplete = self.status != "complete"
         gt = read_tum(self.path / "gt.tum", complete_lines=cut)
         odom = read_tum(self.path / "odom.tum", complete_lines=cut)
-        n = min(len(gt), len(odom))
+        self.cmd = read_numeric_csv(self.path / "cmd.csv", 3, complete_lines=cut)
+        wheels = read_numeric_csv(self.path / "wheels.csv", 11, complete_lines=cut)
+        # one row each per control step: a cut run may end between the files
+        n = min(len(gt), len(odom), len(wheels))
         self.gt: Trajectory = gt.head(n)
         self.odom: Trajectory = odom.head(n)
-        self.cmd = read_numeric_csv(self.path / "cmd.csv", 3, complete_lines=cut)
-        self.wheels = read_numeric_csv(self.path / "wheels.csv", 11, complete_lines=cut)
+        self.wheels = wheels[:n]
         self.imu = read_numeric_csv(self.path / "imu.csv", 7, complete_lines=cut)
         true = self.path / "imu_true.csv"
         self.imu_true = (read_numeric_csv(true, 7, complete_lines=cut) if true.is_file()

@@ -300,3 +300,37 @@ def test_shared_load_once_per_item_and_nothing_kept() -> None:
     assert got == [i * 10 for i in range(200) for _ in range(2)]
     assert sorted(loads) == list(range(200))
     assert shared.slots == {}
+
+
+def test_threaded_chunk_writer_makes_the_stock_mcap_writers_bytes(tmp_path):
+    """marsscene's MCAP storage (chunks compressed on threads, Message records packed in one
+    write) against rosbags' own McapWriter with the same compressor: the same file."""
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2.storage_mcap import McapWriter
+    from rosbags.typesys import Stores, get_typestore
+
+    from marsscene.runs.export.bag_writer import _compressor, open_writer
+
+    class Stock(McapWriter):
+        def __init__(self, path: Path, compression: Any) -> None:
+            super().__init__(path, compression)
+            self.compression, self.compressor = "zstd", _compressor("zstd", 3)
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    rng = np.random.default_rng(5)
+    sizes = rng.integers(1, 3_000_000, 60)
+    sizes[::3] = rng.integers(1, 200, 20)  # small and large messages, chunks of both kinds
+    payloads = [rng.integers(0, 4, n, dtype=np.uint8).tobytes() for n in sizes]
+    files = []
+    for name, stock in (("ours", False), ("stock", True)):
+        writer = open_writer(tmp_path / name / "bag", "mcap", "zstd", "jazzy")
+        if stock:
+            writer.STORAGE_PLUGINS = {**writer.STORAGE_PLUGINS, StoragePlugin.MCAP: Stock}
+        with writer:
+            a = writer.add_connection("/a", "std_msgs/msg/String", typestore=store)
+            for i, data in enumerate(payloads):
+                if i == 30:  # a channel added mid-way
+                    b = writer.add_connection("/b", "std_msgs/msg/String", typestore=store)
+                writer.write(a if i < 30 or i % 2 else b, 1000 + i, memoryview(data))
+        files.append((tmp_path / name / "bag" / "bag.mcap").read_bytes())
+    assert files[0] == files[1] and len(files[0]) > 1_000_000

@@ -83,7 +83,9 @@ def _returns(data: bytes) -> Callable[[bytes], bytes]:
 #: MCAP Message record head: opcode, record length, channel id, sequence, log/publish time.
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")
 
-#: Chunks compressed at once beside the writer (each 1 MiB; the oldest is waited for beyond).
+#: Chunks compressed at once beside the writer (the oldest is waited for beyond). A chunk
+#: closes past 1 MiB, so it holds 1 MiB plus its last message: an os1-128 scan (~1.5 MB)
+#: makes a chunk of its own; the pending chunks hold ~20-100 MB, raw and compressed.
 _CHUNKS_IN_FLIGHT = 8
 
 
@@ -123,8 +125,8 @@ def _chunked_mcap(codec: str, level: int) -> Any:
             chunk.message_start_time = min(timestamp, chunk.message_start_time)
             chunk.message_end_time = max(timestamp, chunk.message_end_time)
             chunk.msgs[connection.id].append((timestamp, chunk.bio.tell()))
-            chunk.bio.write(_MESSAGE_HEAD.pack(0x05, 22 + len(data), connection.id, 0,
-                                               timestamp, timestamp))
+            chunk.bio.write(_MESSAGE_HEAD.pack(0x05, 22 + memoryview(data).nbytes,
+                                               connection.id, 0, timestamp, timestamp))
             chunk.bio.write(data)
             if chunk.bio.tell() > 2**20:
                 self.close_chunk()
@@ -141,8 +143,10 @@ def _chunked_mcap(codec: str, level: int) -> Any:
                 data = future.result()
                 live, self.chunk = self.chunk, chunk
                 self.compressor = _returns(data)
-                super().close_chunk()  # writes the Chunk, MessageIndex records, ChunkIndex
-                self.chunk = live
+                try:
+                    super().close_chunk()  # writes the Chunk, MessageIndex records, ChunkIndex
+                finally:
+                    self.chunk = live
                 wait = False
 
         def close(self, version: int, metadata: str) -> None:
@@ -153,6 +157,12 @@ def _chunked_mcap(codec: str, level: int) -> Any:
             finally:
                 self.pool.shutdown(wait=True, cancel_futures=True)
             super().close(version, metadata)
+
+        def abort(self) -> None:
+            """On an error: drop the chunks still compressing (the folder is discarded)."""
+            self.pending.clear()
+            self.pool.shutdown(wait=False, cancel_futures=True)
+            super().abort()
 
     return ChunkCompressedMcap
 
