@@ -148,17 +148,15 @@ def odometry_covariances(
     """
     from dataclasses import fields
 
+    from marsscene._validate import dataclass_from_mapping
     from marsscene.rover.config import NoiseConfig
     from marsscene.rover.odometry_covariance import pose_covariance, twist_covariance
 
-    known = {f.name for f in fields(NoiseConfig)}
-    meta = run_meta.get("noise", {})
-    kwargs: dict[str, Any] = {k: (tuple(v) if isinstance(v, list) else v)
-                              for k, v in meta.items() if k in known}
-    noise = NoiseConfig(**kwargs)
-    tw = twist_covariance(wheels[:, 1:7], wheels[:, 7:11], noise, rover)
-    n = len(odom_t_s)
-    tw = tw[np.clip(np.arange(n), 0, len(tw) - 1)]
+    known = {f.name for f in fields(NoiseConfig)}  # run.json of older versions may hold more
+    noise = dataclass_from_mapping(
+        NoiseConfig, {k: v for k, v in run_meta.get("noise", {}).items() if k in known}, "noise")
+    n = len(odom_t_s)  # RunLog keeps one wheels row per odometry row
+    tw = twist_covariance(wheels[:n, 1:7], wheels[:n, 7:11], noise, rover)
     pose3 = pose_covariance(odom_t_s, twist[:n, 0], odom_yaw_rad, tw)
     pose = np.zeros((n, 6, 6))
     twist6 = np.zeros((n, 6, 6))
