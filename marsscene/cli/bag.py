@@ -43,7 +43,8 @@ bag_options = compose(
 )
 
 
-def write_run_bag(run_dir: Path, out: Path | None, *, overwrite: bool, **options: Any) -> None:
+def write_run_bag(run_dir: Path, out: Path | None, *, overwrite: bool, jpeg_cache: Any = None,
+                  **options: Any) -> None:
     """Write the bag with a progress bar and print a one-line summary (used by drive, too)."""
     from marsscene.runs.export.bag import write_bag
 
@@ -65,7 +66,7 @@ def write_run_bag(run_dir: Path, out: Path | None, *, overwrite: bool, **options
                         jpeg_quality=options.get("jpeg_quality", 95),
                         depth_cloud=options.get("depth_cloud"),
                         compression=options.get("bag_compression", "zstd"),
-                        ros_distro=options.get("ros_distro", "jazzy"))
+                        ros_distro=options.get("ros_distro", "jazzy"), jpeg_cache=jpeg_cache)
     n = sum(res.counts.values())
     click.echo(f"     bag: {res.path} ({len(res.counts)} topics, {n} messages, "
                f"{res.size_bytes / 1e6:.1f} MB)")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -192,20 +193,39 @@ def drive(
         sim, route = _prepare(scene_dir, run, route_path, waypoints_path, out_dir,
                               max_slope=max_slope, corridor=corridor,
                               write_rover_xml=write_rover_xml)
-        res, wall = _drive(sim, route, seconds, out_dir, seed, lookahead)
-    s = res.summary
-    click.echo(
-        f"   drove: {s['path_length_m']:.2f} m in {s['sim_time_s']:.2f} sim s "
-        f"({s['sim_time_s'] / max(wall, 1e-9):.1f}x real time), goal reached: "
-        f"{s['goal_reached']}, cross-track RMS {s.get('cross_track_rms_m', float('nan')):.3f} m"
-    )
-    click.echo(f"    logs: {out_dir}")
-    if write_bag:
-        t0 = time.perf_counter()
+    cache = _jpeg_cache(out_dir, bag_opts) if write_bag and run.camera is not None else None
+    try:
         with user_errors():
-            write_run_bag(out_dir, None, overwrite=overwrite, **bag_opts)
-        click.echo(f"          bag written in {time.perf_counter() - t0:.1f} s "
-                   f"(drive: {wall:.1f} s)")
+            res, wall = _drive(sim, route, seconds, out_dir, seed, lookahead, cache)
+        s = res.summary
+        click.echo(
+            f"   drove: {s['path_length_m']:.2f} m in {s['sim_time_s']:.2f} sim s "
+            f"({s['sim_time_s'] / max(wall, 1e-9):.1f}x real time), goal reached: "
+            f"{s['goal_reached']}, cross-track RMS "
+            f"{s.get('cross_track_rms_m', float('nan')):.3f} m"
+        )
+        click.echo(f"    logs: {out_dir}")
+        if write_bag:
+            t0 = time.perf_counter()
+            with user_errors():
+                write_run_bag(out_dir, None, overwrite=overwrite, jpeg_cache=cache, **bag_opts)
+            click.echo(f"          bag written in {time.perf_counter() - t0:.1f} s "
+                       f"(drive: {wall:.1f} s)")
+    finally:
+        if cache is not None:
+            shutil.rmtree(cache.root, ignore_errors=True)
+
+
+def _jpeg_cache(out_dir: Path, bag_opts: dict[str, Any]) -> Any:
+    """The JPEGs the bag will want, encoded while driving (none for PNG-only or raw images)."""
+    from marsscene.runs.export.bag_images import JpegCache
+
+    if (bag_opts.get("bag_images", "compressed") == "raw"
+            or bag_opts.get("bag_image_format", "jpeg") != "jpeg"):
+        return None
+    cache = JpegCache(out_dir / ".bag-cache", bag_opts.get("jpeg_quality", 95))
+    shutil.rmtree(cache.root, ignore_errors=True)  # a killed drive's leftovers
+    return cache
 
 
 def _run_config(run_config: Path | None, noise_config: Path | None, lidar: bool,
@@ -258,7 +278,7 @@ def _prepare(scene_dir: Path, run: Any, route_path: Path | None, waypoints_path:
 
 
 def _drive(sim: Any, route: Any, seconds: float | None, out_dir: Path, seed: int,
-           lookahead: float) -> tuple[Any, float]:
+           lookahead: float, jpeg_cache: Any = None) -> tuple[Any, float]:
     """Drive with a progress line; the result and the wall time (s). Ctrl-C or SIGTERM stop the
     drive with the run folder finished up to there (exit code 130)."""
     import signal
@@ -281,7 +301,8 @@ def _drive(sim: Any, route: Any, seconds: float | None, out_dir: Path, seed: int
     try:
         res = run_drive(sim, route=route, seconds=seconds, out_dir=out_dir,
                         rng=stage_rng(seed, "sensors"),
-                        pursuit=PursuitConfig(lookahead_m=lookahead), progress=meter)
+                        pursuit=PursuitConfig(lookahead_m=lookahead), progress=meter,
+                        jpeg_cache=jpeg_cache)
     except DriveInterrupted as stop:
         meter.close()
         s = stop.result.summary

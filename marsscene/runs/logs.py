@@ -23,6 +23,7 @@ from __future__ import annotations
 import io
 import json
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -158,13 +159,16 @@ class ImageWriter:
         self._max = max_pending
 
     @staticmethod
-    def _write(path: Path, image: NDArray[Any]) -> None:
-        write_file(path, png_bytes(image))
+    def _write(path: Path, image: NDArray[Any], encode: Callable[[NDArray[Any]], bytes]) -> None:
+        write_file(path, encode(image))
 
-    def submit(self, path: Path, image: NDArray[Any]) -> None:
+    def submit(self, path: Path, image: NDArray[Any],
+               encode: Callable[[NDArray[Any]], bytes] | None = None) -> None:
+        """Write ``encode(image)`` (default :func:`png_bytes`) to ``path``, in the background."""
         while len(self._pending) >= self._max:
             self._pending.popleft().result()
-        self._pending.append(self._pool.submit(self._write, path, np.array(image)))
+        self._pending.append(self._pool.submit(self._write, path, np.array(image),
+                                               encode or png_bytes))
 
     def close(self) -> None:
         try:

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from marsscene.sensors.odometry import WheelOdometry, measure_wheels
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
 from marsscene.sim.route import Route, cross_track_m
 from marsscene.sim.run_writer import GT_HEADER, ODOM_HEADER, RunWriter
+
+if TYPE_CHECKING:
+    from marsscene.runs.export.bag_images import JpegCache
 
 __all__ = ["DriveInterrupted", "DriveProgress", "DriveResult", "drive"]
 
@@ -104,7 +107,8 @@ class _Loop:
     """One drive's state: the sensors, their periods on the physics clock, the rows kept."""
 
     def __init__(self, sim: Any, route: Route | None, command: Any, pursuit: PursuitConfig | None,
-                 rng: np.random.Generator, keep: bool, writer_out: Path | None):
+                 rng: np.random.Generator, keep: bool, writer_out: Path | None,
+                 jpeg_cache: Any = None):
         run = sim.run
         self.sim, self.command, self.rng, self.keep = sim, command, rng, keep
         self.follower = PurePursuit(route, pursuit) if route is not None else None
@@ -124,7 +128,8 @@ class _Loop:
         self.stereo = self.renderer is not None and self.renderer.stereo_ids is not None
         self.writer = RunWriter(writer_out, sim, lidar=self.lidar is not None,
                                 camera=self.renderer is not None, stereo=self.stereo,
-                                pursuit=self.follower.config if self.follower else None)
+                                pursuit=self.follower.config if self.follower else None,
+                                jpeg_cache=jpeg_cache)
         pos0, _ = sim.pose()
         self.odo = WheelOdometry(sim.rover, pos0[0], pos0[1], pos0[2], sim.yaw_rad())
         self.streamed = writer_out is not None  # else the rows are kept here
@@ -323,6 +328,7 @@ def drive(
     pursuit: PursuitConfig | None = None,
     keep_sensors: bool = False,
     progress: Callable[[DriveProgress], None] | None = None,
+    jpeg_cache: JpegCache | None = None,
 ) -> DriveResult:
     """Drive ``sim`` and log every sensor.
 
@@ -343,6 +349,9 @@ def drive(
         Keep LiDAR scans, images and IMU samples in memory in the result.
     progress : callable, optional
         ``progress(DriveProgress)`` called once per simulated second.
+    jpeg_cache : JpegCache, optional
+        Also JPEG-encode every colour frame into this cache (for a bag written right after:
+        :func:`~marsscene.runs.export.bag.write_bag` reads it instead of decoding the PNGs).
 
     Raises
     ------
@@ -352,7 +361,7 @@ def drive(
     """
     limit_s = _time_limit_s(route, command, seconds)
     out = Path(out_dir) if out_dir is not None else None
-    loop = _Loop(sim, route, command, pursuit, rng, keep_sensors, out)
+    loop = _Loop(sim, route, command, pursuit, rng, keep_sensors, out, jpeg_cache)
     try:
         loop.run(limit_s, progress)
     except KeyboardInterrupt:

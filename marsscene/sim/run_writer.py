@@ -35,8 +35,10 @@ class RunWriter:
     """Writes one drive's run folder ``out``; every method is a no-op without a folder."""
 
     def __init__(self, out: Path | None, sim: Any, *, lidar: bool, camera: bool, stereo: bool,
-                 pursuit: Any = None):
+                 pursuit: Any = None, jpeg_cache: Any = None):
         self.out = out
+        #: a :class:`~marsscene.runs.export.bag_images.JpegCache` to fill beside the PNGs
+        self.jpeg_cache = jpeg_cache
         self.logs: dict[str, CsvLog] = {}
         self.poses: dict[str, TumLog] = {}
         self.images = ImageWriter()  # camera PNGs are encoded beside the simulation
@@ -98,6 +100,7 @@ class RunWriter:
             return
         name = f"{index:06d}.png"
         self.images.submit(self._dir("camera", "rgb") / name, rgb)
+        self._jpeg("navcam", name, rgb)
         dname = ""
         if depth is not None:
             mm = np.clip(np.round(depth * 1000.0), 0, 65535).astype(np.uint16)
@@ -105,7 +108,12 @@ class RunWriter:
             dname = "depth/" + name
         self.logs["camera"].row(t, ("rgb/" + name, dname))
 
-    def _dir(self, *parts: str) -> Path:
+    def _jpeg(self, stream: str, name: str, rgb: Any) -> None:
+        if self.jpeg_cache is not None:
+            path = self.jpeg_cache.file(stream, name)
+            self.images.submit(self._dir(path.parent) / path.name, rgb, self.jpeg_cache.encode)
+
+    def _dir(self, *parts: str | Path) -> Path:
         """``out/parts...``, made on first use (not one mkdir call per frame)."""
         assert self.out is not None
         path = self.out.joinpath(*parts)
@@ -120,6 +128,7 @@ class RunWriter:
         name = f"{index:06d}.png"
         for side, img in zip(("left", "right"), pair, strict=True):
             self.images.submit(self.out / "camera" / side / "rgb" / name, img)
+            self._jpeg(side, name, img)
             self.logs[side].row(t, ("rgb/" + name,))
 
     def flush(self) -> None:

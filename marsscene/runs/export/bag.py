@@ -17,7 +17,7 @@ from pathlib import Path
 from marsscene._atomic import replacing_dir
 from marsscene.errors import ExportError, RuntimeSimError
 from marsscene.runs.export import bag_topics as bt
-from marsscene.runs.export.bag_images import IMAGE_CODECS
+from marsscene.runs.export.bag_images import IMAGE_CODECS, JpegCache
 from marsscene.runs.export.bag_messages import MessageBuilder
 from marsscene.runs.export.bag_writer import check_options
 from marsscene.runs.runlog import RunLog
@@ -55,6 +55,7 @@ def write_bag(
     compression: str = "zstd",
     ros_distro: str = "jazzy",
     progress: Callable[[int, int], None] | None = None,
+    jpeg_cache: JpegCache | None = None,
 ) -> BagSummary:
     """Write a run folder as a rosbag2 folder (``metadata.yaml`` + MCAP or sqlite3 storage).
 
@@ -94,6 +95,9 @@ def write_bag(
         Message definitions and ``metadata.yaml`` version (9 for Jazzy, 5 for Humble).
     progress : callable, optional
         ``progress(messages_done, messages_total)``.
+    jpeg_cache : JpegCache, optional
+        JPEGs the drive encoded from its renders (``drive(jpeg_cache=...)``); used for the
+        colour frames it holds at ``jpeg_quality``, the same bytes as encoding the PNGs here.
     """
     if storage not in STORAGES:
         raise ExportError(f"storage = {storage!r}; expected one of {', '.join(STORAGES)}")
@@ -127,6 +131,7 @@ def write_bag(
         images=images, codec=image_codec, jpeg_quality=jpeg_quality,
         depth_encoding=depth_encoding, cloud_stride_px=cloud_stride_px,
         depth_cloud=images != "compressed" if depth_cloud is None else depth_cloud,
+        jpeg_cache=jpeg_cache,
     )
     bag = MessageBuilder(ros_distro)
     bt.add_state(bag, run, cams, "stereo" in wanted)

@@ -46,6 +46,13 @@ class ImageOptions:
     depth_encoding: str = "16UC1"
     depth_cloud: bool = False
     cloud_stride_px: int = 4
+    jpeg_cache: bi.JpegCache | None = None
+
+    def cached_jpeg(self, cam: CameraStream, i: int) -> Path | None:
+        """Frame ``i``'s JPEG encoded while driving, if the options carry a cache."""
+        if self.jpeg_cache is None or self.jpeg_cache.quality != self.jpeg_quality:
+            return None
+        return self.jpeg_cache.file(cam.name, cam.rgb_files[i].name)
 
 
 def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo: bool) -> None:
@@ -140,7 +147,8 @@ def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> No
 
     def rgb_packed(i: int, t: float) -> Any:
         return bag.compressed(t, frame, bi.compressed_image(cam.rgb_files[i], opts.codec,
-                                                            jpeg_quality=opts.jpeg_quality))
+                                                            jpeg_quality=opts.jpeg_quality,
+                                                            cached=opts.cached_jpeg(cam, i)))
 
     for i, t in enumerate(cam.stamps_s):
         if raw:
@@ -203,7 +211,8 @@ def add_stereo(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> No
 
     def build_packed(i: int, t: float) -> Any:
         return bag.compressed(t, frame, bi.compressed_image(cam.rgb_files[i], opts.codec,
-                                                            jpeg_quality=opts.jpeg_quality))
+                                                            jpeg_quality=opts.jpeg_quality,
+                                                            cached=opts.cached_jpeg(cam, i)))
 
     for i, t in enumerate(cam.stamps_s):
         if raw:

@@ -21,7 +21,7 @@ module chooses how it compresses and which metadata version it is:
 from __future__ import annotations
 
 import struct
-import sys
+import threading
 from collections.abc import Callable
 from io import StringIO
 from pathlib import Path
@@ -63,16 +63,29 @@ def check_options(storage: str, compression: str, distro: str) -> None:
 
 
 def _compressor(codec: str, level: int) -> Callable[[bytes], bytes]:
+    """One-shot chunk compression, safe on several threads.
+
+    zstd is python-zstandard's bundled library (its symbols are private), not the
+    ``backports.zstd`` / ``compression.zstd`` that rosbags uses: those resolve ``ZSTD_*`` to
+    whichever ``libzstd`` the process loaded first, and a drive's EGL renderer loads the
+    system's (Mesa links it), so the same chunks came out of ``marsscene drive --bag`` (zstd
+    1.5.4 here) and ``marsscene bag`` (1.5.7) as different bytes. The frame is the one-shot
+    zstd frame with the content size (what ``zstd.compress`` writes).
+    """
     if codec == "lz4":
         import lz4.frame  # a dependency of rosbags
 
         return lambda data: bytes(lz4.frame.compress(data))
-    if sys.version_info >= (3, 14):
-        from compression import zstd  # pragma: no cover
-    else:
-        from backports import zstd  # a dependency of rosbags
+    import zstandard
 
-    return lambda data: zstd.compress(data, level=level)
+    local = threading.local()
+
+    def compress(data: bytes) -> bytes:
+        if not hasattr(local, "zc"):
+            local.zc = zstandard.ZstdCompressor(level=level)
+        return bytes(local.zc.compress(data))
+
+    return compress
 
 
 def _returns(data: bytes) -> Callable[[bytes], bytes]:

@@ -1,0 +1,74 @@
+"""``marsscene drive --bag``: the bag is the one ``marsscene bag`` makes of the same run folder.
+
+The drive encodes the colour JPEGs from its renders while it drives (a cache the bag reads
+instead of decoding the PNGs again), and the chunks are zstd-compressed by a library whose
+output does not depend on which ``libzstd`` the process happened to load first (a drive's EGL
+renderer loads the system's).
+"""
+
+from __future__ import annotations
+
+import ctypes.util
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rosbags")
+pytest.importorskip("zstandard")
+
+from marsscene.cli import main
+from marsscene.runs.export import bag_images
+
+
+def test_drive_bag_equals_bag_of_the_run_and_reads_the_drives_jpegs(runner, gentle_scene,
+                                                                    tmp_path, monkeypatch):
+    decoded: list[Path] = []
+    real = bag_images.read_image
+
+    def spy(path: Path) -> np.ndarray:
+        decoded.append(Path(path))
+        return real(path)
+
+    monkeypatch.setattr(bag_images, "read_image", spy)
+    wp = tmp_path / "wp.txt"
+    wp.write_text("-5 -5\n-2 -5\n")
+    run = tmp_path / "run"
+    res = runner.invoke(main, ["drive", str(gentle_scene), "--waypoints", str(wp),
+                               "--seconds", "1.5", "--camera", "--camera-size", "160x120",
+                               "--out", str(run), "--bag"])
+    if res.exit_code != 0 and "OpenGL" in res.output:
+        pytest.skip("no headless OpenGL (EGL/OSMesa) here")
+    assert res.exit_code == 0, res.output
+    frames = sorted((run / "camera" / "rgb").glob("*.png"))
+    assert len(frames) >= 10
+    assert not [p for p in decoded if p.parent.name == "rgb"]  # the drive's JPEGs were used
+    assert not (run / ".bag-cache").exists()  # and removed with the bag written
+    again = tmp_path / "again" / "bag"
+    res = runner.invoke(main, ["bag", str(run), "--out", str(again)])
+    assert res.exit_code == 0, res.output
+    assert len([p for p in decoded if p.parent.name == "rgb"]) == len(frames)  # no cache here
+    assert (again / "bag.mcap").read_bytes() == (run / "bag" / "bag.mcap").read_bytes()
+
+
+_CHILD = """
+import ctypes, sys
+if sys.argv[1] == "system-first":
+    ctypes.CDLL(sys.argv[2], mode=ctypes.RTLD_GLOBAL)
+from marsscene.runs.export.bag_writer import _compressor
+import numpy as np
+data = np.random.default_rng(3).integers(0, 6, 3_000_000, dtype=np.uint8).tobytes()
+sys.stdout.write(_compressor("zstd", 3)(data).hex())
+"""
+
+
+def test_zstd_chunks_do_not_depend_on_a_libzstd_loaded_before():
+    system = ctypes.util.find_library("zstd")
+    if system is None:
+        pytest.skip("no system libzstd to load first")
+    out = [subprocess.run([sys.executable, "-c", _CHILD, mode, system], check=True,
+                          capture_output=True, text=True).stdout
+           for mode in ("plain", "system-first")]
+    assert len(out[0]) > 1000 and out[0] == out[1]
