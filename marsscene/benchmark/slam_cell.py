@@ -100,6 +100,7 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     done = None if force else _read_json(final / DRIVE_FILE)
     if done is not None and done.get("key") == key:
         return dict(done["summary"])
+    from marsscene.runs.export.bag_images import JpegCache
     from marsscene.runs.export.datasets import export_dataset
     from marsscene.runs.tum import write_tum
     from marsscene.seeding import stage_rng
@@ -110,8 +111,10 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
         sim, route = _route(scene, cell_dir / "scene", run)
         write_tum(tmp / "route.tum", route.to_trajectory(sim.heightfield),
                   header=f"route of scene {scene.name}: {route.length_m:.1f} m")
+        full_bag = bag and bool(spec.sensors.get("bag")) and run.camera is not None
+        cache = JpegCache.fresh(tmp) if full_bag else None
         res = drive(sim, route=route, seconds=scene.seconds, out_dir=tmp,
-                    rng=stage_rng(spec.noise_seed, "sensors"))
+                    rng=stage_rng(spec.noise_seed, "sensors"), jpeg_cache=cache)
         summary = {"route_m": round(route.length_m, 3), "t_drive_s": time.perf_counter() - t0,
                    **{k: res.summary.get(k) for k in ("path_length_m", "sim_time_s",
                                                       "goal_reached", "cross_track_rms_m")}}
@@ -121,7 +124,10 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
         if bag:  # the LiDAR alone for KISS-ICP; every sensor when [sensors] bag = true
             from marsscene.runs.export.bag import write_bag
 
-            write_bag(tmp, sensors=None if spec.sensors.get("bag") else ["lidar"])
+            write_bag(tmp, sensors=None if spec.sensors.get("bag") else ["lidar"],
+                      jpeg_cache=cache)
+        if cache is not None:
+            cache.remove()
         _write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
     return summary
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
 import sys
 import time
 from pathlib import Path
@@ -213,7 +212,7 @@ def drive(
                        f"(drive: {wall:.1f} s)")
     finally:
         if cache is not None:
-            shutil.rmtree(cache.root, ignore_errors=True)
+            cache.remove()
 
 
 def _jpeg_cache(out_dir: Path, bag_opts: dict[str, Any]) -> Any:
@@ -223,9 +222,7 @@ def _jpeg_cache(out_dir: Path, bag_opts: dict[str, Any]) -> Any:
     if (bag_opts.get("bag_images", "compressed") == "raw"
             or bag_opts.get("bag_image_format", "jpeg") != "jpeg"):
         return None
-    cache = JpegCache(out_dir / ".bag-cache", bag_opts.get("jpeg_quality", 95))
-    shutil.rmtree(cache.root, ignore_errors=True)  # a killed drive's leftovers
-    return cache
+    return JpegCache.fresh(out_dir, bag_opts.get("jpeg_quality", 95))
 
 
 def _run_config(run_config: Path | None, noise_config: Path | None, lidar: bool,

@@ -51,23 +51,31 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         waypoints_xy_m=spec.waypoints if spec.route is None else None,
         max_slope_deg=spec.max_slope_deg, corridor_m=spec.corridor_m,
     )
-    t0 = time.perf_counter()
-    res = drive(
-        sim,
-        route=route,
-        seconds=spec.seconds,
-        out_dir=out_dir,
-        rng=stage_rng(spec.noise_seed, "sensors"),
-        pursuit=PursuitConfig(lookahead_m=spec.lookahead_m),
-    )
-    wall_s = time.perf_counter() - t0
-    bag_s = float("nan")
-    if spec.bag:
-        from marsscene.runs.export.bag import write_bag
+    from marsscene.runs.export.bag_images import JpegCache  # no rosbags import
 
-        t1 = time.perf_counter()
-        write_bag(out_dir)
-        bag_s = time.perf_counter() - t1
+    cache = JpegCache.fresh(out_dir) if spec.bag and spec.camera else None
+    try:
+        t0 = time.perf_counter()
+        res = drive(
+            sim,
+            route=route,
+            seconds=spec.seconds,
+            out_dir=out_dir,
+            rng=stage_rng(spec.noise_seed, "sensors"),
+            pursuit=PursuitConfig(lookahead_m=spec.lookahead_m),
+            jpeg_cache=cache,
+        )
+        wall_s = time.perf_counter() - t0
+        bag_s = float("nan")
+        if spec.bag:
+            from marsscene.runs.export.bag import write_bag
+
+            t1 = time.perf_counter()
+            write_bag(out_dir, jpeg_cache=cache)
+            bag_s = time.perf_counter() - t1
+    finally:
+        if cache is not None:
+            cache.remove()
     s = res.summary
     a_err = ate(res.odom, res.gt, align="se3")
     r_err = rpe(res.odom, res.gt, delta_frames=1)

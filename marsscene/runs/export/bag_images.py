@@ -20,6 +20,7 @@ or ``"<enc>; compressedDepth"`` (Humble); both decoders accept either.
 from __future__ import annotations
 
 import io
+import shutil
 import struct
 from dataclasses import dataclass
 from pathlib import Path
@@ -105,6 +106,16 @@ class JpegCache:
 
     def encode(self, rgb: NDArray[np.uint8]) -> bytes:
         return _jpeg(rgb, self.quality)
+
+    @classmethod
+    def fresh(cls, run_dir: Path, quality: int = JPEG_QUALITY) -> JpegCache:
+        """An empty cache in ``run_dir/.bag-cache`` (a killed drive's leftovers removed)."""
+        cache = cls(Path(run_dir) / ".bag-cache", quality)
+        cache.remove()
+        return cache
+
+    def remove(self) -> None:
+        shutil.rmtree(self.root, ignore_errors=True)
 
 
 def compressed_image(path: Path, codec: str, *, jpeg_quality: int = JPEG_QUALITY,
