@@ -97,11 +97,28 @@ def test_auto_route_is_closed_and_about_the_asked_length(shape: str) -> None:
         auto_route(RouteSpec(shape=shape, length_m=400.0), hf, None)
 
 
+def test_route_centred_on_a_placed_asset(tmp_path: Path) -> None:
+    import json
+
+    from marsscene.benchmark.slam_route import asset_xy_m
+    from marsscene.errors import RuntimeSimError
+
+    (tmp_path / "manifest.json").write_text(json.dumps({"summary": {"assets": [
+        {"name": "lander", "xy_m": [-3.0, 4.0]}, {"name": "habitat", "xy_m": [376.0, -194.5]}]}}))
+    assert asset_xy_m(tmp_path, "habitat") == (376.0, -194.5)
+    with pytest.raises(RuntimeSimError, match=r"no such asset \(placed assets: 'lander', "
+                                              r"'habitat'"):
+        asset_xy_m(tmp_path, "rover")
+    with pytest.raises(RuntimeSimError, match="no readable manifest.json"):
+        asset_xy_m(tmp_path / "nowhere", "habitat")
+
+
 def test_example_specs_parse() -> None:
     quick = load_slam_spec(EXAMPLES / "benchmark_slam_quick.toml")
     paper = load_slam_spec(EXAMPLES / "benchmark_slam_paper.toml")
     assert quick.tau == (0.5, 6.0) and quick.lidar_tau == 0.5
     assert [s.name for s in paper.scenes] == ["mars-base", "main-crater", "grand-canyon"]
+    assert paper.scenes[0].route.center_asset == "habitat"  # the paper's route is at the base
     assert {m.align for m in paper.methods} == {"se3", "sim3"}
     assert next(m for m in quick.methods if m.kind == "opencv-mono").align == "sim3"
 
@@ -122,6 +139,8 @@ _OK = {"sensors": {"camera": {}}, "scenes": [{"name": "a", "route": {"shape": "l
     ({"scenes": [{"name": "a", "preset": "olympus", "route": {"waypoints": [[0, 0], [5, 0]]}}]},
      "scene 'a': preset = 'olympus' is not known"),
     ({"scenes": [{"name": "a", "route": {"file": "r.tum"}}] * 2}, "scene name 'a' is used twice"),
+    ({"scenes": [{"name": "a", "route": {"waypoints": [[0, 0], [5, 0]],
+                                         "center_asset": "habitat"}}]}, "for automatic routes"),
     ({"benchmark": {"tau": [0.5], "lidar_tau": 6.0}}, "lidar_tau = 6.0 is not one of"),
     ({"benchmark": {"seeds": [1, 1]}}, "need distinct ints"),
     ({"routes": {}}, r"unknown table\(s\) \['routes'\]"),

@@ -11,7 +11,9 @@ route; the shape is rescaled (a few passes) until the authored route is within
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,7 +23,23 @@ from marsscene.errors import RuntimeSimError
 from marsscene.sim.route import Obstacles, Route, author_route
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["auto_route", "shape_waypoints"]
+__all__ = ["asset_xy_m", "auto_route", "shape_waypoints"]
+
+
+def asset_xy_m(scene_dir: Path, name: str) -> tuple[float, float]:
+    """Where the built scene placed asset ``name`` (``manifest.json`` ``summary.assets``)."""
+    try:
+        doc = json.loads((Path(scene_dir) / "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError) as err:
+        raise RuntimeSimError(f"{scene_dir}: no readable manifest.json ({err})") from None
+    placed = (doc.get("summary") or {}).get("assets") or []
+    for asset in placed:
+        if asset.get("name") == name:
+            x, y = asset["xy_m"]
+            return float(x), float(y)
+    names = ", ".join(repr(a.get("name")) for a in placed) or "none"
+    raise RuntimeSimError(f"route.center_asset = {name!r}: the scene has no such asset "
+                          f"(placed assets: {names}; enable one with [assets] habitat = true)")
 
 
 def shape_waypoints(spec: RouteSpec, scale: float) -> NDArray[np.float64]:

@@ -61,6 +61,9 @@ class RouteSpec:
     """Target length of an automatic route (within a few %)."""
     center_xy_m: tuple[float, float] = (0.0, 0.0)
     """Centre of an automatic route."""
+    center_asset: str | None = None
+    """Centre an automatic route on this placed asset of the scene instead (its name in the
+    scene manifest, e.g. ``"habitat"``; its position depends on the terrain and seed)."""
     heading_deg: float = 0.0
     """Direction of the first leg (counter-clockwise from +x = east)."""
     width_m: float = 6.0
@@ -88,6 +91,10 @@ class RouteSpec:
             raise ConfigError("route.length_m is for automatic routes (route.shape)")
         if len(self.center_xy_m) != 2:
             raise ConfigError(f"route.center_xy_m = {self.center_xy_m!r}; need [x, y] in m")
+        if self.center_asset is not None and (self.shape is None or not isinstance(
+                self.center_asset, str) or not self.center_asset):
+            raise ConfigError(f"route.center_asset = {self.center_asset!r}: an asset name, for "
+                              "automatic routes (route.shape)")
         check_range("route.heading_deg", self.heading_deg, -360.0, 360.0)
         check_range("route.width_m", self.width_m, 1.0, 1e3)
         check_range("route.max_slope_deg", self.max_slope_deg, 0.0, 90.0, lo_open=True)
