@@ -6,7 +6,9 @@ Embree vs the numpy march, then whole scans as a drive makes them: catalogue roc
 geoms, motion distortion, noise; and the time to build the Embree window), or
 ``python benchmarks/bench_lidar.py drive SCENE LENGTH_M [MODEL]`` with SCENE one of
 ``default``, ``mars-base``, ``main-crater``, ``grand-canyon`` (a square loop of LENGTH_M around
-the scene centre, authored by the route planner). Each drive is what a user types:
+the scene centre, authored by the route planner) or ``mars-base-habitat`` (the loop around the
+mars-base habitat, as the paper's Mars Base route; the plain loop of ``mars-base`` never sees
+it: the habitat stands 420 m from the centre). Each drive is what a user types:
 ``marsscene build`` -> ``marsscene drive --lidar-model M --bag`` ->
 ``kiss_icp_pipeline --topic /rover/lidar/points RUN/bag``; the score is KISS-ICP's ATE
 (SE(3)-aligned, lidar frame) against the ground truth. It also prints the drive's real-time
@@ -111,22 +113,26 @@ def scan_timings(repeats: int = 10) -> None:
               f"{np.median(times) * 1e3:12.1f}, {min(times) * 1e3:5.1f}")
 
 
-def _loop_waypoints(side_m: float) -> str:
-    h = side_m / 2.0
-    return "\n".join(f"{x:.1f} {y:.1f}" for x, y in
+def _loop_waypoints(side_m: float, centre: tuple[float, float] = (0.0, 0.0)) -> str:
+    h, (cx, cy) = side_m / 2.0, centre
+    return "\n".join(f"{cx + x:.1f} {cy + y:.1f}" for x, y in
                      [(-h, -h), (h, -h), (h, h), (-h, h), (-h, -h + 1.0)]) + "\n"
 
 
 def drive(scene: str, length_m: float, model: str = "os1-64", camera: bool = False) -> dict:
     """One drive + KISS-ICP; returns the figures (also printed as one JSON line)."""
     from marsscene.benchmark.kiss_icp import run_kiss_icp, score_lidar_odometry
+    from marsscene.benchmark.slam_route import asset_xy_m
     from marsscene.runs.runlog import RunLog
 
-    scene_dir = _scene(scene)
+    around = scene.endswith("-habitat")  # mars-base-habitat: the loop circles the habitat
+    scene_dir = _scene(scene.removesuffix("-habitat"))
     run_dir = CACHE / f"run-{scene}-{int(length_m)}-{model}{'-cam' if camera else ''}"
     wp = CACHE / f"wp-{scene}-{int(length_m)}.txt"
+    centre = asset_xy_m(scene_dir, "habitat") if around else (0.0, 0.0)
     # the default scene: the issue's route (-10,-10) -> (10,-10) -> (10,10), 39.5 m
-    wp.write_text(_ISSUE_ROUTE if scene == "default" else _loop_waypoints(length_m / 4.0))
+    wp.write_text(_ISSUE_ROUTE if scene == "default" else _loop_waypoints(length_m / 4.0,
+                                                                          centre))
     cmd = ["marsscene", "drive", str(scene_dir), "--waypoints", str(wp), "--lidar-model",
            model, "--bag", "--overwrite", "--out", str(run_dir)]
     if camera:
