@@ -109,7 +109,7 @@ def test_route_centred_on_a_placed_asset(tmp_path: Path) -> None:
     with pytest.raises(RuntimeSimError, match=r"no such asset \(placed assets: 'lander', "
                                               r"'habitat'"):
         asset_xy_m(tmp_path, "rover")
-    with pytest.raises(RuntimeSimError, match="no readable manifest.json"):
+    with pytest.raises(RuntimeSimError, match=r"no readable manifest\.json"):
         asset_xy_m(tmp_path / "nowhere", "habitat")
 
 
