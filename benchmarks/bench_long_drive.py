@@ -3,7 +3,8 @@
 Run: ``python benchmarks/bench_long_drive.py [MINUTES] [OUT]`` (default 10 minutes of
 simulated driving into a temporary folder). The drive is what ``marsscene drive --camera
 --lidar`` does with the default camera (640 x 480 RGB-D, 10 Hz) and LiDAR (os1-128, 10 Hz) on the
-default scene, around a loop of laps long enough not to finish. Printed:
+default scene, around a loop of laps long enough not to finish, encoding the bag's JPEGs while
+it drives as ``marsscene drive --bag`` does. Printed:
 
 - resident memory (VmRSS) at every simulated minute and the peak (VmHWM): flat means nothing
   grows per frame beyond the files;
@@ -26,6 +27,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -48,7 +50,7 @@ def _scene() -> Path:
     return out
 
 
-def drive(minutes: float, out: Path) -> tuple[float, float]:
+def drive(minutes: float, out: Path, jpeg_cache: Any = None) -> tuple[float, float]:
     """Drive ``minutes`` of sim time into ``out``; returns (wall s, metres driven)."""
     import numpy as np
 
@@ -76,7 +78,7 @@ def drive(minutes: float, out: Path) -> tuple[float, float]:
             print(marks[-1], flush=True)
 
     res = run_drive(sim, route=route, seconds=minutes * 60.0, out_dir=out,
-                    rng=stage_rng(7, "sensors"), progress=sample)
+                    rng=stage_rng(7, "sensors"), progress=sample, jpeg_cache=jpeg_cache)
     wall = time.perf_counter() - t0
     print(f"peak RSS (VmHWM) {_status_kb('VmHWM') / 1024:.0f} MB; "
           f"{res.summary['path_length_m']:.1f} m in {res.summary['sim_time_s']:.0f} sim s, "
@@ -84,7 +86,7 @@ def drive(minutes: float, out: Path) -> tuple[float, float]:
     return wall, float(res.summary["path_length_m"])
 
 
-def bag(run_dir: Path, drive_wall_s: float | None = None) -> None:
+def bag(run_dir: Path, drive_wall_s: float | None = None, jpeg_cache: Any = None) -> None:
     """Write the run's bag with the default settings and print size and time per minute."""
     from marsscene.runs.export.bag import write_bag
     from marsscene.runs.runlog import RunLog
@@ -95,7 +97,7 @@ def bag(run_dir: Path, drive_wall_s: float | None = None) -> None:
     out = run_dir / "bag"
     shutil.rmtree(out, ignore_errors=True)
     t0 = time.perf_counter()
-    res = write_bag(run_dir)
+    res = write_bag(run_dir, jpeg_cache=jpeg_cache)
     wall = time.perf_counter() - t0
     mb = res.size_bytes / 1e6
     print(f"bag: {mb:.0f} MB for {minutes:.1f} min of drive = {mb / minutes:.1f} MB/min "
@@ -119,8 +121,15 @@ def main(argv: list[str] | None = None) -> None:
     minutes = float(argv[0]) if argv else 10.0
     out = Path(argv[1]) if len(argv) > 1 else CACHE / f"run-{minutes:g}min"
     shutil.rmtree(out, ignore_errors=True)
-    wall, _ = drive(minutes, out)
-    bag(out, wall)
+    from marsscene.runs.export.bag_images import JpegCache
+
+    out.mkdir(parents=True)
+    cache = JpegCache.fresh(out)
+    try:
+        wall, _ = drive(minutes, out, cache)
+        bag(out, wall, cache)
+    finally:
+        cache.remove()
 
 
 if __name__ == "__main__":

@@ -100,12 +100,17 @@ def test_auto_route_is_closed_and_about_the_asked_length(shape: str) -> None:
 def test_route_centred_on_a_placed_asset(tmp_path: Path) -> None:
     import json
 
-    from marsscene.benchmark.slam_route import asset_xy_m
+    from marsscene.benchmark.slam_route import asset_xy_m, centred_on_asset
     from marsscene.errors import RuntimeSimError
 
     (tmp_path / "manifest.json").write_text(json.dumps({"summary": {"assets": [
         {"name": "lander", "xy_m": [-3.0, 4.0]}, {"name": "habitat", "xy_m": [376.0, -194.5]}]}}))
     assert asset_xy_m(tmp_path, "habitat") == (376.0, -194.5)
+    # the SLAM cell and the VPR dataset both centre their routes through this
+    loop = RouteSpec(shape="loop", length_m=100.0, center_asset="lander")
+    assert centred_on_asset(loop, tmp_path).center_xy_m == (-3.0, 4.0)
+    plain = RouteSpec(shape="loop", length_m=100.0, center_xy_m=(7.0, 8.0))
+    assert centred_on_asset(plain, tmp_path / "nowhere") == plain
     with pytest.raises(RuntimeSimError, match=r"no such asset \(placed assets: 'lander', "
                                               r"'habitat'"):
         asset_xy_m(tmp_path, "rover")

@@ -74,12 +74,11 @@ def _route(scene: SceneSpec, scene_dir: Path, run: Any) -> tuple[Any, Any]:
     if spec.waypoints is not None:
         return prepare_drive(scene_dir, run, waypoints_xy_m=spec.waypoints,
                              max_slope_deg=spec.max_slope_deg)
-    from marsscene.benchmark.slam_route import asset_xy_m, auto_route
+    from marsscene.benchmark.slam_route import auto_route, centred_on_asset
     from marsscene.rover.config import RunConfig
     from marsscene.sim.rover_sim import RoverSim, scene_obstacles
 
-    if spec.center_asset is not None:
-        spec = dataclasses.replace(spec, center_xy_m=asset_xy_m(scene_dir, spec.center_asset))
+    spec = centred_on_asset(spec, scene_dir)
     bare = RoverSim(scene_dir, run=RunConfig(), settle_s=0.0)
     route = auto_route(spec, bare.heightfield, scene_obstacles(bare))
     del bare

@@ -11,6 +11,7 @@ route; the shape is rescaled (a few passes) until the authored route is within
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -23,7 +24,7 @@ from marsscene.errors import RuntimeSimError
 from marsscene.sim.route import Obstacles, Route, author_route
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["asset_xy_m", "auto_route", "shape_waypoints"]
+__all__ = ["asset_xy_m", "auto_route", "centred_on_asset", "shape_waypoints"]
 
 
 def asset_xy_m(scene_dir: Path, name: str) -> tuple[float, float]:
@@ -40,6 +41,13 @@ def asset_xy_m(scene_dir: Path, name: str) -> tuple[float, float]:
     names = ", ".join(repr(a.get("name")) for a in placed) or "none"
     raise RuntimeSimError(f"route.center_asset = {name!r}: the scene has no such asset "
                           f"(placed assets: {names}; enable one with [assets] habitat = true)")
+
+
+def centred_on_asset(spec: RouteSpec, scene_dir: Path) -> RouteSpec:
+    """``spec`` with ``center_xy_m`` where the scene placed ``center_asset`` (if it names one)."""
+    if spec.center_asset is None:
+        return spec
+    return dataclasses.replace(spec, center_xy_m=asset_xy_m(scene_dir, spec.center_asset))
 
 
 def shape_waypoints(spec: RouteSpec, scale: float) -> NDArray[np.float64]:

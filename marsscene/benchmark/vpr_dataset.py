@@ -75,7 +75,7 @@ def _scene(spec: VprSpec, out: Path) -> Path:
 
 
 def _route(spec: VprSpec, scene_dir: Path) -> Any:
-    from marsscene.benchmark.slam_route import auto_route
+    from marsscene.benchmark.slam_route import auto_route, centred_on_asset
     from marsscene.rover.config import RunConfig
     from marsscene.runs.tum import read_tum
     from marsscene.sim.route import Route, author_route
@@ -88,7 +88,7 @@ def _route(spec: VprSpec, scene_dir: Path) -> Any:
     if r.waypoints is not None:
         return author_route(np.asarray(r.waypoints), bare.heightfield,
                             max_slope_deg=r.max_slope_deg, obstacles=scene_obstacles(bare))
-    return auto_route(r, bare.heightfield, scene_obstacles(bare))
+    return auto_route(centred_on_asset(r, scene_dir), bare.heightfield, scene_obstacles(bare))
 
 
 def _traverse(spec: VprSpec, split: str, lighting: TraversalSpec, scene_dir: Path, route: Any,

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -192,27 +194,61 @@ def drive(
         sim, route = _prepare(scene_dir, run, route_path, waypoints_path, out_dir,
                               max_slope=max_slope, corridor=corridor,
                               write_rover_xml=write_rover_xml)
-    cache = _jpeg_cache(out_dir, bag_opts) if write_bag and run.camera is not None else None
-    try:
+    if write_bag:
+        from marsscene.runs.export.bag_writer import require_backends
+
         with user_errors():
-            res, wall = _drive(sim, route, seconds, out_dir, seed, lookahead, cache)
-        s = res.summary
-        click.echo(
-            f"   drove: {s['path_length_m']:.2f} m in {s['sim_time_s']:.2f} sim s "
-            f"({s['sim_time_s'] / max(wall, 1e-9):.1f}x real time), goal reached: "
-            f"{s['goal_reached']}, cross-track RMS "
-            f"{s.get('cross_track_rms_m', float('nan')):.3f} m"
-        )
-        click.echo(f"    logs: {out_dir}")
-        if write_bag:
-            t0 = time.perf_counter()
-            with user_errors():
-                write_run_bag(out_dir, None, overwrite=overwrite, jpeg_cache=cache, **bag_opts)
-            click.echo(f"          bag written in {time.perf_counter() - t0:.1f} s "
-                       f"(drive: {wall:.1f} s)")
+            require_backends(bag_opts.get("bag_compression", "zstd"))
+    cache = _jpeg_cache(out_dir, bag_opts) if write_bag and run.camera is not None else None
+    try:  # SIGTERM is Ctrl-C until the JPEG cache is gone, the bag's writing included
+        with _sigterm_interrupts():
+            try:
+                with user_errors():
+                    res, wall = _drive(sim, route, seconds, out_dir, seed, lookahead, cache)
+                _report(res.summary, wall, out_dir)
+                if write_bag:
+                    t0 = time.perf_counter()
+                    with user_errors():
+                        write_run_bag(out_dir, None, overwrite=overwrite, jpeg_cache=cache,
+                                      **bag_opts)
+                    click.echo(f"          bag written in {time.perf_counter() - t0:.1f} s "
+                               f"(drive: {wall:.1f} s)")
+            finally:
+                if cache is not None:
+                    cache.remove()
+    except KeyboardInterrupt:  # while writing the bag: the run folder is whole, no bag
+        click.echo(f"marsscene: interrupted while writing the bag; {out_dir} holds the whole "
+                   f"drive (`marsscene bag {out_dir}` writes the bag)", err=True)
+        sys.exit(130)
+
+
+def _report(s: dict[str, Any], wall: float, out_dir: Path) -> None:
+    click.echo(
+        f"   drove: {s['path_length_m']:.2f} m in {s['sim_time_s']:.2f} sim s "
+        f"({s['sim_time_s'] / max(wall, 1e-9):.1f}x real time), goal reached: "
+        f"{s['goal_reached']}, cross-track RMS "
+        f"{s.get('cross_track_rms_m', float('nan')):.3f} m"
+    )
+    click.echo(f"    logs: {out_dir}")
+
+
+@contextmanager
+def _sigterm_interrupts() -> Iterator[None]:
+    """SIGTERM raises KeyboardInterrupt inside the block (a no-op off the main thread)."""
+    import signal
+
+    def terminate(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    try:  # only the main thread may set handlers
+        previous: Any = signal.signal(signal.SIGTERM, terminate)
+    except ValueError:
+        previous = None
+    try:
+        yield
     finally:
-        if cache is not None:
-            cache.remove()
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 def _jpeg_cache(out_dir: Path, bag_opts: dict[str, Any]) -> Any:
@@ -278,23 +314,14 @@ def _drive(sim: Any, route: Any, seconds: float | None, out_dir: Path, seed: int
            lookahead: float, jpeg_cache: Any = None) -> tuple[Any, float]:
     """Drive with a progress line; the result and the wall time (s). Ctrl-C or SIGTERM stop the
     drive with the run folder finished up to there (exit code 130)."""
-    import signal
-
     from marsscene.cli._progress import DriveMeter
     from marsscene.seeding import stage_rng
     from marsscene.sim.driver import DriveInterrupted
     from marsscene.sim.driver import drive as run_drive
     from marsscene.sim.pursuit import PursuitConfig
 
-    def terminate(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
     t0 = time.perf_counter()
     meter = DriveMeter()
-    try:  # only the main thread may set handlers
-        previous: Any = signal.signal(signal.SIGTERM, terminate)
-    except ValueError:
-        previous = None
     try:
         res = run_drive(sim, route=route, seconds=seconds, out_dir=out_dir,
                         rng=stage_rng(seed, "sensors"),
@@ -307,8 +334,5 @@ def _drive(sim: Any, route: Any, seconds: float | None, out_dir: Path, seed: int
                    f"{s['sim_time_s']:.1f} sim s; {out_dir} holds the drive up to there "
                    f"(`marsscene bag {out_dir}` and `marsscene export` read it)", err=True)
         sys.exit(130)
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
     meter.close()
     return res, time.perf_counter() - t0

@@ -143,11 +143,12 @@ def png_bytes(image: NDArray[Any]) -> bytes:
 
 
 class ImageWriter:
-    """PNG-encodes and writes images on one background thread (zlib releases the GIL).
+    """Encodes and writes images on one background thread (zlib releases the GIL).
 
     ``submit`` returns at once (at most ``max_pending`` images wait; then it blocks on the
-    oldest); ``close`` waits for all and re-raises the first error. Bytes are those of
-    :func:`png_bytes`, whatever the order the files are written in.
+    oldest); ``close`` waits for all and re-raises the first error. Bytes are those of the
+    image's encoder (:func:`png_bytes` unless ``submit`` names another, e.g. the bag's JPEG
+    cache), whatever the order the files are written in.
     """
 
     def __init__(self, max_pending: int = 8) -> None:

@@ -110,8 +110,11 @@ class RunWriter:
 
     def _jpeg(self, stream: str, name: str, rgb: Any) -> None:
         if self.jpeg_cache is not None:
-            path = self.jpeg_cache.file(stream, name)
-            self.images.submit(self._dir(path.parent) / path.name, rgb, self.jpeg_cache.encode)
+            path = self.jpeg_cache.file(stream, name)  # already under out: not out / path
+            if path.parent not in self._made:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                self._made.add(path.parent)
+            self.images.submit(path, rgb, self.jpeg_cache.encode)
 
     def _dir(self, *parts: str | Path) -> Path:
         """``out/parts...``, made on first use (not one mkdir call per frame)."""

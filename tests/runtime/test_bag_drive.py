@@ -35,7 +35,8 @@ def test_drive_bag_equals_bag_of_the_run_and_reads_the_drives_jpegs(runner, gent
     monkeypatch.setattr(bag_images, "read_image", spy)
     wp = tmp_path / "wp.txt"
     wp.write_text("-5 -5\n-2 -5\n")
-    run = tmp_path / "run"
+    monkeypatch.chdir(tmp_path)
+    run = Path("run")  # relative, as users type it (the cache once landed in run/run/)
     res = runner.invoke(main, ["drive", str(gentle_scene), "--waypoints", str(wp),
                                "--seconds", "1.5", "--camera", "--camera-size", "160x120",
                                "--out", str(run), "--bag"])
@@ -46,6 +47,7 @@ def test_drive_bag_equals_bag_of_the_run_and_reads_the_drives_jpegs(runner, gent
     assert len(frames) >= 10
     assert not [p for p in decoded if p.parent.name == "rgb"]  # the drive's JPEGs were used
     assert not (run / ".bag-cache").exists()  # and removed with the bag written
+    assert sorted(p.name for p in run.iterdir() if p.is_dir()) == ["bag", "camera"]
     again = tmp_path / "again" / "bag"
     res = runner.invoke(main, ["bag", str(run), "--out", str(again)])
     assert res.exit_code == 0, res.output
@@ -72,3 +74,34 @@ def test_zstd_chunks_do_not_depend_on_a_libzstd_loaded_before():
                           capture_output=True, text=True).stdout
            for mode in ("plain", "system-first")]
     assert len(out[0]) > 1000 and out[0] == out[1]
+
+
+def test_interrupt_while_writing_the_bag_keeps_the_run_and_removes_the_cache(
+        runner, gentle_scene, tmp_path, monkeypatch):
+    """Ctrl-C or SIGTERM after the drive, while the bag is written: exit 130 with a message,
+    the run folder whole, no bag, and no ``.bag-cache`` left behind."""
+    import os
+    import signal
+
+    from marsscene.cli import drive as cli_drive
+
+    def killed(run_dir: Path, *args: object, **kwargs: object) -> None:
+        assert (Path(run_dir) / ".bag-cache").is_dir()  # the drive filled the cache
+        os.kill(os.getpid(), signal.SIGTERM)  # as `kill PID` would, mid-bag
+
+    monkeypatch.setattr(cli_drive, "write_run_bag", killed)
+    wp = tmp_path / "wp.txt"
+    wp.write_text("-5 -5\n-2 -5\n")
+    run = tmp_path / "run"
+    before = signal.getsignal(signal.SIGTERM)
+    res = runner.invoke(main, ["drive", str(gentle_scene), "--waypoints", str(wp),
+                               "--seconds", "1.0", "--camera", "--camera-size", "160x120",
+                               "--out", str(run), "--bag"])
+    if res.exit_code != 0 and "OpenGL" in res.output:
+        pytest.skip("no headless OpenGL (EGL/OSMesa) here")
+    assert res.exit_code == 130, res.output
+    assert "interrupted while writing the bag" in res.output
+    assert "Traceback" not in res.output
+    assert not (run / ".bag-cache").exists() and not (run / "bag").exists()
+    assert (run / "gt.tum").is_file() and len(list((run / "camera" / "rgb").glob("*.png"))) >= 5
+    assert signal.getsignal(signal.SIGTERM) == before  # the handler is put back

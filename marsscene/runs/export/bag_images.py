@@ -93,8 +93,8 @@ class JpegCache:
     once more beside its PNG (~1 ms on the image writer's thread, where the drive leaves a core
     a third idle), so the bag does not decode the PNGs again (~4.5 ms a frame, 40 % of a
     bag's CPU time): the bytes are those the bag would make from the PNG (PNG is lossless, the
-    encoder and settings the same). Files: ``root/jpeg-q{quality}/{stream}/{frame}.jpg``; the
-    writer of the bag deletes ``root`` afterwards.
+    encoder and settings the same). Files: ``root/jpeg-q{quality}/{stream}/{frame}.jpg``; whoever
+    made the cache deletes ``root`` once the bag is written (:meth:`remove`).
     """
 
     root: Path
@@ -110,7 +110,7 @@ class JpegCache:
     @classmethod
     def fresh(cls, run_dir: Path, quality: int = JPEG_QUALITY) -> JpegCache:
         """An empty cache in ``run_dir/.bag-cache`` (a killed drive's leftovers removed)."""
-        cache = cls(Path(run_dir) / ".bag-cache", quality)
+        cache = cls(Path(run_dir).absolute() / ".bag-cache", quality)
         cache.remove()
         return cache
 

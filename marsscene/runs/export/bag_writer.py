@@ -27,10 +27,10 @@ from io import StringIO
 from pathlib import Path
 from typing import Any
 
-from marsscene.errors import ExportError
+from marsscene.errors import ExportError, missing_dependency
 
 __all__ = ["COMPRESSIONS", "DISTROS", "HUMBLE_FIELDS", "METADATA_VERSION", "check_options",
-           "finish_metadata", "humble_metadata", "open_writer"]
+           "finish_metadata", "humble_metadata", "open_writer", "require_backends"]
 
 #: ``compression`` -> (MCAP chunk codec, level); ``None``: no compression.
 COMPRESSIONS: dict[str, tuple[str, int] | None] = {
@@ -62,6 +62,16 @@ def check_options(storage: str, compression: str, distro: str) -> None:
                           "zstd (rosbag2 message compression) or none")
 
 
+def require_backends(compression: str = "zstd") -> None:
+    """Refuse up front (before a long drive) when the bag's libraries are not installed:
+    ``rosbags``, and ``zstandard`` for zstd chunks."""
+    import importlib.util
+
+    for module, needed in (("rosbags", True), ("zstandard", compression == "zstd")):
+        if needed and importlib.util.find_spec(module) is None:
+            raise missing_dependency(module, "ros")
+
+
 def _compressor(codec: str, level: int) -> Callable[[bytes], bytes]:
     """One-shot chunk compression, safe on several threads.
 
@@ -76,7 +86,10 @@ def _compressor(codec: str, level: int) -> Callable[[bytes], bytes]:
         import lz4.frame  # a dependency of rosbags
 
         return lambda data: bytes(lz4.frame.compress(data))
-    import zstandard
+    try:
+        import zstandard
+    except ImportError:  # pragma: no cover - exercised without the extra only
+        raise missing_dependency("zstandard", "ros") from None
 
     local = threading.local()
 
