@@ -168,3 +168,34 @@ def test_a_failing_drive_is_a_failed_cell_with_failed_rows(tmp_path: Path) -> No
     assert res.cells[0]["status"] == "failed" and "outside the terrain" in res.cells[0]["error"]
     assert [(r["method"], r["status"]) for r in res.rows] == [("wheel", "failed")]
     assert "outside the terrain" in res.rows[0]["note"]
+
+
+_MEET = ("bash -c 'touch {{cell_dir}}/{me}.flag; for i in $(seq 300); do "
+         "if [ -e {{cell_dir}}/{other}.flag ]; then cp {{tum_rgbd_dir}}/groundtruth.txt "
+         "{{out_tum}}; exit 0; fi; sleep 0.1; done; exit 1'")
+
+
+def test_methods_of_a_cell_run_side_by_side(bench: tuple[Path, Path, str]) -> None:
+    """Two command methods that each wait (up to 30 s) for the other to start: both finish
+    only if the cell runs them at the same time (one after the other, the first times out).
+    The cell's build and drive are the benchmark's, reused."""
+    from marsscene.benchmark.slam_cell import run_slam_cell
+    from marsscene.benchmark.slam_run import slam_cells
+    from marsscene.benchmark.slam_spec import load_slam_spec
+
+    spec_path, out, _ = bench
+    meet = spec_path.with_name("meet.toml")
+    meet.write_text(SPEC + "".join(
+        f'[[methods]]\nname = "{me}"\nkind = "command"\n'
+        f'command = "{_MEET.format(me=me, other=other)}"\n'
+        for me, other in (("left", "right"), ("right", "left"))), encoding="utf-8")
+    spec = load_slam_spec(meet)
+    cell = slam_cells(spec)[0]
+    drive = out / "cells" / cell.cell_id / "drive" / "benchmark_drive.json"
+    stamp = drive.stat().st_mtime_ns
+    row = run_slam_cell(cell, out_dir=str(out / "cells"), spec=spec, method_workers=2)
+    assert drive.stat().st_mtime_ns == stamp  # the drive was reused, not redone
+    by_name = {m["method"]: m for m in row["methods"]}
+    assert [m["method"] for m in row["methods"]] == [m.name for m in spec.methods]  # spec order
+    assert by_name["left"]["status"] == by_name["right"]["status"] == "ok", by_name["left"]
+    assert by_name["truth"]["status"] == "ok" and by_name["broken"]["status"] == "failed"

@@ -20,6 +20,8 @@ import json
 import logging
 import math
 import time
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -133,7 +135,7 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     return summary
 
 
-def _score(spec: SlamSpec, method: MethodSpec, data: CellData, drive_key: str,
+def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_key: str,
            force: bool) -> dict[str, Any]:
     """The method's row, from ``methods/<name>.json`` when its inputs did not change."""
     path = data.cell_dir / "methods" / f"{method.name}.json"
@@ -166,14 +168,27 @@ def _score(spec: SlamSpec, method: MethodSpec, data: CellData, drive_key: str,
     return row
 
 
-def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = False
-                  ) -> dict[str, Any]:
+def _score_or_fail(spec: SlamSpec, method: MethodSpec, **kw: Any) -> dict[str, Any]:
+    """:func:`_score`, with an unexpected error as the method's ``failed`` row (the other
+    methods of the cell, maybe running beside it, keep theirs)."""
+    try:
+        return _score(spec, method, **kw)
+    except Exception as err:
+        msg = " ".join(f"{type(err).__name__}: {err}".split())
+        log.warning("method %s failed: %s", method.name, msg)
+        return {"method": method.name, "kind": method.kind,
+                **failed_score("failed", msg, align=str(method.align)).as_row()}
+
+
+def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = False,
+                  method_workers: int = 1) -> dict[str, Any]:
     """Build, drive and score one cell into ``out_dir/<cell_id>/``; return its row.
 
     The row has the sweep's build row (``status``, ``error``, timings ...) plus ``drive``
     (route and drive summary) and ``methods``: one score row per method that runs in this cell
     (LiDAR and wheel odometry only in the ``lidar_tau`` cell). A failed build or drive gives
-    ``status = "failed"`` and a ``failed`` row for every method.
+    ``status = "failed"`` and a ``failed`` row for every method. ``method_workers`` threads
+    score the methods side by side (rows in the spec's order whatever the finishing order).
     """
     scene = next(s for s in spec.scenes if s.name == cell.params["scene"])
     tau, seed = float(cell.params["tau"]), int(cell.params["seed"])
@@ -192,8 +207,14 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
                    cross_track_rms_m=drv.get("cross_track_rms_m"))
         drive_key = _read_json(cell_dir / "drive" / DRIVE_FILE) or {}
         data = CellData(cell_dir, scene.name, tau, seed)
-        for method in methods:
-            row["methods"].append(_score(spec, method, data, str(drive_key.get("key")), force))
+        score = partial(_score_or_fail, spec, data=data, drive_key=str(drive_key.get("key")),
+                        force=force)
+        if method_workers <= 1 or len(methods) <= 1:
+            row["methods"] += [score(m) for m in methods]
+        else:
+            with ThreadPoolExecutor(min(method_workers, len(methods)),
+                                    thread_name_prefix="slam-method") as pool:
+                row["methods"] += list(pool.map(score, methods))  # in the spec's order
     except Exception as err:  # one failing cell never stops the benchmark
         msg = " ".join(f"{type(err).__name__}: {err}".split())
         log.warning("cell %s failed: %s", cell.cell_id, msg)

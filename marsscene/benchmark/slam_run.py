@@ -95,6 +95,7 @@ def run_slam_benchmark(
     resume: bool = False,
     progress: Callable[[Any], None] | None = None,
     report: bool = True,
+    method_workers: int = 2,
 ) -> SlamBenchmarkResult:
     """Run the benchmark ``spec`` into ``out_dir``.
 
@@ -115,6 +116,10 @@ def run_slam_benchmark(
         Called with a :class:`marsscene.sweep.run.Progress` after every cell.
     report : bool
         Also write ``table.md``, the plots and ``report.md`` (needs matplotlib).
+    method_workers : int
+        Threads that run the methods of one cell side by side once its drive is done (a cell
+        whose neighbour finished early then uses the idle core; KISS-ICP and ``command``
+        methods are separate processes). Rows and files do not depend on it.
     """
     from marsscene.sweep.run import map_cells
     from marsscene.sweep.table import write_results
@@ -122,7 +127,8 @@ def run_slam_benchmark(
     root = Path(out_dir).resolve()
     _claim(root, spec, resume)
     cells_dir = root / "cells"
-    task = partial(run_slam_cell, out_dir=str(cells_dir), spec=spec)
+    task = partial(run_slam_cell, out_dir=str(cells_dir), spec=spec,
+                   method_workers=method_workers)
     cell_rows = map_cells(slam_cells(spec), task, cells_dir, workers=workers,
                           scheduler=scheduler, serial=serial, progress=progress)
     for row in cell_rows:  # a cell lost with its worker has no method rows: give them

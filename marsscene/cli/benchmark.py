@@ -24,8 +24,11 @@ def benchmark() -> None:
 @click.option("--resume", is_flag=True,
               help="Continue the benchmark in --out: finished builds, drives and methods are "
               "reused.")
+@click.option("--method-workers", type=click.IntRange(1, 16), default=2, show_default=True,
+              help="Methods of one cell run side by side on this many threads (KISS-ICP and "
+              "command methods are processes of their own; results do not depend on it).")
 def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | None,
-         serial: bool, resume: bool) -> None:
+         serial: bool, resume: bool, method_workers: int) -> None:
     """Run the SLAM benchmark SPEC_TOML into OUT.
 
     Every cell (scene x tau x seed) is built, driven along its route with the camera (and, in
@@ -59,7 +62,8 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
         n = len(slam_cells(spec))
         click.echo(f"benchmark slam: {n} cells x {len(spec.methods)} methods {where}", err=True)
         res = run_slam_benchmark(spec, out_dir, workers=workers, scheduler=scheduler,
-                                 serial=serial, resume=resume, progress=show)
+                                 serial=serial, resume=resume, progress=show,
+                                 method_workers=method_workers)
     click.echo(f"methods: {res.count('ok')} ok, {res.count('lost')} lost, "
                f"{res.count('failed')} failed, {res.count('missing')} missing")
     for f in res.files:
