@@ -23,6 +23,18 @@ from marsscene.cli import main
 from marsscene.runs.export import bag_images
 
 
+def _drive_with_bag(runner, scene: Path, tmp_path: Path, run: Path, *, seconds: float):
+    """``marsscene drive --camera --bag`` for ``seconds`` into ``run`` (skips without GL)."""
+    wp = tmp_path / "wp.txt"
+    wp.write_text("-5 -5\n-2 -5\n")
+    res = runner.invoke(main, ["drive", str(scene), "--waypoints", str(wp),
+                               "--seconds", str(seconds), "--camera", "--camera-size", "160x120",
+                               "--out", str(run), "--bag"])
+    if res.exit_code not in (0, 130) and "OpenGL" in res.output:
+        pytest.skip("no headless OpenGL (EGL/OSMesa) here")
+    return res
+
+
 def test_drive_bag_equals_bag_of_the_run_and_reads_the_drives_jpegs(runner, gentle_scene,
                                                                     tmp_path, monkeypatch):
     decoded: list[Path] = []
@@ -33,15 +45,9 @@ def test_drive_bag_equals_bag_of_the_run_and_reads_the_drives_jpegs(runner, gent
         return real(path)
 
     monkeypatch.setattr(bag_images, "read_image", spy)
-    wp = tmp_path / "wp.txt"
-    wp.write_text("-5 -5\n-2 -5\n")
     monkeypatch.chdir(tmp_path)
     run = Path("run")  # relative, as users type it (the cache once landed in run/run/)
-    res = runner.invoke(main, ["drive", str(gentle_scene), "--waypoints", str(wp),
-                               "--seconds", "1.5", "--camera", "--camera-size", "160x120",
-                               "--out", str(run), "--bag"])
-    if res.exit_code != 0 and "OpenGL" in res.output:
-        pytest.skip("no headless OpenGL (EGL/OSMesa) here")
+    res = _drive_with_bag(runner, gentle_scene, tmp_path, run, seconds=1.5)
     assert res.exit_code == 0, res.output
     frames = sorted((run / "camera" / "rgb").glob("*.png"))
     assert len(frames) >= 10
@@ -90,15 +96,9 @@ def test_interrupt_while_writing_the_bag_keeps_the_run_and_removes_the_cache(
         os.kill(os.getpid(), signal.SIGTERM)  # as `kill PID` would, mid-bag
 
     monkeypatch.setattr(cli_drive, "write_run_bag", killed)
-    wp = tmp_path / "wp.txt"
-    wp.write_text("-5 -5\n-2 -5\n")
     run = tmp_path / "run"
     before = signal.getsignal(signal.SIGTERM)
-    res = runner.invoke(main, ["drive", str(gentle_scene), "--waypoints", str(wp),
-                               "--seconds", "1.0", "--camera", "--camera-size", "160x120",
-                               "--out", str(run), "--bag"])
-    if res.exit_code != 0 and "OpenGL" in res.output:
-        pytest.skip("no headless OpenGL (EGL/OSMesa) here")
+    res = _drive_with_bag(runner, gentle_scene, tmp_path, run, seconds=1.0)
     assert res.exit_code == 130, res.output
     assert "interrupted while writing the bag" in res.output
     assert "Traceback" not in res.output
