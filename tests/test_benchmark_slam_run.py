@@ -124,6 +124,9 @@ def test_table_plot_and_report_are_written(bench: tuple[Path, Path, str]) -> Non
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "![tiny trajectories](traj_tiny.png)" in report and "ate_summary.png" in report
+    n_ok = sum(r["status"] == "ok" for r in _rows(out).values())
+    assert f"Scenes tiny × τ 0.5, 6 × seeds 3: 2 cells, 7 methods; {n_ok} of 13 runs tracked." \
+        in report
     cells = (out / "cells" / "results.csv").read_text(encoding="utf-8").splitlines()
     assert len(cells) == 3 and cells[0].startswith("cell_id,scene,tau,seed,status")
     cell = out / "cells" / "scene=tiny__tau=0.5__seed=3"
@@ -199,3 +202,23 @@ def test_methods_of_a_cell_run_side_by_side(bench: tuple[Path, Path, str]) -> No
     assert [m["method"] for m in row["methods"]] == [m.name for m in spec.methods]  # spec order
     assert by_name["left"]["status"] == by_name["right"]["status"] == "ok", by_name["left"]
     assert by_name["truth"]["status"] == "ok" and by_name["broken"]["status"] == "failed"
+
+
+def test_a_long_thin_route_gets_stacked_wide_panels() -> None:
+    pytest.importorskip("matplotlib")
+    import numpy as np
+
+    from marsscene.benchmark.slam_report import _panel_grid, _plt
+
+    plt = _plt()
+    out_and_back = np.array([[-150.0, -10.0], [150.0, -10.0], [150.0, 10.0], [-150.0, 10.0]])
+    fig, axes, stacked = _panel_grid(plt, 2, [out_and_back])
+    w, h = fig.get_size_inches()
+    assert stacked and len(axes) == 2 and w > 2.0 * h / 2  # each panel wider than 2:1
+    plt.close(fig)
+    angle = np.linspace(0.0, 2.0 * np.pi, 50)
+    loop = np.column_stack([70.0 * np.cos(angle), 70.0 * np.sin(angle)])
+    fig, axes, stacked = _panel_grid(plt, 2, [loop])
+    w, h = fig.get_size_inches()
+    assert not stacked and len(axes) == 2 and w > 1.5 * h  # side by side
+    plt.close(fig)

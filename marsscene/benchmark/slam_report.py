@@ -1,9 +1,10 @@
 """The SLAM benchmark's pictures and its one-page ``report.md``.
 
 Per scene, ``traj_<scene>.png``: top-down ground truth and every method's trajectory after its
-alignment, one panel per tau (first seed); ``ate_summary.png``: ATE per scene and method (log
-scale, ✗ for failures). Matplotlib (Agg) is imported here only, when a report is written: this
-is the one library module that draws, because the figures are this command's product.
+alignment, one panel per tau (first seed; side by side, or stacked for a long thin route);
+``ate_summary.png``: ATE per scene and method (log scale, ✗ for failures). Matplotlib (Agg)
+is imported here only, when a report is written: this is the one library module that draws,
+because the figures are this command's product.
 """
 
 from __future__ import annotations
@@ -38,32 +39,62 @@ def _plt() -> Any:
     return plt
 
 
+_Panel = tuple[float, list[dict[str, Any]], CellData | None, Any]
+
+
+def _ground_truths(spec: SlamSpec, scene: str, rows: list[dict[str, Any]],
+                   cells_dir: Path) -> list[_Panel]:
+    """Per tau (first seed): the scene's rows, its cell and its ground truth (None: unreadable)."""
+    seed = spec.seeds[0]
+    panels = []
+    for tau in spec.tau:
+        mine = [r for r in rows if r["scene"] == scene and r["seed"] == seed
+                and math.isclose(float(r["tau"]), tau)]
+        cell, gt = None, None
+        if mine:
+            cell = CellData(cells_dir / str(mine[0]["cell_id"]), scene, tau, seed)
+            try:
+                gt = read_tum(cell.run_dir / "gt.tum")
+            except (MarsSceneError, OSError):
+                gt = None
+        panels.append((tau, mine, cell, gt))
+    return panels
+
+
+def _panel_grid(plt: Any, n: int, extents_m: list[Any]) -> tuple[Any, Any, bool]:
+    """Side-by-side panels, or stacked wide ones for a long thin route (an out-and-back)."""
+    span = np.ptp(np.concatenate(extents_m), axis=0) if extents_m else np.ones(2)
+    aspect = float(span[0] / max(span[1], 1.0))  # east extent / north extent
+    if aspect <= 2.5:
+        fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 5.0), squeeze=False,
+                                 constrained_layout=True)
+        return fig, axes[0], False
+    panel_h = float(np.clip(9.0 / aspect + 1.3, 2.4, 5.0))
+    fig, axes = plt.subplots(n, 1, figsize=(12.0, panel_h * n), squeeze=False,
+                             constrained_layout=True)
+    return fig, axes[:, 0], True
+
+
 def _trajectory_figure(plt: Any, spec: SlamSpec, scene: str, rows: list[dict[str, Any]],
                        cells_dir: Path, out: Path) -> Path | None:
     seed = spec.seeds[0]
     colors = {m.name: _COLORS[i % len(_COLORS)] for i, m in enumerate(spec.methods)}
-    fig, axes = plt.subplots(1, len(spec.tau), figsize=(5.2 * len(spec.tau), 5.0),
-                             squeeze=False, constrained_layout=True)
-    drew = False
-    for ax, tau in zip(axes[0], spec.tau, strict=True):
-        mine = [r for r in rows if r["scene"] == scene and r["seed"] == seed
-                and math.isclose(float(r["tau"]), tau)]
+    panels = _ground_truths(spec, scene, rows, cells_dir)
+    if all(gt is None for *_, gt in panels):
+        return None
+    fig, axes, stacked = _panel_grid(plt, len(panels),
+                                     [gt.xyz_m[:, :2] for *_, gt in panels if gt is not None])
+    for ax, (tau, mine, cell, gt) in zip(axes, panels, strict=True):
         ax.set_title(f"{scene}  τ = {tau:g}  (seed {seed})", fontsize=10)
         ax.set_aspect("equal", adjustable="datalim")
         ax.grid(alpha=0.3)
         ax.set_xlabel("x east (m)")
         ax.set_ylabel("y north (m)")
-        if not mine:
-            continue
-        cell = CellData(cells_dir / str(mine[0]["cell_id"]), scene, tau, seed)
-        try:
-            gt = read_tum(cell.run_dir / "gt.tum")
-        except (MarsSceneError, OSError):
+        if gt is None or cell is None:
             continue
         ax.plot(gt.xyz_m[:, 0], gt.xyz_m[:, 1], color="k", lw=2.4, label="ground truth",
                 zorder=1)
         ax.plot(*gt.xyz_m[0, :2], marker="*", ms=14, color="#2ca02c", mec="w", zorder=5)
-        drew = True
         for r in mine:
             path = cell.cell_dir / "estimates" / f"{r['method']}.tum"
             if not path.is_file():
@@ -80,10 +111,11 @@ def _trajectory_figure(plt: Any, spec: SlamSpec, scene: str, rows: list[dict[str
                      and math.isfinite(ate) else str(r["method"])) + (f"  {FAIL}" if lost else "")
             ax.plot(xyz[:, 0], xyz[:, 1], color=colors.get(r["method"], "0.5"), lw=1.3,
                     ls="--" if lost else "-", label=label, zorder=2)
-        ax.legend(fontsize=8, loc="best", framealpha=0.85)
-    if not drew:
-        plt.close(fig)
-        return None
+        if stacked:  # beside the panel: inside, it would hide a thin route
+            ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5),
+                      framealpha=0.85)
+        else:
+            ax.legend(fontsize=8, loc="best", framealpha=0.85)
     fig.savefig(out, dpi=110)
     plt.close(fig)
     return out
@@ -144,9 +176,10 @@ def write_report(spec: SlamSpec, rows: list[dict[str, Any]], cell_rows: list[dic
     summary = _summary_figure(plt, spec, rows, out_dir / "ate_summary.png")
     written.append(summary)
     lines = [f"# SLAM benchmark `{spec.name}`", "",
-             f"{len(spec.scenes)} scene(s) × τ {', '.join(f'{t:g}' for t in spec.tau)} × seed(s) "
-             f"{', '.join(map(str, spec.seeds))}: {len(cell_rows)} cells, {len(spec.methods)} "
-             f"methods, {sum(r['status'] == 'ok' for r in rows)} of {len(rows)} runs tracked.",
+             f"Scenes {', '.join(s.name for s in spec.scenes)} × τ "
+             f"{', '.join(f'{t:g}' for t in spec.tau)} × seeds {', '.join(map(str, spec.seeds))}: "
+             f"{len(cell_rows)} cells, {len(spec.methods)} methods; "
+             f"{sum(r['status'] == 'ok' for r in rows)} of {len(rows)} runs tracked.",
              "", table, f"![ATE per scene and method]({summary.name})", ""]
     for scene in spec.scenes:
         fig = _trajectory_figure(plt, spec, scene.name, rows, cells_dir,
