@@ -43,8 +43,8 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
       marsscene benchmark slam paper.toml --out /shared/bench --scheduler tcp://head:8786
       marsscene benchmark slam paper.toml --out bench/paper --resume
     """
-    from marsscene.benchmark.slam_run import run_slam_benchmark, slam_cells
-    from marsscene.benchmark.slam_spec import load_slam_spec
+    from marsscene.benchmark.slam.run import run_slam_benchmark, slam_cells
+    from marsscene.benchmark.slam.spec import SlamSpec
 
     where = dask_where(workers, scheduler, serial)
 
@@ -58,7 +58,7 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
                    f"{row.get('error') if row['status'] == 'failed' else methods}", err=True)
 
     with user_errors():
-        spec = load_slam_spec(spec_toml)
+        spec = SlamSpec.from_toml(spec_toml)
         n = len(slam_cells(spec))
         click.echo(f"benchmark slam: {n} cells x {len(spec.methods)} methods {where}", err=True)
         res = run_slam_benchmark(spec, out_dir, workers=workers, scheduler=scheduler,

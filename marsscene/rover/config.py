@@ -178,12 +178,16 @@ class NoiseConfig:
             object.__setattr__(self, key, tuple(float(v) for v in value))
 
     @classmethod
-    def from_file(cls, path: str | Path) -> NoiseConfig:
-        """Read a ``.toml`` (optionally with a ``[noise]`` table) or ``.json`` noise config."""
-        doc = _read_doc(path, "noise config")
-        if isinstance(doc, dict) and "noise" in doc:
-            doc = doc["noise"]
-        return dataclass_from_mapping(cls, doc, "noise")
+    def from_dict(cls, mapping: Any) -> NoiseConfig:
+        """From a table (optionally wrapped in a ``noise`` key); unknown keys are an error."""
+        if isinstance(mapping, dict) and "noise" in mapping:
+            mapping = mapping["noise"]
+        return dataclass_from_mapping(cls, mapping, "noise")
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> NoiseConfig:
+        """Read a ``.toml`` (optionally with a ``[noise]`` table) noise config (``.json`` too)."""
+        return cls.from_dict(_read_doc(path, "noise config"))
 
     def with_profile(self, name: str) -> NoiseConfig:
         """The same config on profile ``name``: fields that differ from the current profile's
@@ -291,8 +295,8 @@ class RunConfig:
         _check_rate("run.imu_hz", self.imu_hz)
 
     @classmethod
-    def from_file(cls, path: str | Path) -> RunConfig:
-        r"""Read a run config: ``.toml`` or ``.json`` with optional tables ``[run]``
+    def from_toml(cls, path: str | Path) -> RunConfig:
+        r"""Read a run config: ``.toml`` (or ``.json``) with optional tables ``[run]``
         (``control_hz``, ``imu_hz``), ``[lidar]`` (e.g. ``model = "vlp16"``), ``[camera]`` and
         ``[noise]``; a sensor without its table is off.
 
@@ -301,11 +305,17 @@ class RunConfig:
         >>> import tempfile, pathlib
         >>> p = pathlib.Path(tempfile.mkdtemp()) / "run.toml"
         >>> _ = p.write_text('[lidar]\nmodel = "vlp16"\n')
-        >>> RunConfig.from_file(p).lidar.spec.channels
+        >>> RunConfig.from_toml(p).lidar.spec.channels
         16
         """
         p = Path(path)
-        doc = _read_doc(p, "run config")
+        return cls.from_dict(_read_doc(p, "run config"), source=str(p))
+
+    @classmethod
+    def from_dict(cls, doc: Any, *, source: str = "run config") -> RunConfig:
+        """From a table of tables ``run``, ``lidar``, ``camera``, ``noise`` (a sensor without
+        its table is off)."""
+        p = source
         if not isinstance(doc, dict):
             raise ConfigError(f"{p}: a run config is a table of tables")
         unknown = sorted(set(doc) - {"run", "lidar", "camera", "noise"})

@@ -22,13 +22,14 @@ from __future__ import annotations
 
 import io
 import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from marsscene._atomic import write_atomic
 
 __all__ = ["CsvLog", "TumLog", "ply_bytes", "png_bytes", "write_file", "write_json"]
 
@@ -90,11 +91,9 @@ class TumLog:
 
 
 def write_file(path: Path, data: bytes) -> None:
-    """Write ``path`` whole or not at all (a temporary sibling renamed over it), so a killed
-    drive never leaves a truncated image or scan behind."""
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
+    """Write ``path`` whole or not at all, so a killed drive never leaves a truncated image or
+    scan behind (:func:`~marsscene._atomic.write_atomic`)."""
+    write_atomic(path, data)
 
 
 def ply_bytes(
@@ -180,6 +179,5 @@ class ImageWriter:
 
 
 def write_json(path: Path, doc: dict[str, Any]) -> None:
-    path.write_text(
-        json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    """``doc`` as sorted, indented JSON, written whole or not at all."""
+    write_atomic(path, json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n")

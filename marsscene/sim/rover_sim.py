@@ -21,6 +21,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene._atomic import write_atomic
 from marsscene.errors import RuntimeSimError
 from marsscene.rover.config import RoverConfig, RunConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
@@ -310,8 +311,7 @@ class RoverSim:
     def write_rover_xml(self, path: str | Path | None = None) -> Path:
         """Write the rover MJCF (default: beside ``scene.xml``, as ``rover.xml``)."""
         target = Path(path) if path is not None else self.scene_xml.parent / "rover.xml"
-        target.write_text(self.rover_xml, encoding="utf-8")
-        return target
+        return write_atomic(target, self.rover_xml)
 
     @property
     def time_s(self) -> float:
@@ -356,30 +356,3 @@ class RoverSim:
         g = np.concatenate([self.data.contact.geom1[:n], self.data.contact.geom2[:n]])
         return np.isin(self.wheel_geoms, g)
 
-
-def scene_obstacles(sim: RoverSim) -> Any:
-    """Non-terrain world geoms of the scene (rocks) as :class:`~marsscene.runtime.Obstacles`.
-
-    Radius is the geom's horizontal bounding radius, height its top above the terrain.
-    """
-    from marsscene.sim.route import Obstacles
-
-    m, d = sim.model, sim.data
-    world = np.flatnonzero(
-        (m.geom_bodyid == 0)
-        & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)
-        & (m.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
-    )
-    if len(world) == 0:
-        return Obstacles(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
-    aabb = m.geom_aabb[world]  # (n, 6): centre offset, half sizes in the geom frame
-    rot = d.geom_xmat[world].reshape(-1, 3, 3)
-    half_world = np.einsum("nij,nj->ni", np.abs(rot), aabb[:, 3:])
-    centre = d.geom_xpos[world] + np.einsum("nij,nj->ni", rot, aabb[:, :3])
-    top = centre[:, 2] + half_world[:, 2]
-    ground = sim.heightfield.sample(centre[:, 0], centre[:, 1])
-    return Obstacles(
-        centre[:, :2].copy(),
-        np.hypot(half_world[:, 0], half_world[:, 1]),
-        np.maximum(top - ground, 0.0),
-    )

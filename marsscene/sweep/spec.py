@@ -28,7 +28,7 @@ from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.config import SceneConfig, read_config_toml
 from marsscene.errors import ConfigError
 
-__all__ = ["DriveSpec", "SweepSpec", "load_sweep", "sweep_from_dict"]
+__all__ = ["DriveSpec", "SweepSpec"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,6 +103,31 @@ class SweepSpec:
     source: str = "<dict>"
     extra: dict[str, Any] = field(default_factory=dict)
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], *, base_dir: Path | None = None,
+                  source: str = "<dict>") -> SweepSpec:
+        """Check a parsed sweep mapping: a scene config plus ``[sweep]`` axes and an optional
+        ``[drive]`` table; relative route paths resolve against ``base_dir``."""
+        return _spec_from_dict(data, base_dir=base_dir, source=source)
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> SweepSpec:
+        """Read and check a SWEEP.toml (relative DEM/ortho/route paths resolve against its
+        folder)."""
+        p = Path(path)
+        data = read_config_toml(p, what="sweep file")
+        table = data.get("sweep")
+        if isinstance(table, dict):  # swept DEM / ortho paths resolve like the base config's
+            for key in ("terrain.dem_path", "terrain.ortho_path"):
+                values = table.get(key)
+                if isinstance(values, list):
+                    table[key] = [
+                        str((p.parent / v).resolve()) if isinstance(v, str)
+                        and not Path(v).is_absolute() else v
+                        for v in values
+                    ]
+        return _spec_from_dict(data, base_dir=p.parent, source=str(p))
+
 
 def _field_hint(key: str) -> Any:
     """The annotation of a dotted SceneConfig key, or raise ConfigError naming the key."""
@@ -169,7 +194,7 @@ def _check_some_cell_valid(base: dict[str, Any], axes: list[tuple[str, tuple[Any
     raise first
 
 
-def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
+def _spec_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
                     source: str = "<dict>") -> SweepSpec:
     """Check a parsed SWEEP.toml mapping and return a :class:`SweepSpec`."""
     data = _deepcopy(data)
@@ -201,20 +226,3 @@ def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
                 drive_table["route"] = str((base_dir / route).resolve())
         drive = dataclass_from_mapping(DriveSpec, drive_table, "drive")
     return SweepSpec(base=data, axes=tuple(axes), drive=drive, source=source)
-
-
-def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and check a SWEEP.toml (relative DEM/ortho/route paths resolve against its folder)."""
-    p = Path(path)
-    data = read_config_toml(p, what="sweep file")
-    table = data.get("sweep")
-    if isinstance(table, dict):  # swept DEM / ortho paths resolve like the base config's
-        for key in ("terrain.dem_path", "terrain.ortho_path"):
-            values = table.get(key)
-            if isinstance(values, list):
-                table[key] = [
-                    str((p.parent / v).resolve()) if isinstance(v, str)
-                    and not Path(v).is_absolute() else v
-                    for v in values
-                ]
-    return sweep_from_dict(data, base_dir=p.parent, source=str(p))

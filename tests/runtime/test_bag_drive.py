@@ -89,13 +89,13 @@ def test_interrupt_while_writing_the_bag_keeps_the_run_and_removes_the_cache(
     import os
     import signal
 
-    from marsscene.cli import drive as cli_drive
+    from marsscene.runs.export import bag as bag_module
 
     def killed(run_dir: Path, *args: object, **kwargs: object) -> None:
         assert (Path(run_dir) / ".bag-cache").is_dir()  # the drive filled the cache
         os.kill(os.getpid(), signal.SIGTERM)  # as `kill PID` would, mid-bag
 
-    monkeypatch.setattr(cli_drive, "write_run_bag", killed)
+    monkeypatch.setattr(bag_module, "write_bag", killed)
     run = tmp_path / "run"
     before = signal.getsignal(signal.SIGTERM)
     res = _drive_with_bag(runner, gentle_scene, tmp_path, run, seconds=1.0)

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from marsscene.errors import ExportError
 from marsscene.runs.export.bag_data import depth_m
+from marsscene.runs.export.options import IMAGE_CODECS
 from marsscene.runs.runlog import read_image
 
 __all__ = [
@@ -45,7 +46,6 @@ __all__ = [
     "inverse_depth",
 ]
 
-IMAGE_CODECS = ("png", "jpeg")
 #: ``compressed_image_transport``'s default ``jpeg_quality``.
 JPEG_QUALITY = 95
 #: ``png_level`` of both publishers' defaults (zlib level 3).

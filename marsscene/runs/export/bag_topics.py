@@ -20,8 +20,8 @@ from marsscene.errors import RuntimeSimError
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.runs.export import bag_data as bd
 from marsscene.runs.export import bag_images as bi
-from marsscene.runs.export.datasets import imu_noise_declared
 from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
+from marsscene.runs.export.imu_noise import imu_noise_declared
 from marsscene.runs.runlog import CameraStream, RunLog, read_image, read_ply
 
 if TYPE_CHECKING:

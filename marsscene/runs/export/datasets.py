@@ -14,7 +14,6 @@ Commands to run ORB-SLAM3 on them: ``docs/ros.md``.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -27,12 +26,14 @@ from scipy.spatial.transform import Rotation
 from marsscene._atomic import replacing_dir
 from marsscene.errors import ExportError, RuntimeSimError
 from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
+from marsscene.runs.export.imu_noise import EUROC_IMU_KEYS, imu_noise_declared, rate_hz
+from marsscene.runs.export.options import DATASET_FORMATS
 from marsscene.runs.logs import png_bytes
 from marsscene.runs.runlog import CameraStream, RunLog, read_image
 
-__all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset", "imu_noise_declared"]
+__all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset"]
 
-FORMATS = ("tum-rgbd", "euroc")
+FORMATS = DATASET_FORMATS
 #: TUM RGB-D depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored as 0).
 TUM_DEPTH_PER_M = 5000
 
@@ -158,7 +159,7 @@ def _euroc(
         i = cam.intrinsics
         (d / "sensor.yaml").write_text(
             f"sensor_type: camera\ncomment: marsscene {camera_frame(cam.name)}\n"
-            + _t_bs(tbc) + f"rate_hz: {_rate(cam.stamps_s):g}\n"
+            + _t_bs(tbc) + f"rate_hz: {rate_hz(cam.stamps_s):g}\n"
             f"resolution: [{i['width']}, {i['height']}]\ncamera_model: pinhole\n"
             f"intrinsics: [{i['fx']:.9g}, {i['fy']:.9g}, {i['cx']:.9g}, {i['cy']:.9g}]\n"
             "distortion_model: radial-tangential\ndistortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n"
@@ -176,8 +177,8 @@ def _euroc(
     (imu / "sensor.yaml").write_text(
         f"sensor_type: imu\ncomment: marsscene IMU (body = base_link), noise profile "
         f"{nd['profile']}: white noise, per-run turn-on bias, bias random walk\n"
-        + _t_bs(np.eye(4)) + f"rate_hz: {_rate(run.imu[:, 0]):g}\n"
-        + "".join(f"{k}: {nd[k]:.9g}\n" for k in _EUROC_IMU_KEYS)
+        + _t_bs(np.eye(4)) + f"rate_hz: {rate_hz(run.imu[:, 0]):g}\n"
+        + "".join(f"{k}: {nd[k]:.9g}\n" for k in EUROC_IMU_KEYS)
     )
     gt = mav / "state_groundtruth_estimate0"
     gt.mkdir()
@@ -197,7 +198,7 @@ def _euroc(
         text += "Stereo.ThDepth: 60.0\n" + _cv_mat("Stereo.T_c1_c2",
                                                    np.linalg.inv(t_b_c[0]) @ t_b_c[1])
     text += _cv_mat("IMU.T_b_c1", t_b_c[0]) + "IMU.InsertKFsWhenLost: 0\n" + _orb_imu(nd) + (
-        f"IMU.Frequency: {_rate(run.imu[:, 0]):.1f}\n")
+        f"IMU.Frequency: {rate_hz(run.imu[:, 0]):.1f}\n")
     (out / f"orbslam3_{name}.yaml").write_text(text + _ORB_TAIL)
 
 
@@ -209,46 +210,11 @@ _EUROC_GT_HEAD = (
 )
 
 
-def _rate(stamps: NDArray[np.float64]) -> float:
-    return float(1.0 / np.median(np.diff(stamps))) if len(stamps) > 1 else 0.0
-
-
-#: EuRoC imu0/sensor.yaml noise keys (Kalibr convention: continuous-time densities).
-_EUROC_IMU_KEYS = ("gyroscope_noise_density", "gyroscope_random_walk",
-                   "accelerometer_noise_density", "accelerometer_random_walk")
 #: ORB-SLAM3 key, EuRoC key, floor used only where the simulated value is 0 (profile none).
 _ORB_IMU = (("IMU.NoiseGyro", "gyroscope_noise_density", 1e-5),
             ("IMU.NoiseAcc", "accelerometer_noise_density", 1e-4),
             ("IMU.GyroWalk", "gyroscope_random_walk", 1e-6),
             ("IMU.AccWalk", "accelerometer_random_walk", 1e-5))
-
-
-def imu_noise_declared(run: RunLog) -> dict[str, Any]:
-    """The simulated IMU noise of a run in the EuRoC/Kalibr convention (from ``run.json``).
-
-    White-noise densities (rad/s/sqrt(Hz), m/s^2/sqrt(Hz)) combine the profile's density with
-    any per-sample sigma: ``sqrt(density^2 + sigma^2 / rate)``; random walks are the bias
-    random-walk densities (rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)). Keys: ``profile``, ``rate_hz``
-    and :data:`_EUROC_IMU_KEYS`. Runs from before noise profiles read as profile ``none``.
-    """
-    noise, rate = run.meta.get("noise", {}), _rate(run.imu[:, 0])
-
-    def get(key: str) -> float:
-        return float(noise.get(key, 0.0))
-
-    def density(nd_key: str, sigma_key: str) -> float:
-        per_rate = get(sigma_key) ** 2 / rate if rate > 0 else get(sigma_key) ** 2
-        return math.sqrt(get(nd_key) ** 2 + per_rate)
-
-    return {
-        "profile": str(noise.get("profile", "none")),
-        "rate_hz": rate,
-        "gyroscope_noise_density": density("gyro_noise_density_rad_s_rthz", "gyro_sigma_rad_s"),
-        "gyroscope_random_walk": get("gyro_bias_walk_rad_s2_rthz"),
-        "accelerometer_noise_density": density("accel_noise_density_m_s2_rthz",
-                                               "accel_sigma_m_s2"),
-        "accelerometer_random_walk": get("accel_bias_walk_m_s3_rthz"),
-    }
 
 
 def _orb_imu(nd: dict[str, Any]) -> str:
@@ -299,7 +265,7 @@ def _orb_head(cam: CameraStream, run: RunLog) -> str:
     i = cam.intrinsics
     return (f'%YAML:1.0\n# ORB-SLAM3 settings for marsscene run {run.path.name}\n'
             f'File.version: "1.0"\nCamera.type: "PinHole"\nCamera.width: {i["width"]}\n'
-            f'Camera.height: {i["height"]}\nCamera.fps: {round(_rate(cam.stamps_s))}\n'
+            f'Camera.height: {i["height"]}\nCamera.fps: {round(rate_hz(cam.stamps_s))}\n'
             "Camera.RGB: 1\n")
 
 
