@@ -141,6 +141,12 @@ def _size(text: str) -> tuple[int, int]:
     help="Only MJCF rocks within this distance of the route are simulated (m); widened to "
     "the LiDAR range / camera window when those sensors are on.",
 )
+@click.option("--controller", "controller_ref", metavar="MODULE:NAME", default=None,
+              help="Steer with your controller instead of pure pursuit: a callable "
+              "controller(observation) -> (v, omega), or a class (instantiated with the route "
+              "when it takes one); MODULE is imported from the current folder too "
+              "(docs/runtime.md). Without --route/--waypoints it starts at the terrain centre "
+              "and needs --seconds.")
 @click.option("--bag", "write_bag", is_flag=True,
               help="Also write RUN_DIR/bag, a ROS 2 bag of the run (see `marsscene bag`).")
 @click.option("--dataset", "datasets", multiple=True, type=click.Choice(DATASET_FORMATS),
@@ -151,22 +157,27 @@ def _size(text: str) -> tuple[int, int]:
 @bag_options
 def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
           seconds: float | None, out_dir: Path, seed: int, write_rover_xml: bool,
-          write_bag: bool, datasets: tuple[str, ...], overwrite: bool, **opts: Any) -> None:
-    """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz).
+          controller_ref: str | None, write_bag: bool, datasets: tuple[str, ...],
+          overwrite: bool, **opts: Any) -> None:
+    """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz),
+    or with your controller.
 
     \b
     Examples:
       marsscene drive scenes/demo --waypoints wp.txt --lidar --out runs/r1
       marsscene drive scenes/demo --route route.tum --seconds 60 --camera
       marsscene drive scenes/demo --waypoints wp.txt --camera --bag --dataset euroc
+      marsscene drive scenes/demo --waypoints wp.txt --lidar --controller my_nav:Planner
     """
     import marsscene as ms
     from marsscene.runs.export.options import ExportOptions
     from marsscene.sim.driver import DriveInterrupted
     from marsscene.sim.pursuit import PursuitConfig
 
-    if (route_path is None) == (waypoints_path is None):
-        raise click.UsageError("give exactly one of --route or --waypoints")
+    if route_path is not None and waypoints_path is not None:
+        raise click.UsageError("give --route or --waypoints, not both")
+    if route_path is None and waypoints_path is None and controller_ref is None:
+        raise click.UsageError("give --route or --waypoints (or a --controller)")
     bag_values = {k: opts.pop(k) for k in list(opts) if k in BAG_OPTION_NAMES}
     with user_errors():
         run = _run_config(**opts)
@@ -175,6 +186,8 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
         export = ExportOptions(bag=bag_options_of(bag_values) if write_bag else None,
                                datasets=datasets, overwrite=overwrite)
         waypoints = _read_waypoints(waypoints_path) if waypoints_path else None
+        controller = (_load_controller(controller_ref, route_path, waypoints, scene_dir,
+                                       options) if controller_ref else None)
         if write_rover_xml:
             click.echo(f"   rover: {_write_rover_xml(scene_dir, run)}")
     with ExitStack() as stack, _sigterm_interrupts():
@@ -182,8 +195,9 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
         try:
             with user_errors():
                 res = ms.drive(scene_dir, route=route_path, waypoints=waypoints,
-                               seconds=seconds, config=run, options=options, export=export,
-                               out_dir=out_dir, seed=seed, progress=meter)
+                               controller=controller, seconds=seconds, config=run,
+                               options=options, export=export, out_dir=out_dir, seed=seed,
+                               progress=meter)
         except DriveInterrupted as stop:
             meter.close()
             s = stop.result.summary
@@ -196,6 +210,48 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
                               f"drive (`marsscene bag {out_dir}` writes the bag)")
         meter.close()
     _report(res, out_dir)
+
+
+def _load_controller(ref: str, route_path: Path | None, waypoints: Any, scene_dir: Path,
+                     options: Any) -> Any:
+    """The controller named ``MODULE:NAME`` (a class is instantiated, with the route if its
+    constructor takes one)."""
+    import importlib
+    import inspect
+    import os
+
+    from marsscene.errors import ConfigError
+
+    module_name, _, name = ref.partition(":")
+    if not module_name or not name:
+        raise ConfigError(f"--controller {ref!r}: give MODULE:NAME, e.g. my_nav:Planner")
+    if os.getcwd() not in sys.path:
+        sys.path.insert(0, os.getcwd())
+    try:
+        obj: Any = getattr(importlib.import_module(module_name), name)
+    except (ImportError, AttributeError) as err:
+        raise ConfigError(f"--controller {ref!r}: {type(err).__name__}: {err}") from None
+    if not inspect.isclass(obj):
+        if not callable(obj):
+            raise ConfigError(f"--controller {ref!r} is not callable")
+        return obj
+    params = inspect.signature(obj).parameters
+    if "route" not in params:
+        return obj()
+    route = None
+    if route_path is not None or waypoints is not None:
+        from marsscene.runs.tum import read_tum
+        from marsscene.sim.route import Route, author_route
+        from marsscene.sim.world import load_world
+
+        if route_path is not None:
+            route = Route.from_trajectory(read_tum(route_path))
+        else:
+            world = load_world(scene_dir)
+            route = author_route(waypoints, world.heightfield, obstacles=world.obstacles,
+                                 max_slope_deg=options.max_slope_deg)
+    factory: Any = obj
+    return factory(route=route)
 
 
 def _exit_interrupted(message: str) -> None:

@@ -55,10 +55,12 @@ _SKY_ZFAR_FRACTION = 0.45
 class MastCamera:
     """Offscreen renderer of a :class:`~marsscene.sim.rover_sim.RoverSim`'s mast camera(s)."""
 
-    def __init__(self, sim: Any, *, rng: np.random.Generator | None = None) -> None:
+    def __init__(self, sim: Any, *, rng: np.random.Generator | None = None,
+                 config: Any = None) -> None:
         from marsscene.rover.config import CameraConfig
 
-        cam = sim.run.camera if sim.run.camera is not None else CameraConfig()
+        cam = config if config is not None else (
+            sim.run.camera if sim.run.camera is not None else CameraConfig())
         self.config = cam
         self.width, self.height = cam.width_px, cam.height_px
         self.depth = cam.depth
@@ -106,9 +108,10 @@ class MastCamera:
         # the render's linear values in the fixed mode's units (the render itself is scaled to
         # use the 8 bits of the GL buffer in either mode: no banding in dark fixed exposures)
         scale = 1.0 / (FIXED_REFERENCE_W_M2 * self.render_scale)
+        self._exposure_args = {"target_mean": cam.target_mean, "fixed_gain": cam.exposure_gain,
+                               "input_scale": scale, "max_gain": MAX_EXPOSURE_GAIN}
         self.exposure, self.exposure_stereo = (
-            Exposure(cam.exposure, target_mean=cam.target_mean, fixed_gain=cam.exposure_gain,
-                     input_scale=scale, max_gain=MAX_EXPOSURE_GAIN) for _ in range(2))
+            Exposure(cam.exposure, **self._exposure_args) for _ in range(2))
         try:
             self.view = OffscreenView(self.model, width=self.width, height=self.height)
         except Exception as err:
@@ -202,6 +205,18 @@ class MastCamera:
             if near:
                 self.view.upload_mesh(mesh("cam_terrain_near" + layer))
                 self.view.upload_texture(tex("cam_ground_near" + layer))
+
+    def restart(self, sim: Any, *, rng: np.random.Generator | None = None) -> None:
+        """Start a new drive with this renderer (its scene is built once): fresh exposure
+        state, a new noise stream, the terrain window placed at the rover's pose as a new
+        renderer would place it."""
+        cam = self.config
+        self.noise_rng = rng if cam.sensor_noise else None
+        self.exposure, self.exposure_stereo = (
+            Exposure(cam.exposure, **self._exposure_args) for _ in range(2))
+        self.world.update(self.model, tuple(sim.pose()[0][:2]), _forward_xy(sim), force=True)
+        self._upload()
+        self._show_window_rocks()
 
     # ---- rendering -----------------------------------------------------------------------------
     def _sync(self, sim: Any) -> None:

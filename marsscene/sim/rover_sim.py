@@ -140,6 +140,8 @@ class RoverSim:
                 self.model.geom_group[gid] = 3
         self._vis = mujoco.MjvOption()
         self._vis.geomgroup[3] = 1
+        if self.run.physics_hz is not None:
+            self.model.opt.timestep = 1.0 / self.run.physics_hz
         self.dt_physics_s = float(self.model.opt.timestep)
         self.substeps = round(1.0 / (self.run.control_hz * self.dt_physics_s))
         self._ids()

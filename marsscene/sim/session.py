@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from marsscene.errors import RuntimeSimError
 from marsscene.sensors.camera_world import read_rock_catalog
 from marsscene.sensors.imu import ImuNoise
 from marsscene.sensors.lidar import Lidar
@@ -37,7 +38,12 @@ _STREAMS = ("control", "imu", "lidar", "camera", "stereo")
 
 
 def _period(sim: Any, rate_hz: float) -> int:
-    return round(1.0 / (rate_hz * sim.dt_physics_s))
+    """Physics steps per sample at ``rate_hz`` (it must divide the physics rate)."""
+    steps = 1.0 / (rate_hz * sim.dt_physics_s)
+    if steps < 1.0 - 1e-9 or abs(steps - round(steps)) > 1e-6:
+        raise RuntimeSimError(f"a rate of {rate_hz:g} Hz does not divide the "
+                              f"{1.0 / sim.dt_physics_s:g} Hz physics rate")
+    return round(steps)
 
 
 class DriveSession:
@@ -59,11 +65,16 @@ class DriveSession:
         Objects that receive every sample as the run writer does.
     meta : dict, optional
         Extra ``run.json`` entries (``pursuit``: the follower's config; ``controller``).
+    renderer, lidar : optional
+        The camera renderer and the LiDAR of an earlier session of ``sim``, reused (restarted
+        with this session's noise streams) instead of built again (``close(release=False)``
+        keeps them for the next session).
     """
 
     def __init__(self, sim: Any, *, rng: np.random.Generator, out_dir: str | Path | None = None,
                  keep_sensors: bool = False, jpeg_cache: Any = None,
-                 listeners: Sequence[Any] = (), meta: dict[str, Any] | None = None):
+                 listeners: Sequence[Any] = (), meta: dict[str, Any] | None = None,
+                 renderer: Any = None, lidar: Lidar | None = None):
         run = sim.run
         self.sim, self.rng, self.keep = sim, rng, keep_sensors
         self.periods = {"control": _period(sim, run.control_hz), "imu": _period(sim, run.imu_hz)}
@@ -73,12 +84,19 @@ class DriveSession:
         if run.camera is not None:
             if self.trigger_m is None:
                 self.periods["camera"] = _period(sim, run.camera.rate_hz)
-            self.renderer = sim.make_renderer(rng=rng.spawn(1)[0])
-        self.lidar = None
+            if renderer is None:
+                self.renderer = sim.make_renderer(rng=rng.spawn(1)[0])
+            else:  # a renderer of an earlier drive of this simulator (its scene costs seconds)
+                self.renderer = renderer
+                renderer.restart(sim, rng=rng.spawn(1)[0])
+        self.lidar = lidar
         if run.lidar is not None:  # its own stream: LiDAR noise never moves IMU/wheel noise
             self.periods["lidar"] = _period(sim, run.lidar.spec.rate_hz)
-            self.lidar = Lidar(run.lidar, rng=rng.spawn(1)[0],
-                               rocks=read_rock_catalog(Path(sim.scene_dir)))
+            if lidar is None:
+                self.lidar = Lidar(run.lidar, rng=rng.spawn(1)[0],
+                                   rocks=read_rock_catalog(Path(sim.scene_dir)))
+            else:  # an earlier drive's LiDAR (its ray-casting structures are built once)
+                lidar.rng = rng.spawn(1)[0]
         self.stereo = self.renderer is not None and self.renderer.stereo_ids is not None
         out = Path(out_dir) if out_dir is not None else None
         self.writer = RunWriter(out, sim, lidar=self.lidar is not None,
@@ -239,12 +257,13 @@ class DriveSession:
         self.next_frame_m = (math.floor(self.distance_m / self.trigger_m) + 1) * self.trigger_m
         return True
 
-    def close(self) -> None:
-        """Collect the last scan, stop the helper thread, close the writer and the renderer."""
+    def close(self, *, release: bool = True) -> None:
+        """Collect the last scan, stop the helper thread, close the writer and (unless
+        ``release`` is false: kept for the next session) the renderer."""
         self.collect_scan()
         if self._lidar_pool is not None:
             self._lidar_pool.shutdown()
             self._lidar_pool = None
         self.writer.close()
-        if self.renderer is not None:
+        if self.renderer is not None and release:
             self.renderer.close()

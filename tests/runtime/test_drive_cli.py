@@ -87,7 +87,10 @@ def test_drive_errors(runner, tmp_path: Path) -> None:
     res = runner.invoke(main, ["drive", str(tmp_path / "empty"), "--waypoints", str(wp)])
     assert res.exit_code == 1 and "scene.xml is missing" in res.output
     res = runner.invoke(main, ["drive", str(tmp_path / "empty")])
-    assert res.exit_code == 2 and "exactly one of --route or --waypoints" in res.output
+    assert res.exit_code == 2 and "give --route or --waypoints (or a --controller)" in res.output
+    res = runner.invoke(main, ["drive", str(tmp_path / "empty"), "--waypoints", str(wp),
+                               "--route", str(wp)])
+    assert res.exit_code == 2 and "not both" in res.output
 
 
 def test_eval_reports_bad_tum_line(runner, tmp_path: Path) -> None:
@@ -100,3 +103,44 @@ def test_eval_reports_bad_tum_line(runner, tmp_path: Path) -> None:
     assert "est.tum:2: expected 8 numbers" in res.output
     res = runner.invoke(main, ["eval", str(good), str(good)])
     assert res.exit_code == 0 and "ATE (m):     rmse 0.000000" in res.output
+
+
+_CONTROLLER = '''
+class StopAfter:
+    """Straight on the odometry, stop after 2 m (a class taking the route)."""
+
+    def __init__(self, route=None):
+        self.route, self.done = route, False
+
+    def __call__(self, obs):
+        if obs.step == 0:
+            self.x0 = obs.odom_xyz_m[0]
+        self.done = abs(obs.odom_xyz_m[0] - self.x0) >= 2.0
+        return (0.0, 0.0) if self.done else (0.4, 0.0)
+
+
+def spin(obs):
+    return (0.0, 0.2)
+'''
+
+
+def test_drive_with_a_controller_from_a_module(runner, flat_scene, tmp_path, monkeypatch):
+    (tmp_path / "my_nav.py").write_text(_CONTROLLER)
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "run"
+    res = runner.invoke(main, ["drive", str(flat_scene), "--controller", "my_nav:StopAfter",
+                               "--seconds", "30", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    run = json.loads((out / "run.json").read_text())
+    assert run["controller"] == "my_nav:StopAfter" and run["summary"]["goal_reached"] is True
+    assert 1.9 < run["summary"]["path_length_m"] < 2.3
+    res = runner.invoke(main, ["drive", str(flat_scene), "--controller", "my_nav:spin",
+                               "--seconds", "2", "--out", str(tmp_path / "spin")])
+    assert res.exit_code == 0, res.output
+    gt = read_tum(tmp_path / "spin" / "gt.tum")
+    assert gt.path_length_m() < 0.2  # turning in place
+    for ref, msg in (("my_nav", "MODULE:NAME"), ("my_nav:Nope", "AttributeError"),
+                     ("no_such_module:f", "ModuleNotFoundError")):
+        res = runner.invoke(main, ["drive", str(flat_scene), "--controller", ref,
+                                   "--seconds", "1", "--out", str(tmp_path / "bad")])
+        assert res.exit_code == 1 and msg in res.output and "Traceback" not in res.output
