@@ -21,19 +21,17 @@ from collections import OrderedDict, deque
 from typing import Any
 
 import gymnasium as gym
-import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from marsscene.env.observe import HeightScanner, ObsConfig, lidar_image, observation_vector
+from marsscene.env.loaded import LoadedWorld
+from marsscene.env.observe import ObsConfig, lidar_image, observation_vector
 from marsscene.env.reward import RewardConfig, compute_reward, goal_terms, step_terms
-from marsscene.env.task import NavTask, TaskMap
+from marsscene.env.task import NavTask
 from marsscene.env.worlds import WorldSampler, world_paths
 from marsscene.errors import ConfigError
 from marsscene.rover.config import CameraConfig, LidarConfig, NoiseConfig, RoverConfig, RunConfig
-from marsscene.sim.rover_sim import PREFIX, RoverSim
 from marsscene.sim.session import DriveSession
-from marsscene.sim.world import scene_obstacles
 
 __all__ = ["RoverNavEnv"]
 
@@ -44,39 +42,6 @@ def _up_z(q_wxyz: Any) -> float:
     """The z component of the body's up axis in the world (cosine of the tilt)."""
     _, x, y, _ = q_wxyz
     return float(1.0 - 2.0 * (x * x + y * y))
-
-
-class _World:
-    """One loaded world: the simulator, its free ground, its height scanner and sensors."""
-
-    def __init__(self, path: Any, run: RunConfig, rover: RoverConfig, task: NavTask,
-                 obs: ObsConfig) -> None:
-        self.sim = RoverSim(path, run=run, rover=rover, settle_s=0.0)
-        obstacles = scene_obstacles(self.sim)
-        self.task_map = TaskMap(self.sim.heightfield, obstacles, task)
-        self.scanner = (HeightScanner(obs.height_scan, self.sim.heightfield, obstacles)
-                        if obs.height_scan is not None else None)
-        m = self.sim.model
-        self.chassis = np.zeros(m.ngeom, bool)  # per geom id: what it is
-        self.chassis[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, PREFIX + "chassis")] = True
-        self.wheel = np.zeros(m.ngeom, bool)
-        self.wheel[np.asarray(self.sim.wheel_geoms)] = True
-        self.rock = (m.geom_bodyid == 0) & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)
-        self.renderer: Any = None
-        self.lidar: Any = None
-
-    def collided(self) -> bool:
-        """The chassis touches anything, or a wheel touches a rock."""
-        d = self.sim.data
-        g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
-        hit = (self.chassis[g1] | self.chassis[g2] | (self.wheel[g1] & self.rock[g2])
-               | (self.wheel[g2] & self.rock[g1]))
-        return bool(hit.any())
-
-    def close(self) -> None:
-        if self.renderer is not None:
-            self.renderer.close()
-            self.renderer = None
 
 
 class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
@@ -137,23 +102,23 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._hi = np.ones(2, np.float32) if self.normalized else np.array(
             [V_MAX_M_S, OMEGA_MAX_RAD_S], np.float32)
         self.action_space = spaces.Box(-self._hi, self._hi, dtype=np.float32)
-        self._loaded: OrderedDict[int, _World] = OrderedDict()
+        self._loaded: OrderedDict[int, LoadedWorld] = OrderedDict()
         self._session: DriveSession | None = None
-        self._world: _World | None = None
+        self._world: LoadedWorld | None = None
 
     # ---- worlds ------------------------------------------------------------------------------
-    def _load(self, index: int) -> _World:
+    def _load(self, index: int) -> LoadedWorld:
         if index in self._loaded:
             self._loaded.move_to_end(index)
             return self._loaded[index]
-        world = _World(self._path(index), self.run, self.rover, self.task, self.obs_config)
+        world = LoadedWorld(self._path(index), self.run, self.rover, self.task, self.obs_config)
         self._loaded[index] = world
         while len(self._loaded) > self.max_worlds_loaded:
             _, old = self._loaded.popitem(last=False)
             old.close()
         return world
 
-    def _camera(self, world: _World, size: tuple[int, int]) -> Any:
+    def _camera(self, world: LoadedWorld, size: tuple[int, int]) -> Any:
         if world.renderer is None:
             from marsscene.sensors.camera import MastCamera
 
@@ -229,7 +194,7 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                               steps_total=self.steps_total)
 
     # ---- helpers -----------------------------------------------------------------------------
-    def _place(self, world: _World, opts: dict[str, Any], tries: int = 20
+    def _place(self, world: LoadedWorld, opts: dict[str, Any], tries: int = 20
                ) -> tuple[np.ndarray, float, np.ndarray]:
         """Draw (or take from ``opts``) start, heading and goal, and settle the rover there;
         a start where the settled rover leans over 20 deg or touches a rock is drawn again."""
