@@ -33,7 +33,7 @@ def make_env(cache: str, seed: int = 0) -> object:
     scan = me.HeightScan(size_m=5.0, resolution_m=0.2)
     return me.RoverNavEnv(
         me.WorldSampler(base="plain", count=8, seed=seed, cache_dir=cache,
-                        vary={"rocks.k": [0.02, 0.1]}),
+                        vary={"rocks.k": [0.05, 0.15]}),
         task=me.NavTask(distance_m=(3.0, 8.0), max_episode_s=60.0),
         observations=me.ObsConfig(height_scan=scan))
 

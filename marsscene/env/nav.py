@@ -51,7 +51,7 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ----------
     worlds : path, list of paths or WorldSampler, optional
         Scene folders, or scenes drawn and built on demand (default: the ``plain`` world kind,
-        8 worlds with the rock abundance k drawn in [0.02, 0.15]).
+        8 worlds with the rock abundance k drawn in [0.05, 0.15]).
     task : NavTask
         Goal distances and tolerance, time limit, termination thresholds.
     observations : ObsConfig
@@ -83,7 +83,7 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.reward_config = reward if reward is not None else RewardConfig()
         self.rover = rover if rover is not None else RoverConfig()
         self.worlds = worlds if worlds is not None else WorldSampler(
-            base="plain", vary={"rocks.k": [0.02, 0.15]}, count=8)
+            base="plain", vary={"rocks.k": [0.05, 0.15]}, count=8)
         self.n_worlds, self._path = world_paths(self.worlds)
         self.run = RunConfig(control_hz=control_hz, imu_hz=2 * control_hz,
                              physics_hz=physics_hz,

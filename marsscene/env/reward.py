@@ -13,7 +13,7 @@ goal            +5.0    ``2 (T - t) / T`` once, at the step the goal is reached 
 oscillation     -0.05   ``sum_i (3 |a_i - a'_i|)^4 / T`` over ``3 |a_i - a'_i| > 0.05`` (jerks)
 reverse         -0.5    ``1 / T`` when the speed command is negative
 heading_away    -1.5    ``|b| / T`` when ``|b| > 2 rad``
-collision       -3.0    ``1`` per step the chassis, or a wheel against a rock, is in contact
+collision       -3.0    ``1 / T`` per step the chassis, or a wheel against a rock, is in contact
 stray           -2.0    ``1`` at the step the rover strays from the start-goal corridor
 ==============  ======  ===================================================================
 
@@ -21,7 +21,8 @@ Source of the terms and weights: RLRoverLab, Aalborg University's Isaac Lab suit
 navigation (https://github.com/abmoRobotics/RLRoverLab, ``rover_envs/envs/navigation/mdp/
 rewards.py`` and ``rover_env_cfg.py``, read 2026-11). Differences: the goal
 needs no final heading (a point goal), oscillation counts changes of either sign, collisions do
-not end the episode (the rover may climb a rock; getting stuck ends it), and the goal tolerance
+not end the episode (the rover may climb a rock; getting stuck ends it) and so cost ``1 / T``
+a step in contact (RLRoverLab's one-off -3 spread over a whole episode), and the goal tolerance
 is the task's (0.5 m for a 3 m rover, RLRoverLab: 0.18 m for a 1 m rover).
 
 Sparse: ``-1`` per step until the goal, ``0`` at it (Gymnasium-Robotics' convention).
@@ -104,7 +105,7 @@ def step_terms(action: NDArray[np.float64], last_action: NDArray[np.float64], *,
     return {
         "oscillation": cfg.oscillation * float(osc.sum()) / t,
         "reverse": cfg.reverse / t if action[0] < 0.0 else 0.0,
-        "collision": cfg.collision if collided else 0.0,
+        "collision": cfg.collision / t if collided else 0.0,
         "stray": cfg.stray if strayed else 0.0,
     }
 
