@@ -110,7 +110,7 @@ class SampleMessages:
                  wanted: Callable[[str], bool] | None = None) -> None:
         self.b = MessageBuilder(distro)
         self.rover, self.noise, self.lidar_cfg = rover, noise, lidar
-        self.camera, self.stereo_intr, self.camera_depth = camera, stereo or {}, camera_depth
+        self.cam_intr, self.stereo_intr, self.camera_depth = camera, stereo or {}, camera_depth
         self.opts = images if images is not None else ImageOptions()
         self.wanted = wanted if wanted is not None else (lambda topic: True)
         nd = imu_noise_of(asdict(noise), imu_hz)
@@ -123,8 +123,8 @@ class SampleMessages:
 
     def topics(self) -> list[tuple[str, str]]:
         """``(topic, msgtype)`` of everything this publisher can make."""
-        return topic_table(camera=self.camera is not None,
-                           depth=self.camera is not None and self.camera_depth,
+        return topic_table(camera=self.cam_intr is not None,
+                           depth=self.cam_intr is not None and self.camera_depth,
                            stereo=bool(self.stereo_intr), lidar=self.lidar_cfg is not None,
                            images=self.opts)
 
@@ -215,12 +215,12 @@ class SampleMessages:
 
     def camera(self, t: float, index: int, rgb: Any, depth: Any) -> Pairs:
         """The navcam's colour, depth, camera infos and (``depth_cloud``) the depth cloud."""
-        if self.camera is None:
+        if self.cam_intr is None:
             return []
         frame, out = camera_frame("navcam"), self._colour("/rover/rgb", t, "navcam", rgb, 0.0)
         if depth is None:
             return out
-        b, want, opts, intr = self.b, self.wanted, self.opts, self.camera
+        b, want, opts, intr = self.b, self.wanted, self.opts, self.cam_intr
         mm = depth_mm(depth)
         if want("/rover/depth/image_raw") and opts.images in ("raw", "both"):
             arr = bd.depth_m(mm) if opts.depth_encoding == "32FC1" else mm.astype("<u2")
@@ -253,7 +253,7 @@ class SampleMessages:
     def _colour(self, prefix: str, t: float, stream: str, img: Any, tx: float) -> Pairs:
         b, want, opts = self.b, self.wanted, self.opts
         frame = camera_frame(stream)
-        intr = self.camera if stream == "navcam" else self.stereo_intr[stream]
+        intr = self.cam_intr if stream == "navcam" else self.stereo_intr[stream]
         info = f"{prefix}/camera_info"
         out: Pairs = []
         if want(f"{prefix}/image_raw") and opts.images in ("raw", "both"):
