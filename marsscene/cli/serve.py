@@ -56,6 +56,8 @@ _ros_options = compose(
                  help="End when the goal (/marsscene/goal) is reached."),
     click.option("--ros-distro", type=click.Choice(["jazzy", "humble"]), default="jazzy",
                  show_default=True, help="Message definitions."),
+    click.option("--map-tf/--no-map-tf", default=True, show_default=True,
+                 help="Publish map -> odom from ground truth (off when a SLAM stack does)."),
 )
 
 
@@ -98,7 +100,7 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
             cmd_vel_topic=opts["cmd_vel_topic"], cmd_vel_stamped=opts["cmd_vel_stamped"],
             cmd_timeout_s=opts["cmd_timeout"], pace=opts["pace"], realtime_factor=opts["rtf"],
             sensor_qos=opts["sensor_qos"], images=opts["images"],
-            stop_at_goal=opts["stop_at_goal"], distro=opts["ros_distro"])
+            stop_at_goal=opts["stop_at_goal"], distro=opts["ros_distro"], map_tf=opts["map_tf"])
         options = ms.DriveOptions(start_xy_m=start, start_yaw_rad=yaw)
         where = "127.0.0.1 only" if ros.localhost_only else "the network"
         meter = _Meter()
@@ -128,13 +130,17 @@ def _drive_defaults(opts: dict[str, Any]) -> dict[str, Any]:
 
 
 class _Meter:
-    """One status line every 10 wall seconds: sim time, real-time factor, distance."""
+    """A status line every 10 wall seconds: sim time, real-time factor, distance driven."""
 
     def __init__(self) -> None:
-        self.t0 = self.last = time.monotonic()
+        self.t0: float | None = None  # the first report (after the sensors' set-up)
+        self.last = 0.0
 
     def __call__(self, p: Any) -> None:
         now = time.monotonic()
+        if self.t0 is None:
+            self.t0 = self.last = now - p.sim_time_s
+            return
         if now - self.last >= 10.0:
             self.last = now
             sys.stderr.write(f"marsscene: sim {p.sim_time_s:.0f} s | "

@@ -47,12 +47,14 @@ _CONTROL_TOPICS = {"/marsscene/reset": "std_msgs/msg/Empty",
 
 
 class SessionStats:
-    """Counts of a live session: messages and bytes per topic, commands, write seconds."""
+    """Counts of a live session: messages, bytes and write seconds per topic, message-building
+    seconds per sample stream (image codecs included), commands, resets, the goal."""
 
     def __init__(self) -> None:
         self.messages: dict[str, int] = {}
         self.bytes: dict[str, int] = {}
-        self.write_s: dict[str, float] = {}
+        self.write_s: dict[str, float] = {}  # per topic: CDR + DDS write
+        self.build_s: dict[str, float] = {}  # per sample stream: building the messages
         self.commands = 0
         self.timeouts = 0
         self.resets = 0
@@ -63,6 +65,7 @@ class SessionStats:
     def as_dict(self) -> dict[str, Any]:
         return {"messages": dict(self.messages), "bytes": dict(self.bytes),
                 "write_s": {k: round(v, 6) for k, v in self.write_s.items()},
+                "build_s": {k: round(v, 6) for k, v in self.build_s.items()},
                 "commands": self.commands, "command_timeouts": self.timeouts,
                 "resets": self.resets, "teleports": self.teleports,
                 "goal_reached_t_s": self.goal_reached_t_s, "pacing_sleep_s": round(self.sleep_s, 3)}
@@ -127,20 +130,27 @@ class Bridge:
         self.publish(self.msgs.static(0.0))
         self._goal_reached(False)
 
+    def _sample(self, stream: str, make: Any, args: tuple[Any, ...]) -> None:
+        t0 = time.perf_counter()
+        pairs = make(*args)
+        st = self.stats
+        st.build_s[stream] = st.build_s.get(stream, 0.0) + time.perf_counter() - t0
+        self.publish(pairs)
+
     def control(self, *args: Any) -> None:
-        self.publish(self.msgs.control(*args))
+        self._sample("control", self.msgs.control, args)
 
     def imu(self, *args: Any) -> None:
-        self.publish(self.msgs.imu(*args))
+        self._sample("imu", self.msgs.imu, args)
 
     def lidar(self, *args: Any) -> None:
-        self.publish(self.msgs.lidar(*args))
+        self._sample("lidar", self.msgs.lidar, args)
 
     def camera(self, *args: Any) -> None:
-        self.publish(self.msgs.camera(*args))
+        self._sample("camera", self.msgs.camera, args)
 
     def stereo(self, *args: Any) -> None:
-        self.publish(self.msgs.stereo(*args))
+        self._sample("stereo", self.msgs.stereo, args)
 
     # ---- the control step (controller) -----------------------------------------------------
     def __call__(self, obs: Any) -> tuple[float, float]:

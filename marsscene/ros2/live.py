@@ -166,5 +166,5 @@ def _bridge(sim: Any, config: RunConfig, ros: Ros2Options) -> Bridge:
         stereo=({s: sim.camera_intrinsics(s) for s in ("left", "right")}
                 if cam is not None and cam.stereo else None),
         camera_depth=cam is not None and cam.depth,
-        images=ImageOptions(images=ros.images), distro=ros.distro)
+        images=ImageOptions(images=ros.images), distro=ros.distro, map_tf=ros.map_tf)
     return Bridge(sim, msgs, ros, Participant(ros.domain, ros.localhost_only))

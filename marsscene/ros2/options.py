@@ -67,6 +67,9 @@ class Ros2Options:
         End the session when the goal is reached.
     distro : str
         ``"jazzy"`` or ``"humble"`` message definitions (they differ in ``ros_discovery_info``).
+    map_tf : bool
+        Publish ``map -> odom`` on ``/tf`` (from ground truth: a perfect localiser); turn it off
+        when a SLAM or localisation stack publishes its own.
     """
 
     domain_id: int | None = None
@@ -82,6 +85,7 @@ class Ros2Options:
     goal_tolerance_m: float = 1.0
     stop_at_goal: bool = False
     distro: str = "jazzy"
+    map_tf: bool = True
 
     def __post_init__(self) -> None:
         if self.domain_id is not None:

@@ -14,8 +14,8 @@ loopback only (127.0.0.1, no multicast, unicast discovery). Modes (JSON on stdou
   reports ``|v| >= V / 2``, then stop and wait until it stops;
 * ``goto DOMAIN DX DY [--stop-m 3.0]``: a DDS-only closed loop: drive towards the point ``(DX,
   DY)`` m from the start on ``/rover/odom`` and stop short of the first obstacle that
-  ``/rover/lidar/points`` shows ahead in the rover's path (points 0.3..2.5 m above the ground,
-  within 1.6 m of the path's centre line).
+  ``/rover/lidar/points`` shows ahead in the rover's path (a step of 0.4 m within 1.6 m of the
+  path's centre line, :func:`nearest_obstacle_m`).
 """
 
 from __future__ import annotations
@@ -181,6 +181,29 @@ def latency(peer: Peer, v: float, repeats: int) -> dict[str, Any]:
     return {"latency_s": out}
 
 
+def nearest_obstacle_m(pts: Any, half_width_m: float = 1.6, step_m: float = 0.4,
+                       cell_m: float = 0.5) -> float:
+    """Distance ahead (LiDAR x) of the nearest obstacle in the rover's path: points binned into
+    ``cell_m`` cells; a cell in the path (``|y| < half_width_m``) whose highest point stands
+    ``step_m`` above the lowest point of its 3 x 3 neighbourhood (the local ground) is one."""
+    x, y, z = pts["x"], pts["y"], pts["z"]
+    keep = (x > 0.5) & (x < 30.0) & (np.abs(y) < half_width_m + 2 * cell_m) & np.isfinite(z)
+    i = np.floor(x[keep] / cell_m).astype(int)
+    j = np.floor((y[keep] + half_width_m + 2 * cell_m) / cell_m).astype(int)
+    shape = (int(30.0 / cell_m) + 2, int(2 * (half_width_m + 2 * cell_m) / cell_m) + 2)
+    lo, hi = np.full(shape, np.inf), np.full(shape, -np.inf)
+    np.minimum.at(lo, (i, j), z[keep])
+    np.maximum.at(hi, (i, j), z[keep])
+    pad = np.pad(lo, 1, constant_values=np.inf)
+    ground = np.min([pad[a:a + shape[0], b:b + shape[1]] for a in range(3) for b in range(3)],
+                    axis=0)
+    cols = np.arange(shape[1]) * cell_m - half_width_m - 2 * cell_m + cell_m / 2
+    in_path = np.abs(cols) < half_width_m
+    hit = (hi - ground > step_m) & np.isfinite(ground) & in_path[None, :]
+    rows = np.nonzero(hit.any(axis=1))[0]
+    return float(rows[0] * cell_m) if len(rows) else math.inf
+
+
 def goto(peer: Peer, dx: float, dy: float, stop_m: float, seconds: float) -> dict[str, Any]:
     """Drive to (dx, dy) from the start on odometry; stop before an obstacle in the cloud."""
     odom = peer.reader("/rover/odom", "nav_msgs/msg/Odometry", reliable=True)
@@ -202,10 +225,7 @@ def goto(peer: Peer, dx: float, dy: float, stop_m: float, seconds: float) -> dic
                            "formats": [kinds[f.datatype] for f in pc.fields],
                            "offsets": [f.offset for f in pc.fields], "itemsize": pc.point_step}
             pts: Any = np.frombuffer(pc.data.tobytes(), dtype=np.dtype(layout))
-            # the LiDAR sits ~2.1 m above the ground: obstacles are 0.3..2.5 m above it
-            ahead = (pts["x"] > 0.5) & (np.abs(pts["y"]) < 1.6) & (pts["z"] > -1.8) & \
-                (pts["z"] < 0.4)
-            near = float(pts["x"][ahead].min()) if ahead.any() else math.inf
+            near = nearest_obstacle_m(pts)
             if near < stop_m:
                 blocked_at, reason = near, "obstacle"
         if start is None or pose is None:

@@ -101,18 +101,21 @@ class SampleMessages:
         ``"jazzy"`` or ``"humble"`` message definitions.
     wanted : callable, optional
         ``wanted(topic)``: build that topic's messages (default: all).
+    map_tf : bool
+        ``/tf`` carries ``map -> odom`` (from ground truth) besides ``odom -> base_link``.
     """
 
     def __init__(self, rover: RoverConfig, noise: NoiseConfig, *, imu_hz: float,
                  lidar: dict[str, Any] | None = None, camera: dict[str, Any] | None = None,
                  stereo: dict[str, dict[str, Any]] | None = None, camera_depth: bool = True,
                  images: ImageOptions | None = None, distro: str = "jazzy",
-                 wanted: Callable[[str], bool] | None = None) -> None:
+                 wanted: Callable[[str], bool] | None = None, map_tf: bool = True) -> None:
         self.b = MessageBuilder(distro)
         self.rover, self.noise, self.lidar_cfg = rover, noise, lidar
         self.cam_intr, self.stereo_intr, self.camera_depth = camera, stereo or {}, camera_depth
         self.opts = images if images is not None else ImageOptions()
         self.wanted = wanted if wanted is not None else (lambda topic: True)
+        self.map_tf = map_tf
         nd = imu_noise_of(asdict(noise), imu_hz)
         self.g_var = nd["gyroscope_noise_density"] ** 2 * nd["rate_hz"]
         self.a_var = nd["accelerometer_noise_density"] ** 2 * nd["rate_hz"]
@@ -153,10 +156,13 @@ class SampleMessages:
                  else np.zeros((3, 3)))
         self._angle = self._angle + rates * dt
         out: Pairs = []
-        if want("/tf"):
+        if want("/tf") and self.map_tf:
             rot = r_gt * r_od.inv()
             out.append(("/tf", b.state_tf(t, (gt_xyz - rot.apply(od_xyz), rot.as_quat()),
                                           (od_xyz, r_od.as_quat()))))
+        elif want("/tf"):  # a SLAM stack publishes map -> odom itself
+            out.append(("/tf", b.tf_message([b.tf(t, "odom", "base_link", od_xyz,
+                                                  r_od.as_quat())])))
         if want("/rover/cmd_vel"):
             out.append(("/rover/cmd_vel", b.twist(v, w)))
         if want("/rover/odom"):
