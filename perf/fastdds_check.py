@@ -10,7 +10,7 @@ One command: ``python perf/fastdds_check.py`` (``FASTDDS_SECONDS`` of served sim
    on 127.0.0.1, and runs the peer beside it: it subscribes to IMU, odometry, the raw image and
    the LiDAR cloud and publishes ``/cmd_vel`` (0.4 m/s, 0.05 rad/s);
 3. prints what the peer received against what was published, and how far ``/cmd_vel`` drove the
-   rover.
+   rover; twice: with Fast DDS's default UDP receive buffer and with 4 MiB (``rmem_max`` here).
 
 Needs (Debian 12): ``apt-get install fastddsgen libfastrtps-dev libfastcdr-dev cmake g++``.
 All DDS traffic stays on the loopback interface.
@@ -63,7 +63,6 @@ def build(work: Path) -> Path:
 
 def main() -> None:
     import marsscene as ms
-    from marsscene.runs.tum import read_tum
 
     with tempfile.TemporaryDirectory(prefix="marsscene-fastdds-") as tmp:
         work = Path(tmp)
@@ -73,28 +72,40 @@ def main() -> None:
                                         "craters": {"enabled": False},
                                         "rocks": {"enabled": False}})
         ms.write_scene(ms.build_scene(cfg, seed=3), work / "scene", formats=("mjcf",))
-        serve = subprocess.Popen(
-            ["marsscene", "serve", str(work / "scene"), "--ros2", "--localhost", "--domain-id",
-             str(DOMAIN), "--seconds", str(SECONDS), "--camera", "--camera-size", CAMERA,
-             "--images", "raw", "--lidar-model", LIDAR, "--out", str(work / "run")],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        # the peer runs until the session has ended (renderer set-up + sim time + margin)
-        got = subprocess.run([str(peer), str(DOMAIN), str(SECONDS + 40.0), "0.4", "0.05"],
-                             capture_output=True, text=True, timeout=SECONDS + 120.0)
-        err, _ = serve.communicate(timeout=60)
-        result = json.loads(got.stdout)
-        print(json.dumps(result, indent=1))
-        served = [ln for ln in err.splitlines() if "served" in ln or "serving" in ln]
-        cmd = (work / "run" / "cmd.csv").read_text().splitlines()[1:]
-        moving = sum(1 for row in cmd if float(row.split(",")[1]) != 0.0)
-        gt = read_tum(work / "run" / "gt.tum")
-        print("\n".join(served))
-        print(f"served {SECONDS:.0f} sim s; Fast DDS peer received: "
-              + ", ".join(f"{k} {v['n']}" for k, v in result.items() if isinstance(v, dict))
-              + f"; published at rates 100 / 50 / 10 / 10 Hz -> {int(100 * SECONDS) + 1} / "
-              f"{int(50 * SECONDS) + 1} / {int(10 * SECONDS) + 1} / {int(10 * SECONDS) + 1}")
-        print(f"/cmd_vel from Fast DDS: {moving} of {len(cmd)} control steps moving; the rover "
-              f"drove {gt.path_length_m():.2f} m")
+        for rcvbuf in (0, 4 * 1024 * 1024):
+            check(peer, work, rcvbuf)
+
+
+def check(peer: Path, work: Path, rcvbuf: int) -> None:
+    """One served session with the peer beside it (``rcvbuf``: its UDP receive buffer)."""
+    from marsscene.runs.tum import read_tum
+
+    run = work / f"run-{rcvbuf}"
+    serve = subprocess.Popen(
+        ["marsscene", "serve", str(work / "scene"), "--ros2", "--localhost", "--domain-id",
+         str(DOMAIN), "--seconds", str(SECONDS), "--camera", "--camera-size", CAMERA,
+         "--images", "raw", "--lidar-model", LIDAR, "--out", str(run)],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    # the peer runs until the session has ended (renderer set-up + sim time + margin)
+    got = subprocess.run([str(peer), str(DOMAIN), str(SECONDS / 0.4 + 30.0), "0.4", "0.05",
+                          str(rcvbuf)], capture_output=True, text=True,
+                         timeout=SECONDS / 0.4 + 120.0)
+    err, _ = serve.communicate(timeout=60)
+    result = json.loads(got.stdout)
+    served = [ln for ln in err.splitlines() if "served" in ln or "serving" in ln]
+    cmd = (run / "cmd.csv").read_text().splitlines()[1:]
+    moving = sum(1 for row in cmd if float(row.split(",")[1]) != 0.0)
+    gt = read_tum(run / "gt.tum")
+    print(f"\nFast DDS peer, UDP receive buffer "
+          f"{f'{rcvbuf / 2**20:.0f} MiB' if rcvbuf else 'Fast DDS default'}:")
+    print(json.dumps(result, indent=1))
+    print("\n".join(served))
+    print(f"served {SECONDS:.0f} sim s; the Fast DDS peer received: "
+          + ", ".join(f"{k} {v['n']}" for k, v in result.items() if isinstance(v, dict))
+          + f"; published (100 / 50 / 10 / 10 Hz): {int(100 * SECONDS) + 1} / "
+          f"{int(50 * SECONDS) + 1} / {int(10 * SECONDS) + 1} / {int(10 * SECONDS) + 1}")
+    print(f"/cmd_vel from Fast DDS: {moving} of {len(cmd)} control steps moving; the rover "
+          f"drove {gt.path_length_m():.2f} m")
 
 
 if __name__ == "__main__":

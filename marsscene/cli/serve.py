@@ -90,10 +90,11 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
     """
     import marsscene as ms
     from marsscene.ros2 import Ros2Options
-    from marsscene.ros2 import serve as serve_live
     from marsscene.runs.export.options import BagOptions
 
     with user_errors():
+        from marsscene.ros2 import serve as serve_live  # MissingDependencyError: one line
+
         run = _run_config(**_drive_defaults(opts))
         ros = Ros2Options(
             domain_id=opts["domain_id"], localhost=opts["localhost"],

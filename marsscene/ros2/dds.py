@@ -25,7 +25,7 @@ import os
 import threading
 from typing import Any
 
-from marsscene.errors import missing_dependency
+from marsscene.errors import RuntimeSimError, missing_dependency
 
 __all__ = ["QOS", "Participant", "RawReader", "RawWriter", "cyclone_config", "dds_topic",
            "dds_type"]
@@ -33,7 +33,7 @@ __all__ = ["QOS", "Participant", "RawReader", "RawWriter", "cyclone_config", "dd
 try:
     from cyclonedds import qos as _qos
     from cyclonedds._clayer import ddspy_take, ddspy_write
-    from cyclonedds.core import InstanceState, Listener, SampleState, ViewState
+    from cyclonedds.core import DDSException, InstanceState, Listener, SampleState, ViewState
     from cyclonedds.domain import Domain, DomainParticipant
     from cyclonedds.idl import annotations as _ann
     from cyclonedds.idl import make_idl_struct
@@ -138,12 +138,17 @@ class Participant:
 
     def __init__(self, domain_id: int, localhost: bool) -> None:
         config = cyclone_config(localhost)
-        if config is not None and domain_id not in _DOMAINS:  # one configuration per process
-            _DOMAINS[domain_id] = (config, Domain(domain_id, config))
-        if config is not None and _DOMAINS[domain_id][0] != config:
-            raise RuntimeError(f"DDS domain {domain_id} is already configured differently in "
-                               "this process")
-        self.dp = DomainParticipant(domain_id, qos=_qos.Qos(_P.Userdata(b"enclave=/;")))
+        try:
+            if config is not None and domain_id not in _DOMAINS:  # one configuration a process
+                _DOMAINS[domain_id] = (config, Domain(domain_id, config))
+            if config is not None and _DOMAINS[domain_id][0] != config:
+                raise RuntimeSimError(f"DDS domain {domain_id} is already configured "
+                                      "differently in this process")
+            self.dp = DomainParticipant(domain_id, qos=_qos.Qos(_P.Userdata(b"enclave=/;")))
+        except DDSException as err:  # e.g. a bad CYCLONEDDS_URI, no usable interface
+            uri = os.environ.get("CYCLONEDDS_URI", "")
+            raise RuntimeSimError(f"cannot start Cyclone DDS on domain {domain_id}: {err}"
+                                  + (f" (CYCLONEDDS_URI={uri!r})" if uri else "")) from None
         self.writers: list[RawWriter] = []
         self.readers: list[RawReader] = []
 

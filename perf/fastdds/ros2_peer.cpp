@@ -8,7 +8,7 @@
 // Loopback only: UDPv4 on 127.0.0.1 (interface white list), no multicast, unicast discovery of
 // 127.0.0.1 (participant ids 0..31).
 //
-// Usage: ros2_peer DOMAIN SECONDS V W
+// Usage: ros2_peer DOMAIN SECONDS V W [RECEIVE_BUFFER_BYTES]  (0 or absent: Fast DDS's default)
 
 #include <atomic>
 #include <chrono>
@@ -98,8 +98,8 @@ static std::string cloud_note(const msg::PointCloud2_& m) {
 }
 
 int main(int argc, char** argv) {
-  if (argc != 5) {
-    std::fprintf(stderr, "usage: ros2_peer DOMAIN SECONDS V W\n");
+  if (argc != 5 && argc != 6) {
+    std::fprintf(stderr, "usage: ros2_peer DOMAIN SECONDS V W [RECEIVE_BUFFER_BYTES]\n");
     return 2;
   }
   const int domain = std::atoi(argv[1]);
@@ -109,6 +109,7 @@ int main(int argc, char** argv) {
   pqos.name("marsscene_fastdds_peer");
   auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
   udp->interfaceWhiteList.push_back("127.0.0.1");
+  if (argc == 6 && std::atol(argv[5]) > 0) udp->receiveBufferSize = std::atol(argv[5]);
   pqos.transport().use_builtin_transports = false;
   pqos.transport().user_transports.push_back(udp);
   auto& builtin = pqos.wire_protocol().builtin;

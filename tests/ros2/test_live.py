@@ -79,7 +79,7 @@ def test_every_topic_arrives_at_its_rate_and_decodes(session):
     res, _, listen = session
     got_text, _ = listen.communicate(timeout=30)
     assert res.result.summary["sim_time_s"] == pytest.approx(SECONDS)
-    assert 0.5 < res.realtime_factor < 1.2  # paced to the wall clock (a busy CI may lag)
+    assert res.realtime_factor < 1.1  # paced to the wall clock (never ahead; a busy CI lags)
     got = json.loads(got_text) if got_text else {}
     for topic, hz in RATES_HZ.items():
         stamps = got[topic]["stamps"]
