@@ -94,7 +94,8 @@ class Peer:
                   else Policy.Reliability.BestEffort,
                   Policy.Durability.TransientLocal if transient_local
                   else Policy.Durability.Volatile, Policy.History.KeepLast(depth))
-        return DataReader(self.dp, Topic(self.dp, "rt" + topic, idl(msgtype)), qos)
+        name = "rt" + topic if topic.startswith("/") else topic  # ros_discovery_info: as is
+        return DataReader(self.dp, Topic(self.dp, name, idl(msgtype)), qos)
 
     def writer(self, topic: str, msgtype: str) -> Any:
         qos = Qos(Policy.Reliability.Reliable(100_000_000), Policy.History.KeepLast(10))
@@ -150,6 +151,10 @@ def listen(peer: Peer, seconds: float, topics: dict[str, list[Any]],
                 g["n"] += 1
                 g["bytes"] = len(data)
                 g["stamps"].append(stamp_s(msg))
+                for node in getattr(msg, "node_entities_info_seq", ()):  # ros_discovery_info
+                    g["nodes"] = [*g.get("nodes", []), [
+                        node.node_namespace, node.node_name, len(node.reader_gid_seq),
+                        len(node.writer_gid_seq)]]
         time.sleep(0.002)
     return got
 

@@ -16,6 +16,8 @@ import pytest
 import marsscene as ms
 import marsscene.testing
 from marsscene.ros2 import Ros2Options, serve
+from marsscene.runs.export.bag_topics import ImageOptions
+from marsscene.runs.export.sample_messages import topic_table
 from marsscene.runs.tum import read_tum
 
 pytest.importorskip("mujoco")
@@ -38,6 +40,7 @@ TOPICS = {  # name: [msgtype, reliable, transient local] as a ROS 2 subscriber w
     "/rover/rgb/image_raw/compressed": ["sensor_msgs/msg/CompressedImage", False, False],
     "/rover/depth/image_raw/compressedDepth": ["sensor_msgs/msg/CompressedImage", False, False],
     "/rover/rgb/camera_info": ["sensor_msgs/msg/CameraInfo", False, False],
+    "ros_discovery_info": ["rmw_dds_common/msg/ParticipantEntitiesInfo", True, True],
 }
 RATES_HZ = {"/clock": 100, "/tf": 50, "/rover/odom": 50, "/rover/GT_Trajectory": 50,
             "/rover/joint_states": 50, "/rover/imu": 100, "/rover/imu_noisy": 100,
@@ -86,6 +89,12 @@ def test_every_topic_arrives_at_its_rate_and_decodes(session):
         assert len(stamps) >= 0.9 * (hz * SECONDS + 1), (topic, len(stamps))
         assert stamps[0] == pytest.approx(0.0) and np.all(np.diff(stamps) > 0), topic
     assert got["/tf_static"]["n"] == 1 and got["/rover/robot_description"]["n"] == 1
+    # the node as `ros2 node list` reads it: 4 readers (cmd_vel, reset, teleport, goal) and a
+    # writer per published topic
+    ns, name, readers, writers = got["ros_discovery_info"]["nodes"][-1]
+    assert (ns, name, readers) == ("/", "marsscene_rover", 4)
+    table = topic_table(camera=True, depth=True, lidar=True, images=ImageOptions(images="both"))
+    assert writers == len(table) - 1 + 1  # not /rover/cmd_vel (subscribed); + goal_reached
 
 
 def test_cmd_vel_moves_the_rover_as_drive_with_the_same_commands(session, gentle_scene):
