@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -105,7 +107,7 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
         options = ms.DriveOptions(start_xy_m=start, start_yaw_rad=yaw)
         where = "127.0.0.1 only" if ros.localhost_only else "the network"
         meter = _Meter()
-        with _sigterm_interrupts():
+        with _sigterm_interrupts(), _interrupted_before_start():
             res = serve_live(scene_dir, ros=ros, config=run, options=options, seconds=seconds,
                              out_dir=out_dir, record=BagOptions() if record else None,
                              seed=seed, progress=meter,
@@ -121,6 +123,16 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
         click.echo(f"     bag: {res.bag.path}")
     if out_dir is not None:
         click.echo(f"    logs: {out_dir}")
+
+
+@contextmanager
+def _interrupted_before_start() -> Iterator[None]:
+    """Ctrl-C while the scene loads (a started session ends normally): exit 130, one line."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        click.echo("marsscene: interrupted before the session started", err=True)
+        sys.exit(130)
 
 
 def _drive_defaults(opts: dict[str, Any]) -> dict[str, Any]:

@@ -195,15 +195,14 @@ class Bridge:
 
     def _read_control(self) -> None:
         readers = self.control_readers
-        if readers["/marsscene/reset"].take():
-            self._place(*self.start_pose)
+        if readers["/marsscene/reset"].take() and self._place(*self.start_pose):
             self.stats.resets += 1
         for raw in readers["/marsscene/teleport"].take()[-1:]:
             pose: Any = self.store.deserialize_cdr(raw, "geometry_msgs/msg/Pose")
             q = pose.orientation
             yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-            self._place((pose.position.x, pose.position.y), yaw)
-            self.stats.teleports += 1
+            if self._place((pose.position.x, pose.position.y), yaw):
+                self.stats.teleports += 1
         for raw in readers["/marsscene/goal"].take()[-1:]:
             goal: Any = self.store.deserialize_cdr(raw, "geometry_msgs/msg/PoseStamped")
             self.goal_xy = (float(goal.pose.position.x), float(goal.pose.position.y))
@@ -211,13 +210,14 @@ class Bridge:
             self._goal_reached(False)
             log.info("goal set at (%.2f, %.2f) m", *self.goal_xy)
 
-    def _place(self, xy: Any, yaw: float) -> None:
+    def _place(self, xy: Any, yaw: float) -> bool:
         try:
             self.sim.place(xy_m=(float(xy[0]), float(xy[1])), yaw_rad=float(yaw))
         except RuntimeSimError as err:  # a pose off the terrain: say so, keep serving
             log.warning("teleport refused: %s", err)
-            return
+            return False
         self.cmd, self.cmd_t_s = (0.0, 0.0), None
+        return True
 
     def _goal_reached(self, reached: bool) -> None:
         b = self.msgs.b
