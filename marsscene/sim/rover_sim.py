@@ -243,6 +243,13 @@ class RoverSim:
         self.data.time = 0.0
         self.cmd = (0.0, 0.0)
 
+    def place(self, *, xy_m: tuple[float, float], yaw_rad: float) -> None:
+        """Move the rover to ``xy_m`` facing ``yaw_rad``, set on the terrain at rest, without
+        settling or resetting the clock (a live session's teleport; :meth:`reset` restarts)."""
+        self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy_m, yaw_rad)
+        self.data.qvel[:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+
     # ---- stepping ----------------------------------------------------------------------------
     def apply(self, v_m_s: float, omega_rad_s: float) -> None:
         """Set actuator targets for ``cmd_vel`` (clipped to the actuator ranges by MuJoCo)."""

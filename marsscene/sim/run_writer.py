@@ -14,10 +14,16 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
-from marsscene.runs.logs import CsvLog, ImageWriter, TumLog, ply_bytes, write_file, write_json
+from marsscene.runs.logs import (
+    CsvLog,
+    ImageWriter,
+    TumLog,
+    depth_mm,
+    ply_bytes,
+    write_file,
+    write_json,
+)
 
 __all__ = ["RunWriter"]
 
@@ -103,8 +109,7 @@ class RunWriter:
         self._jpeg("navcam", name, rgb)
         dname = ""
         if depth is not None:
-            mm = np.clip(np.round(depth * 1000.0), 0, 65535).astype(np.uint16)
-            self.images.submit(self._dir("camera", "depth") / name, mm)
+            self.images.submit(self._dir("camera", "depth") / name, depth_mm(depth))
             dname = "depth/" + name
         self.logs["camera"].row(t, ("rgb/" + name, dname))
 

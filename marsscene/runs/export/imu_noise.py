@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 from marsscene.runs.runlog import RunLog
 
-__all__ = ["EUROC_IMU_KEYS", "imu_noise_declared", "rate_hz"]
+__all__ = ["EUROC_IMU_KEYS", "imu_noise_declared", "imu_noise_of", "rate_hz"]
 
 #: EuRoC imu0/sensor.yaml noise keys (Kalibr convention: continuous-time densities).
 EUROC_IMU_KEYS = ("gyroscope_noise_density", "gyroscope_random_walk",
@@ -31,7 +31,12 @@ def imu_noise_declared(run: RunLog) -> dict[str, Any]:
     random-walk densities (rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)). Keys: ``profile``, ``rate_hz``
     and :data:`EUROC_IMU_KEYS`. Runs from before noise profiles read as profile ``none``.
     """
-    noise, rate = run.meta.get("noise", {}), rate_hz(run.imu[:, 0])
+    return imu_noise_of(run.meta.get("noise", {}), rate_hz(run.imu[:, 0]))
+
+
+def imu_noise_of(noise: dict[str, Any], rate: float) -> dict[str, Any]:
+    """:func:`imu_noise_declared` of a noise configuration (``run.json``'s ``noise``, or
+    ``asdict(NoiseConfig)``) sampled at ``rate`` Hz."""
 
     def get(key: str) -> float:
         return float(noise.get(key, 0.0))
