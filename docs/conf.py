@@ -66,7 +66,7 @@ nb_execution_in_temp = True  # each notebook runs in a fresh temporary folder
 nb_execution_show_tb = True
 nb_merge_streams = True
 nb_render_markdown_format = "gfm"  # Markdown outputs (the benchmark table) keep their tables
-nb_output_stderr = "remove-warn"
+nb_output_stderr = "show"
 
 # -- API reference: autodoc + autosummary + numpydoc ------------------------------------------
 autosummary_generate = True
