@@ -13,7 +13,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.docs.site_util import built_site
+from tests.docs.site_util import built_site, site_dir
+
+__all__ = ["site_dir"]  # the fixture of the built-site checks
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
