@@ -110,7 +110,8 @@ def _size(text: str) -> tuple[int, int]:
 @click.option("--noise-profile", type=click.Choice(_NOISE_PROFILES), default=None,
               help="Named IMU + wheel-odometry noise profile from datasheets (docs/runtime.md); "
               "keys set in --noise-config / --run-config still win. Default: the config's "
-              "profile, else none (noise-free).")
+              "profile, else none: a noise-free IMU and exact encoders, an optimistic "
+              "odometry (the SLAM benchmark uses ln200s).")
 @click.option(
     "--seed",
     type=click.IntRange(min=0),

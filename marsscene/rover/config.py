@@ -133,14 +133,24 @@ class NoiseConfig:
     """
 
     profile: str = "none"
+    """Named profile the other fields start from: ``none`` (the default: noise-free, an
+    optimistic odometry), ``ln200s`` (the SLAM benchmark's default) or ``adis16495``."""
     wheel_rate_sigma_rad_s: float = math.nan
+    """Additive Gaussian noise per wheel-rate sample, rad/s (NaN: the profile's)."""
     slip_mean: float = math.nan
+    """Mean of the multiplicative slip of the measured wheel rates (NaN: the profile's)."""
     slip_sigma: float = math.nan
+    """Standard deviation of that slip per sample and wheel (NaN: the profile's)."""
     steer_sigma_rad: float = math.nan
+    """Steering-encoder noise, rad (NaN: the profile's)."""
     accel_sigma_m_s2: float = 0.0
+    """Extra white accelerometer noise per sample, m/s^2."""
     gyro_sigma_rad_s: float = 0.0
+    """Extra white gyro noise per sample, rad/s."""
     accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Fixed accelerometer bias (x, y, z), m/s^2."""
     gyro_bias_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Fixed gyro bias (x, y, z), rad/s."""
     gyro_noise_density_rad_s_rthz: float = math.nan
     """White rate noise, rad/s/sqrt(Hz) (ARW; EuRoC ``gyroscope_noise_density``)."""
     gyro_bias_walk_rad_s2_rthz: float = math.nan
@@ -148,8 +158,11 @@ class NoiseConfig:
     gyro_turn_on_bias_rad_s: float = math.nan
     """1-sigma constant bias drawn once per run (bias repeatability)."""
     accel_noise_density_m_s2_rthz: float = math.nan
+    """White acceleration noise, m/s^2/sqrt(Hz) (VRW; EuRoC ``accelerometer_noise_density``)."""
     accel_bias_walk_m_s3_rthz: float = math.nan
+    """Bias random walk, m/s^3/sqrt(Hz) (EuRoC ``accelerometer_random_walk``)."""
     accel_turn_on_bias_m_s2: float = math.nan
+    """1-sigma constant bias drawn once per run (bias repeatability)."""
 
     def __post_init__(self) -> None:
         profiles = _noise_profiles()
@@ -217,10 +230,15 @@ class CameraConfig:
     """
 
     width_px: int = 640
+    """Image width in pixels."""
     height_px: int = 480
+    """Image height in pixels."""
     fovy_deg: float = 60.0
+    """Vertical field of view in degrees (pinhole, no distortion)."""
     rate_hz: float = 10.0
+    """Frame rate in Hz (must divide the 500 Hz physics rate)."""
     depth: bool = True
+    """Also log a metric depth image (uint16 mm PNG) registered to the colour image."""
     shadows: bool = True
     """Sun shadow map (3072 texels over +-20 m around the camera: 1.3 cm texels, locked to the
     world)."""
@@ -237,6 +255,7 @@ class CameraConfig:
     exposure: str = "auto"
     """``"auto"`` (mean sRGB intensity -> ``target_mean``) or ``"fixed"`` (``exposure_gain``)."""
     target_mean: float = 0.45
+    """Auto mode: mean sRGB intensity the exposure aims for."""
     exposure_gain: float = 1.0
     """Fixed mode: linear 1.0 = albedo 0.5 under 600 W/m^2, times this gain."""
     sensor_noise: bool = False
@@ -244,10 +263,13 @@ class CameraConfig:
     stereo: bool = False
     """Also render a rectified Navcam-like stereo pair (camera/left, camera/right)."""
     stereo_baseline_m: float = 0.424
+    """Stereo baseline in m (Perseverance's Navcams: 0.424 m)."""
     tau: float | None = None
     """Override the scene's dust optical depth (lighting is recomputed)."""
     sun_elevation_deg: float | None = None
+    """Override the sun's elevation in degrees (lighting is recomputed)."""
     sun_azimuth_deg: float | None = None
+    """Override the sun's azimuth in degrees clockwise from north (lighting is recomputed)."""
     trigger_distance_m: float | None = None
     """Capture a frame every this many metres driven (horizontal path, checked at the control
     rate) instead of at ``rate_hz``: place-recognition datasets sample space, not time."""
@@ -291,10 +313,16 @@ class RunConfig:
     """
 
     control_hz: float = 50.0
+    """Control rate in Hz: pure pursuit or the controller, odometry and ground truth logs."""
     imu_hz: float = 100.0
+    """IMU rate in Hz."""
     lidar: LidarConfig | None = None
+    """The LiDAR, or None for none (the default)."""
     camera: CameraConfig | None = None
+    """The mast camera, or None for none (the default)."""
     noise: NoiseConfig = field(default_factory=NoiseConfig)
+    """IMU and wheel-odometry noise; the default is the ``none`` profile (noise-free: an
+    optimistic odometry; the SLAM benchmark uses ``ln200s``)."""
     physics_hz: float | None = None
     """Physics rate (Hz); None: the scene's (``scene.xml`` timestep 2 ms, 500 Hz)."""
 

@@ -62,7 +62,8 @@ class Obstacles:
 
 @dataclass(frozen=True, eq=False)
 class Route:
-    """A path as points every ~``spacing`` m: ``xy_m`` (N, 2), cumulative arc length ``s_m``."""
+    """A path as points about ``spacing`` m apart: ``xy_m`` (N, 2), cumulative arc length
+    ``s_m``."""
 
     xy_m: NDArray[np.float64]
 

@@ -27,6 +27,7 @@ from typing import Any
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.config import SceneConfig, read_config_toml
 from marsscene.errors import ConfigError
+from marsscene.rover.config import noise_profiles
 
 __all__ = ["DriveSpec", "SweepSpec"]
 
@@ -42,11 +43,17 @@ class DriveSpec:
     seconds: float | None = None
     """Sim-time limit in s (default: until the goal)."""
     camera: bool = False
-    """Log the 320x240 RGB-D mast camera at 10 Hz."""
+    """Log the mast RGB-D camera with its defaults (:class:`~marsscene.runtime.CameraConfig`:
+    640 x 480 at 10 Hz)."""
     lidar: bool = False
-    """Log the 16-channel LiDAR at 10 Hz."""
+    """Log the LiDAR with its defaults (:class:`~marsscene.runtime.LidarConfig`: Ouster OS1-128
+    at 10 Hz)."""
     noise_seed: int = 0
     """Seed of the sensor-noise stream (the same in every cell unless swept)."""
+    noise_profile: str = "none"
+    """IMU and wheel-odometry noise profile (:class:`~marsscene.runtime.NoiseConfig`):
+    ``"none"`` (noise-free, as ``marsscene drive``), ``"ln200s"`` (the benchmarks' default) or
+    ``"adis16495"``."""
     lookahead_m: float = 1.0
     """Pure-pursuit lookahead."""
     max_slope_deg: float = 20.0
@@ -82,10 +89,16 @@ class DriveSpec:
         for key in ("camera", "lidar", "bag"):
             if not isinstance(getattr(self, key), bool):
                 raise ConfigError(f"drive.{key} = {getattr(self, key)!r}; must be true or false")
+        profiles = noise_profiles()
+        if not isinstance(self.noise_profile, str) or self.noise_profile not in profiles:
+            raise ConfigError(f"drive.noise_profile = {self.noise_profile!r} is unknown; known "
+                              f"profiles: {', '.join(profiles)}")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict (JSON-serialisable; ``None`` values dropped)."""
         out = {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
+        if out.get("noise_profile") == "none":  # the default: keeps older sweeps' config hashes
+            del out["noise_profile"]
         if "waypoints" in out:
             out["waypoints"] = [list(p) for p in out["waypoints"]]
         return out

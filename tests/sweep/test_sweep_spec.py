@@ -134,3 +134,34 @@ def test_cells_of_one_seed_prefer_one_worker() -> None:
     assert all(len(w) == 1 for w in by_seed.values())
     assert [by_seed[s].pop() for s in (7, 3, 9, 5)] == ["tcp://a", "tcp://b", "tcp://a", "tcp://b"]
     assert _seed_affinity(cells, []) == {c.cell_id: [] for c in cells}
+
+
+def test_drive_noise_profile_is_checked_and_reaches_the_drive(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import marsscene as ms
+    from marsscene.sweep.drive import drive_cell
+
+    base = {"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0], [1, 1]]}}
+    default = SweepSpec.from_dict(base).drive
+    assert default is not None and default.noise_profile == "none"
+    assert "noise_profile" not in default.to_dict()  # older sweeps keep their config hashes
+    with pytest.raises(ConfigError, match=r"drive\.noise_profile = 'ln200' is unknown"):
+        SweepSpec.from_dict({**base, "drive": {**base["drive"], "noise_profile": "ln200"}})
+    spec = SweepSpec.from_dict({**base, "drive": {**base["drive"], "noise_profile": "ln200s"}})
+    assert spec.drive is not None and spec.drive.to_dict()["noise_profile"] == "ln200s"
+
+    seen: dict = {}
+
+    class _Stop(Exception):
+        pass
+
+    def fake_drive(scene, **kwargs):
+        seen.update(kwargs)
+        raise _Stop
+
+    monkeypatch.setattr(ms, "drive", fake_drive)
+    with pytest.raises(_Stop):
+        drive_cell(tmp_path, spec.drive, tmp_path / "drive")
+    assert seen["config"].noise.profile == "ln200s"
+    assert seen["config"].noise == ms.NoiseConfig(profile="ln200s")
