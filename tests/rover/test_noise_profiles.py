@@ -348,7 +348,7 @@ def test_exports_declare_the_simulated_noise(ln_runs: list[Path], tmp_path: Path
 
     add_state(_Bag(), RunLog(ln_runs[0]), [], False)  # type: ignore[arg-type]
     g_sigma, a_sigma = cfg.white_sigmas(100.0)
-    _, _, g_var, a_var = calls["/rover/imu_noisy"][0]
+    *_, g_var, a_var = calls["/rover/imu_noisy"][0]
     assert g_var == pytest.approx(g_sigma**2, rel=1e-6)
     assert a_var == pytest.approx(a_sigma**2, rel=1e-6)
 
