@@ -45,6 +45,11 @@ METHOD_KINDS = ("wheel-odometry", "kiss-icp", "open3d-rgbd", "opencv-mono", "tum
 _FRAMES = ("base", "camera", "lidar")
 _SENSOR_OF = {"wheel-odometry": "none", "kiss-icp": "lidar", "open3d-rgbd": "camera",
               "opencv-mono": "camera"}
+#: Adapter options per built-in kind (``[[methods]] options = {...}``).
+_OPTIONS_OF = {"open3d-rgbd": ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
+                               "max_step_dev_deg"),
+               "opencv-mono": ("max_corners", "min_parallax_px", "min_inliers"),
+               "wheel-odometry": (), "kiss-icp": ()}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -180,6 +185,11 @@ class MethodSpec:
             raise ConfigError(f"method {self.name!r}: {self.kind} estimates the "
                               f"{default_frame} frame; frame = {self.frame!r} is not allowed")
         check_range(f"method {self.name!r} timeout_s", self.timeout_s, 0.0, 1e6, lo_open=True)
+        allowed = _OPTIONS_OF.get(self.kind)
+        unknown = sorted(set(self.options) - set(allowed)) if allowed is not None else []
+        if unknown:
+            raise ConfigError(f"method {self.name!r}: unknown option {unknown[0]!r} for "
+                              f"{self.kind}; allowed: {', '.join(allowed or ()) or 'none'}")
 
 
 @dataclass(frozen=True, kw_only=True)
