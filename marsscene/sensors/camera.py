@@ -82,6 +82,7 @@ class MastCamera:
             near_m=cam.near_window_m, far_stride=cam.far_post_stride,
             terrain_shadows=bool(cam.shadows),
             sun_radius_rad=math.radians(lt.sun_angular_diameter_deg / 2.0),
+            outer=getattr(sim, "outer_heightfield", None),
         )
         rows, cols = sim.heightfield.shape
         self.windowed = self.world.nr < rows or self.world.nc < cols

@@ -12,9 +12,10 @@ changed; contacts keep the scene's rule):
   :mod:`marsscene.sensors.camera_rocks`): a jittered icosphere per rock (80 faces near the
   camera, 20 elsewhere), scaled to its diameter and height, coloured per rock from
   :func:`marsscene.terrain.appearance.rock_albedo_rgb` through a texture atlas;
-* at a low sun the terrain's shadows over the whole heightfield
-  (:mod:`marsscene.sensors.camera_shadow`): the terrain meshes cast no shadow-map shadows,
-  rocks in the terrain's shadow neither (they sit in meshes of their own).
+* at a low sun the terrain's shadows over the whole heightfield, and from a level-of-detail
+  scene's coarse outer terrain too (:mod:`marsscene.sensors.camera_shadow`): the terrain
+  meshes cast no shadow-map shadows, rocks in the terrain's shadow neither (they sit in
+  meshes of their own).
 
 All meshes have a fixed vertex count; when they move their vertex, normal and texcoord arrays
 are rewritten in place and re-uploaded to GL (``mjr_uploadMesh``, ``mjr_uploadTexture``).
@@ -41,7 +42,7 @@ from marsscene.sensors.camera_rocks import (
 from marsscene.terrain.albedo_field import AlbedoField
 from marsscene.terrain.appearance import bump_shading, regolith_tile, rock_albedo_rgb
 from marsscene.terrain.heightfield import Heightfield
-from marsscene.terrain.horizon import SUN_RADIUS_RAD, SunShadow, sun_shadow
+from marsscene.terrain.horizon import SUN_RADIUS_RAD, SunShadow, shadow_with_outer, sun_shadow
 
 __all__ = ["ALBEDO_SCALE", "PEBBLE_MAX_M", "CameraWorld", "read_rock_catalog"]
 
@@ -69,6 +70,7 @@ class CameraWorld:
         far_stride: int = 2,
         terrain_shadows: bool = True,
         sun_radius_rad: float = SUN_RADIUS_RAD,
+        outer: Heightfield | None = None,
     ) -> None:
         self.hf = heightfield
         tile = regolith_tile(size_px=tile_px, tile_m=tile_m, rng=rng)
@@ -81,6 +83,9 @@ class CameraWorld:
         if terrain_shadows and sun_direction_enu[2] > 0.0:
             self.sun_shadow = sun_shadow(heightfield, sun_direction_enu,
                                          sun_radius_rad=sun_radius_rad)
+            if outer is not None:  # a level-of-detail scene: the coarse outer terrain casts too
+                self.sun_shadow = shadow_with_outer(self.sun_shadow, sun_shadow(
+                    outer, sun_direction_enu, sun_radius_rad=sun_radius_rad))
         self.layers: tuple[str, ...] = ("", "_sky") if self.sun_shadow is not None else ("",)
         self.ground = GroundWindow(
             heightfield, window_m=window_m, near_m=near_m, far_stride=far_stride,
