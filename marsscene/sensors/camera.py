@@ -101,6 +101,8 @@ class MastCamera:
             & (m.geom_contype != 0))
         if self.world.sun_shadow is not None:  # MJCF rocks standing in terrain shadows
             shade_mesh_geoms(m, self.rock_geoms, self.world.sun_shadow)
+        if self.world.rocks_baked:  # their shadows are in the ground's sun layer
+            m.geom_castshadow[self.rock_geoms] = 0
         self._show_window_rocks()
         self._flags = {mujoco.mjtRndFlag.mjRND_SHADOW: bool(cam.shadows),
                        mujoco.mjtRndFlag.mjRND_REFLECTION: False,
