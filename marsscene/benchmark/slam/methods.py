@@ -110,7 +110,8 @@ def _open3d_rgbd(cell: CellData, method: MethodSpec) -> Estimate:
     from marsscene.benchmark.slam.rgbd_odometry import rgbd_odometry
 
     opts = {k: method.options[k] for k in ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
-                                           "max_step_dev_deg") if k in method.options}
+                                           "max_step_dev_deg", "decimate")
+            if k in method.options}
     res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, **opts)
     note = (f"{res.fallbacks} of {len(res.poses) - 1} steps from the wheel odometry"
             if opts.get("wheel_prior") else "")
