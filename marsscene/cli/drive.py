@@ -15,7 +15,7 @@ from marsscene.cli._progress import DriveMeter, ProgressBar
 from marsscene.cli.bag import BAG_OPTION_NAMES, bag_options, bag_options_of, echo_bag
 from marsscene.rover.config import noise_profiles
 from marsscene.rover.lidar import lidar_models
-from marsscene.runs.export.options import DATASET_FORMATS
+from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
 
@@ -155,11 +155,18 @@ def _size(text: str) -> tuple[int, int]:
               "needs --camera); repeat for both.")
 @click.option("--overwrite", is_flag=True,
               help="With --bag / --dataset: replace existing RUN_DIR/bag and dataset folders.")
+@click.option("--dataset-images", type=click.Choice(DATASET_IMAGES), default="link",
+              show_default=True,
+              help="link: dataset folders hard-link the run's PNGs (TUM depth at 1000 per m, "
+              "EuRoC in RGB); convert: TUM depth at 5000 per m and EuRoC mono8 copies.")
+@click.option("--keep-lidar-files", is_flag=True,
+              help="With --bag and --lidar: keep RUN_DIR/lidar/*.ply beside the bag (by "
+              "default the scans are kept once, in the bag).")
 @bag_options
 def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
           seconds: float | None, out_dir: Path, seed: int, write_rover_xml: bool,
           controller_ref: str | None, write_bag: bool, datasets: tuple[str, ...],
-          overwrite: bool, **opts: Any) -> None:
+          overwrite: bool, dataset_images: str, keep_lidar_files: bool, **opts: Any) -> None:
     """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz),
     or with your controller.
 
@@ -185,7 +192,9 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
         options = ms.DriveOptions(max_slope_deg=opts["max_slope"], corridor_m=opts["corridor"],
                                   pursuit=PursuitConfig(lookahead_m=opts["lookahead"]))
         export = ExportOptions(bag=bag_options_of(bag_values) if write_bag else None,
-                               datasets=datasets, overwrite=overwrite)
+                               datasets=datasets, overwrite=overwrite,
+                               dataset_images=dataset_images,
+                               keep_lidar_files=keep_lidar_files)
         waypoints = _read_waypoints(waypoints_path) if waypoints_path else None
         controller = (_load_controller(controller_ref, route_path, waypoints, scene_dir,
                                        options) if controller_ref else None)

@@ -272,13 +272,17 @@ def _export(out: Path | None, export: ExportOptions, cache: Any,
 
         bag = write_bag(out, options=export.bag, overwrite=export.overwrite, jpeg_cache=cache,
                         progress=tell("bag"))
+        if export.lidar_into_bag() and not export.keep_lidar_files:
+            from marsscene.runs.runlog import move_lidar_into_bag
+
+            move_lidar_into_bag(out)
     datasets: dict[str, Path] = {}
     if out is not None:
         from marsscene.runs.export.datasets import export_dataset
 
         for fmt in export.datasets:
             datasets[fmt] = export_dataset(out, fmt, overwrite=export.overwrite,
-                                           progress=tell(fmt))
+                                           progress=tell(fmt), images=export.dataset_images)
     return bag, datasets
 
 

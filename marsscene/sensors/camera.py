@@ -82,6 +82,7 @@ class MastCamera:
             near_m=cam.near_window_m, far_stride=cam.far_post_stride,
             terrain_shadows=bool(cam.shadows),
             sun_radius_rad=math.radians(lt.sun_angular_diameter_deg / 2.0),
+            outer=getattr(sim, "outer_heightfield", None),
         )
         rows, cols = sim.heightfield.shape
         self.windowed = self.world.nr < rows or self.world.nc < cols
@@ -100,6 +101,8 @@ class MastCamera:
             & (m.geom_contype != 0))
         if self.world.sun_shadow is not None:  # MJCF rocks standing in terrain shadows
             shade_mesh_geoms(m, self.rock_geoms, self.world.sun_shadow)
+        if self.world.rocks_baked:  # their shadows are in the ground's sun layer
+            m.geom_castshadow[self.rock_geoms] = 0
         self._show_window_rocks()
         self._flags = {mujoco.mjtRndFlag.mjRND_SHADOW: bool(cam.shadows),
                        mujoco.mjtRndFlag.mjRND_REFLECTION: False,
@@ -125,11 +128,17 @@ class MastCamera:
     # ---- model edits ---------------------------------------------------------------------------
     def _edit(self, spec: Any, sim: Any, lt: Any) -> None:
         cam = self.config
-        terrain = spec.geom("terrain")
-        terrain.group = 5  # hidden: the window mesh is drawn instead
-        outer = spec.geom("terrain_outer")  # level-of-detail scenes: its focus posts are lowered
-        if outer is not None:
-            outer.group = 5
+        # the terrain hfields (and a level-of-detail scene's coarse outer one) are not drawn:
+        # the window meshes are. Left in the camera's model, hidden, MuJoCo's GL context would
+        # still upload them as triangles (~170 B per post: 4.3 GB and 28 s for grand-canyon's
+        # 25 M posts), so they are taken out of this model (the simulation keeps them)
+        for name in ("terrain", "terrain_outer"):
+            geom = spec.geom(name)
+            if geom is not None:
+                hfield = spec.hfield(geom.hfieldname) if geom.hfieldname else None
+                spec.delete(geom)
+                if hfield is not None:
+                    spec.delete(hfield)
         for geom in spec.geoms:  # MJCF collision rocks: literature rock colour
             if geom.material == "rock":
                 geom.material = "cam_rock_geom"

@@ -272,6 +272,13 @@ class RoverSim:
             raise RuntimeSimError(f"simulation diverged at t = {self.data.time:.3f} s")
 
     # ---- camera ------------------------------------------------------------------------------
+    @property
+    def outer_heightfield(self) -> Heightfield | None:
+        """A level-of-detail scene's coarse outer terrain (``terrain_outer``; its focus posts
+        lowered under the focus terrain), or None."""
+        gid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "terrain_outer")
+        return scene_heightfield(self.model, "terrain_outer") if gid >= 0 else None
+
     def make_renderer(self, *, rng: np.random.Generator | None = None) -> Any:
         """An offscreen mast-camera renderer (:class:`marsscene.sensors.camera.MastCamera`).
 

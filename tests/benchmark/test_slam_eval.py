@@ -138,6 +138,8 @@ _OK = {"sensors": {"camera": {}}, "scenes": [{"name": "a", "route": {"shape": "l
     ({"methods": [{"name": "k", "kind": "kiss-icp"}]}, r"needs the lidar; add a \[sensors.lidar"),
     ({"methods": [{"name": "c", "kind": "command"}]}, "needs command"),
     ({"methods": [{"name": "m", "kind": "opencv-mono", "frame": "base"}]}, "estimates the camera"),
+    ({"methods": [{"name": "o", "kind": "open3d-rgbd", "options": {"wheel": True}}]},
+     "unknown option 'wheel' for open3d-rgbd; allowed: depth_trunc_m, wheel_prior"),
     ({"scenes": [{"name": "a", "route": {"shape": "loop", "length_m": 20.0,
                                          "waypoints": [[0, 0], [1, 1]]}}]}, "exactly one of"),
     ({"scenes": [{"name": "a", "route": {"shape": "loop"}}]}, "needs route.length_m"),

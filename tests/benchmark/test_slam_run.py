@@ -222,3 +222,33 @@ def test_a_long_thin_route_gets_stacked_wide_panels() -> None:
     w, h = fig.get_size_inches()
     assert not stacked and len(axes) == 2 and w > 1.5 * h  # side by side
     plt.close(fig)
+
+
+def test_a_methods_extra_seeds_are_sensorless_cells_with_a_spread(tmp_path: Path) -> None:
+    """``seeds`` on a method: its extra seeds get cells of their own (only the tau cell it
+    runs in, driving without the sensors it does not need); the table gives mean ± sd."""
+    from marsscene.benchmark.slam.run import run_slam_benchmark, slam_cells
+    from marsscene.benchmark.slam.spec import SlamSpec
+
+    (tmp_path / "scene.toml").write_text(SCENE, encoding="utf-8")
+    doc = {"benchmark": {"tau": [0.5, 6.0], "seeds": [1]},
+           "sensors": {"camera": {"width_px": 64, "height_px": 48}},
+           "scenes": [{"name": "s", "config": "scene.toml", "seconds": 3.0,
+                       "route": {"waypoints": [[-3.0, 0.0], [3.0, 0.0]]}}],
+           "methods": [{"name": "wheel", "kind": "wheel-odometry", "seeds": [1, 2, 3]},
+                       {"name": "mono", "kind": "opencv-mono"}]}
+    spec = SlamSpec.from_dict(doc, base_dir=tmp_path)
+    assert spec.all_seeds == (1, 2, 3)
+    assert [(c.params["tau"], c.params["seed"]) for c in slam_cells(spec)] == [
+        (0.5, 1), (0.5, 2), (0.5, 3), (6.0, 1)]  # no tau-6 cells for the wheel's extra seeds
+    assert [m.name for m in spec.methods_for(0.5, 2)] == ["wheel"]
+    sensorless = SlamSpec.from_dict({**doc, "sensors": {},
+                                     "methods": doc["methods"][:1]}, base_dir=tmp_path)
+    res = run_slam_benchmark(sensorless, tmp_path / "out", serial=True, report=False)
+    assert [(r["seed"], r["status"]) for r in res.rows] == [(1, "ok"), (2, "ok"), (3, "ok")]
+    assert not (tmp_path / "out" / "cells" / "scene=s__tau=0.5__seed=2" / "drive"
+                / "camera").exists()
+    from marsscene.benchmark.slam.table import ate_table_markdown
+
+    table = ate_table_markdown(res.rows, sensorless)
+    assert " ± " in table and "wheel over seeds 1, 2, 3 (mean ± sd)" in table

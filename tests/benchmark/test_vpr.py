@@ -40,6 +40,37 @@ def test_shipped_protocols_are_the_papers() -> None:
         cam = spec.camera_config(spec.database)
         assert cam.trigger_distance_m == 0.1 and not cam.depth
     assert dust.with_length(40.0).scene.route.length_m == 40.0
+    for spec in (dust, dark):  # the Mars Base route passes the habitat (issue 36)
+        assert spec.scene.route.center_asset == spec.landmark_name == "habitat"
+        assert spec.scene.route.shape == "out-and-back" and spec.scene.route.width_m >= 20.0
+
+
+def test_landmark_pixels_in_view_behind_and_hidden() -> None:
+    """The landmark's size in a frame: its box ahead (full size), behind the camera (0), at
+    the image's edge (a sliver: its width), behind a ridge (0)."""
+    from scipy.spatial.transform import Rotation
+
+    from marsscene.benchmark.vpr.landmark import Landmark, landmark_pixels
+    from marsscene.terrain.heightfield import Heightfield
+
+    corners = np.array([[i, j, k] for i in (0, 1) for j in (-1, 1) for k in (0, 1)], float)
+    mark = Landmark([corners * [2.0, 2.0, 6.0] + [20.0, 0.0, 0.0]])  # 2 x 4 x 6 m, 20 m east
+    intr = {"width": 640, "height": 480, "fx": 400.0, "fy": 400.0, "cx": 320.0, "cy": 240.0}
+    # optical frames (x right, y down, z forward) looking east, west, and east past the box
+    east = Rotation.from_matrix([[0, 0, 1], [-1, 0, 0], [0, -1, 0]])
+    west = Rotation.from_euler("z", 180, degrees=True) * east
+    quats = np.stack([east.as_quat(), west.as_quat(),
+                      (Rotation.from_euler("z", 44.0, degrees=True) * east).as_quat()])
+    cams = np.array([[0.0, 0.0, 2.0]] * 3)
+    flat = Heightfield.centered(np.zeros((81, 81), np.float32), 1.0)
+    px = landmark_pixels(mark, cams, quats, intr, flat)
+    assert px[0] == pytest.approx(400.0 * 4.0 / 20.0, rel=0.02)  # 4 m wide, its face 20 m off
+    assert px[1] == 0.0  # behind the camera
+    assert 0.0 < px[2] < 20.0  # a sliver at the left edge
+    ridge = np.zeros((81, 81), np.float32)
+    ridge[:, 50:52] = 10.0  # a 10 m wall at x = 10 m, between the camera and the box
+    assert landmark_pixels(mark, cams[:1], quats[:1], intr,
+                           Heightfield.centered(ridge, 1.0))[0] == 0.0
 
 
 @pytest.mark.parametrize(("patch", "match"), [

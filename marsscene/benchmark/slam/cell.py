@@ -78,16 +78,18 @@ def _route(scene: SceneSpec, scene_dir: Path) -> dict[str, Any]:
 
 
 def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_hash: str,
-           force: bool) -> dict[str, Any]:
+           force: bool, camera: bool = True) -> dict[str, Any]:
     """Drive the cell's route with its sensors into ``cell_dir/drive`` (unless done)."""
     final = cell_dir / "drive"
     route_doc: dict[str, Any] = dataclasses.asdict(scene.route)
     if scene.route.file is not None:
         route_doc["file_sha256"] = hashlib.sha256(Path(scene.route.file).read_bytes()).hexdigest()
-    bag = (lidar and spec.needs_bag()) or bool(spec.sensors.get("bag", False))
-    run = spec.run_config(lidar=lidar)
+    run = spec.run_config(lidar=lidar, camera=camera)
+    bag = (lidar and spec.needs_bag()) or (bool(spec.sensors.get("bag", False))
+                                           and (run.camera is not None or run.lidar is not None))
     key = _digest({"scene": scene_hash, "route": route_doc, "seconds": scene.seconds,
-                   "sensors": {k: v for k, v in spec.sensors.items() if lidar or k != "lidar"},
+                   "sensors": {k: v for k, v in spec.sensors.items()
+                               if (lidar or k != "lidar") and (camera or k != "camera")},
                    "noise": dataclasses.asdict(run.noise),  # the profile's values, defaults too
                    "lidar": lidar, "bag": bag})
     done = None if force else _read_json(final / DRIVE_FILE)
@@ -171,8 +173,12 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
     """
     scene = next(s for s in spec.scenes if s.name == cell.params["scene"])
     tau, seed = float(cell.params["tau"]), int(cell.params["seed"])
-    lidar = is_lidar_cell(spec, tau)
-    methods = [m for m in spec.methods if lidar or m.sensor == "camera"]
+    methods = list(spec.methods_for(tau, seed))
+    # the main seeds' cells log every sensor of the spec; an extra seed's only what its
+    # methods need (e.g. none for the wheel odometry)
+    main = seed in spec.seeds
+    lidar = is_lidar_cell(spec, tau) and (main or any(m.sensor == "lidar" for m in methods))
+    camera = main or any(m.sensor == "camera" for m in methods)
     row = run_cell(cell, out_dir, None, force=force)
     row["methods"] = []
     cell_dir = Path(out_dir) / cell.cell_id
@@ -180,7 +186,7 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
         if row["status"] == "failed":
             raise MarsSceneError(row["error"])
         row["drive"] = drv = _drive(spec, scene, cell_dir, lidar, str(row.get("config_hash")),
-                                    force)
+                                    force, camera)
         row.update(distance_m=drv.get("path_length_m"), sim_time_s=drv.get("sim_time_s"),
                    goal_reached=drv.get("goal_reached"), t_drive_s=drv.get("t_drive_s"),
                    cross_track_rms_m=drv.get("cross_track_rms_m"))

@@ -6,7 +6,9 @@ kind               estimate                                                    f
 =================  ==========================================================  ======  =====
 wheel-odometry     the run's ``odom.tum`` (wheel odometry + IMU yaw)           base    SE(3)
 kiss-icp           KISS-ICP on the run's ROS 2 bag (:mod:`.kiss_icp`)          lidar   SE(3)
-open3d-rgbd        Open3D ``compute_rgbd_odometry``, frame to frame (hybrid)   camera  SE(3)
+open3d-rgbd        Open3D ``compute_rgbd_odometry``, frame to frame (hybrid;   camera  SE(3)
+                   ``wheel_prior``: the wheel odometry as guess and fallback,
+                   :mod:`.rgbd_odometry`)
 opencv-mono        :func:`~marsscene.benchmark.slam.mono_vo.mono_vo` on the RGB     camera  Sim(3)
 tum-file           a TUM file dropped into the cell (``file`` template)        any     any
 command            a command run per cell that writes ``{out_tum}``            any     any
@@ -22,14 +24,13 @@ import shlex
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from marsscene.benchmark.slam.spec import MethodSpec
-from marsscene.errors import MarsSceneError, MissingDependencyError, missing_dependency
+from marsscene.errors import MarsSceneError, MissingDependencyError
 from marsscene.runs.runlog import RunLog, read_image
 from marsscene.runs.tum import Trajectory, read_tum
 
@@ -74,8 +75,8 @@ class CellData:
         if sensor == "camera":
             return len(_associations(self.run_dir / "tum_rgbd"))
         if sensor == "lidar":
-            lidar = RunLog(self.run_dir).lidar
-            return 0 if lidar is None else len(lidar[0])
+            stamps = RunLog(self.run_dir).lidar_stamps_s  # the scans may be in the bag only
+            return 0 if stamps is None else len(stamps)
         return len(read_tum(self.run_dir / "gt.tum"))
 
 
@@ -106,41 +107,16 @@ def _trajectory(stamps_s: NDArray[np.float64], poses: NDArray[np.float64]) -> Tr
 
 
 def _open3d_rgbd(cell: CellData, method: MethodSpec) -> Estimate:
-    try:
-        import open3d as o3d
-    except ImportError:
-        raise missing_dependency("open3d", "bench") from None
-    folder = cell.run_dir / "tum_rgbd"
-    rows = _associations(folder)
-    i = _intrinsics(cell.run_dir)
-    pin = o3d.camera.PinholeCameraIntrinsic(int(i["width"]), int(i["height"]), i["fx"], i["fy"],
-                                            i["cx"], i["cy"])
-    depth_trunc_m = float(method.options.get("depth_trunc_m", 12.0))
-    odo = o3d.pipelines.odometry
+    from marsscene.benchmark.slam.rgbd_odometry import rgbd_odometry
 
-    def frame(row: list[str]) -> Any:
-        rgb = np.ascontiguousarray(read_image(folder / row[1])[..., :3])
-        depth = np.ascontiguousarray(read_image(folder / row[3]).astype(np.uint16))
-        image: Any = o3d.geometry.Image
-        return o3d.geometry.RGBDImage.create_from_color_and_depth(
-            image(rgb), image(depth), depth_scale=5000.0,
-            depth_trunc=depth_trunc_m, convert_rgb_to_intensity=True)
-
-    jac, opt = odo.RGBDOdometryJacobianFromHybridTerm(), odo.OdometryOption()
-    pose: NDArray[Any] = np.eye(4)
-    step: NDArray[Any] = np.eye(4)
-    poses, ok = [pose], 1
-    prev = frame(rows[0])
-    for row in rows[1:]:  # T maps source (previous) points into the target (current) frame
-        cur = frame(row)
-        success, trans, _ = odo.compute_rgbd_odometry(prev, cur, pin, np.eye(4), jac, opt)
-        if success:
-            step, ok = np.linalg.inv(np.asarray(trans, dtype=np.float64)), ok + 1
-        pose = pose @ step  # a failed pair keeps the last motion (constant velocity)
-        poses.append(pose)
-        prev = cur
-    stamps = np.array([float(r[0]) for r in rows])
-    return Estimate(_trajectory(stamps, np.array(poses)), frames_tracked=ok)
+    opts = {k: method.options[k] for k in ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
+                                           "max_step_dev_deg", "decimate")
+            if k in method.options}
+    res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, **opts)
+    note = (f"{res.fallbacks} of {len(res.poses) - 1} steps from the wheel odometry"
+            if opts.get("wheel_prior") else "")
+    return Estimate(_trajectory(res.stamps_s, res.poses), frames_tracked=int(res.visual.sum()),
+                    note=note)
 
 
 def _opencv_mono(cell: CellData, method: MethodSpec) -> Estimate:

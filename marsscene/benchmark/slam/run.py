@@ -54,7 +54,9 @@ def slam_cells(spec: SlamSpec) -> list[Cell]:
     for scene in spec.scenes:
         base = scene.base_config()
         for tau in spec.tau:
-            for seed in spec.seeds:
+            for seed in spec.all_seeds:
+                if not spec.methods_for(tau, seed):
+                    continue  # an extra seed of a method that runs in another tau's cell
                 params = {"scene": scene.name, "tau": tau, "seed": seed}
                 config = set_dotted(set_dotted(base, "lighting.tau", tau), "seed", seed)
                 cells.append(Cell(cell_id(params), params, config, seed))
@@ -134,8 +136,10 @@ def run_slam_benchmark(
                           scheduler=scheduler, serial=serial, progress=progress)
     for row in cell_rows:  # a cell lost with its worker has no method rows: give them
         if "methods" not in row:
+            p = row.get("params", {})
             row["methods"] = [{"method": m.name, "kind": m.kind, "status": "failed",
-                               "note": row.get("error", "")} for m in spec.methods]
+                               "note": row.get("error", "")}
+                              for m in spec.methods_for(float(p["tau"]), int(p["seed"]))]
     files = write_results(cell_rows, ["scene", "tau", "seed"], cells_dir)
     rows = method_rows(cell_rows, spec)
     files.insert(0, write_results_csv(rows, root / "results.csv"))

@@ -60,7 +60,8 @@ def table_columns(spec: SlamSpec) -> list[tuple[str, float | None]]:
 
 
 def _cell_value(rows: list[dict[str, Any]]) -> tuple[float | None, str]:
-    """Mean ATE of the ok seeds and its text (✗ when no seed tracked, '(k ✗)' when some lost)."""
+    """Mean ATE of the ok seeds and its text: ``mean ± sd`` over several seeds (sample
+    standard deviation), ✗ when no seed tracked, '(k ✗)' when some lost."""
     ok = [float(r["ate_rmse_m"]) for r in rows if r.get("status") == "ok"
           and isinstance(r.get("ate_rmse_m"), int | float) and math.isfinite(r["ate_rmse_m"])]
     bad = len(rows) - len(ok)
@@ -71,7 +72,11 @@ def _cell_value(rows: list[dict[str, Any]]) -> tuple[float | None, str]:
         return None, FAIL if statuses in (["lost"], ["failed"], ["failed", "lost"]) else (
             "n/a (" + "/".join(statuses) + ")")
     mean = sum(ok) / len(ok)
-    return mean, f"{mean:.2f}" + (f" ({bad} {FAIL})" if bad else "")
+    spread = ""
+    if len(ok) > 1:
+        sd = math.sqrt(sum((v - mean) ** 2 for v in ok) / (len(ok) - 1))
+        spread = f" ± {sd:.2f}"
+    return mean, f"{mean:.2f}{spread}" + (f" ({bad} {FAIL})" if bad else "")
 
 
 def ate_table_markdown(rows: list[dict[str, Any]], spec: SlamSpec) -> str:
@@ -82,7 +87,8 @@ def ate_table_markdown(rows: list[dict[str, Any]], spec: SlamSpec) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * 2 + "---:|" * len(cols)]
     for scene in spec.scenes:
         mine = [r for r in rows if r["scene"] == scene.name]
-        routes = [float(r["route_m"]) for r in mine if isinstance(r.get("route_m"), int | float)]
+        routes = [float(r["route_m"]) for r in mine if isinstance(r.get("route_m"), int | float)
+                  and r.get("seed") == spec.seeds[0]]
         cells = []
         for name, tau in cols:
             sel = [r for r in mine if r["method"] == name
@@ -95,9 +101,12 @@ def ate_table_markdown(rows: list[dict[str, Any]], spec: SlamSpec) -> str:
         route = f"{sum(routes) / len(routes):.0f}" if routes else "–"
         lines.append("| " + " | ".join([scene.name, route, *texts]) + " |")
     seeds = ", ".join(str(s) for s in spec.seeds)
+    more = "; ".join(f"{m.name} over seeds {', '.join(map(str, m.seeds))} (mean ± sd)"
+                     for m in spec.methods if m.seeds is not None and m.seeds != spec.seeds)
     lines += ["", f"ATE RMSE in m after Umeyama alignment (SE(3); Sim(3) for "
               f"{', '.join(m.name for m in spec.methods if m.align == 'sim3') or 'none'}), "
-              f"mean over seeds {seeds}. Per-row best in **bold**; {FAIL} = tracking failure "
+              f"mean over seeds {seeds}{'; ' + more if more else ''}; route of seed "
+              f"{spec.seeds[0]}. Per-row best in **bold**; {FAIL} = tracking failure "
               "(no usable trajectory or tracked on less than "
               f"{100 * spec.min_tracked_fraction:.0f} % of the frames)."]
     return "\n".join(lines) + "\n"

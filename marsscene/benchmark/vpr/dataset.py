@@ -6,7 +6,8 @@ Output folder (the layout of ``gmberton/VPR-methods-evaluation``, read unchanged
       database/@E@N@@@@@D0001234@@HEADING@PITCH@ROLL@Z@T@database@.jpg
       queries/@E@N@...@queries@.jpg    E, N: the camera's east / north in scene metres
       poses.csv            split, file, t_s, x_m, y_m, z_m, qx, qy, qz, qw (navcam optical
-                           frame in map), yaw_deg, tau, sun_elevation_deg
+                           frame in map), yaw_deg, tau, sun_elevation_deg, landmark_px (the
+                           landmark's height in the frame, px; 0: not in view)
       dataset.json         the spec, the route, each traversal's offset and lookahead, counts
       route.tum            the route both traversals follow (each shifted sideways)
       scene/               the built scene (reused when its config is unchanged)
@@ -142,12 +143,35 @@ _COLUMNS = ["split", "file", "t_s", "x_m", "y_m", "z_m", "qx", "qy", "qz", "qw",
             "sun_elevation_deg"]
 
 
-def _write_rows(path: Path, rows: list[list[Any]]) -> None:
+def _write_rows(path: Path, rows: list[list[Any]], *, landmark: bool = False) -> None:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(_COLUMNS)
+    w.writerow(_COLUMNS + (["landmark_px"] if landmark else []))
     w.writerows(rows)
     write_atomic(path, buf.getvalue())
+
+
+def _landmark(name: str, scene_dir: Path, out: Path, rows: list[list[Any]]) -> dict[str, Any]:
+    """Append each frame's landmark height (px) to its row; the shares of frames in view."""
+    from marsscene.benchmark.vpr.landmark import landmark_parts, landmark_pixels
+
+    mark, hf = landmark_parts(scene_dir, name)
+    intr = json.loads((out / "traversals" / SPLITS[0] / "camera" / "intrinsics.json")
+                      .read_text(encoding="utf-8"))
+    a = np.array([[float(v) for v in r[3:10]] for r in rows]).reshape(-1, 7)
+    px = landmark_pixels(mark, a[:, :3], a[:, 3:], intr, hf)
+    for r, v in zip(rows, px, strict=True):
+        r.append(f"{v:.1f}")
+    info: dict[str, Any] = {"name": name, "box_m": np.round(mark.box, 3).tolist(),
+                            "splits": {}}
+    for split in SPLITS:
+        mine = px[[r[0] == split for r in rows]]
+        seen = mine[mine > 0]
+        info["splits"][split] = {
+            "in_view_share": round(float((mine > 0).mean()), 4) if len(mine) else 0.0,
+            "at_least_20px_share": round(float((mine >= 20).mean()), 4) if len(mine) else 0.0,
+            "median_px_in_view": round(float(np.median(seen)), 1) if len(seen) else 0.0}
+    return info
 
 
 def _make_split(spec: VprSpec, split: str, scene_dir: Path, route_xy_m: NDArray[np.float64],
@@ -224,7 +248,9 @@ def generate_vpr(spec: VprSpec, out_dir: str | Path, *, overwrite: bool = False,
         doc["traversals"][split] = {"offset_m": round(draws[split][0], 6),
                                     "lookahead_m": round(draws[split][1], 6),
                                     "frames": len(split_rows), **asdict(getattr(spec, split))}
-    _write_rows(out / "poses.csv", rows)
+    if spec.landmark_name:
+        doc["landmark"] = _landmark(spec.landmark_name, scene_dir, out, rows)
+    _write_rows(out / "poses.csv", rows, landmark=bool(spec.landmark_name))
     from marsscene.runs.tum import write_tum
     from marsscene.sim.world import load_world
 

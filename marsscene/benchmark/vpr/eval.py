@@ -165,8 +165,10 @@ def write_results(out: Path, results: list[Recall]) -> None:
 
 
 def pairs_figure(out_png: Path, db: VprSplit, queries: VprSplit, ranked: NDArray[np.int64],
-                 radius_m: float, count: int = 4, title: str = "") -> None:
-    """Query / top-1 retrieved pairs (evenly spaced queries), like the paper's figure."""
+                 radius_m: float, count: int = 4, title: str = "",
+                 pick: NDArray[np.int64] | None = None) -> None:
+    """Query / top-1 retrieved pairs (``pick``: query indices; default evenly spaced), like
+    the paper's figure."""
     try:
         import matplotlib  # noqa: TID251  (the benchmark's figure is this function's product)
 
@@ -176,7 +178,9 @@ def pairs_figure(out_png: Path, db: VprSplit, queries: VprSplit, ranked: NDArray
         raise missing_dependency("matplotlib", "bench") from None
     from PIL import Image
 
-    pick = np.linspace(0, len(queries.files) - 1, count).round().astype(int)
+    if pick is None:
+        pick = np.linspace(0, len(queries.files) - 1, count).round().astype(int)
+    count = len(pick)
     fig, axes = plt.subplots(count, 2, figsize=(6.4, 2.4 * count), squeeze=False)
     for row, qi in enumerate(pick):
         di = int(ranked[qi, 0])

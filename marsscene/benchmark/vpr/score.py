@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from marsscene.benchmark.vpr.eval import (
     Recall,
@@ -84,6 +85,30 @@ def evaluate_vpr(
     ranked = retrieve(d_db, d_q, k=20)
     results = [recall_at(ranked, db.xy_m, q.xy_m, r, name) for r in radii_m]
     write_results(out, results)
-    pairs_figure(out / "pairs.png", db, q, ranked, radii_m[0],
-                 title=f"{root.name}: {name}, top-1 within {radii_m[0]:g} m")
+    pick, seen = _landmark_queries(root, q)
+    pairs_figure(out / "pairs.png", db, q, ranked, radii_m[0], pick=pick,
+                 title=f"{root.name}: {name}, top-1 within {radii_m[0]:g} m"
+                 + (f" ({seen} in view)" if seen else ""))
     return results
+
+
+def _landmark_queries(root: Path, queries: Any, count: int = 4, min_px: float = 20.0
+                      ) -> tuple[Any, str]:
+    """Evenly spaced queries that show the dataset's landmark (``poses.csv`` ``landmark_px``
+    >= ``min_px``), or None (evenly spaced queries) when there is none; and its name."""
+    import csv
+    import json
+
+    import numpy as np
+
+    try:
+        with open(root / "poses.csv", encoding="utf-8") as fh:
+            px = {r["file"]: float(r["landmark_px"]) for r in csv.DictReader(fh)
+                  if r.get("landmark_px")}
+        name = json.loads((root / "dataset.json").read_text(encoding="utf-8"))["landmark"]["name"]
+    except (OSError, KeyError, ValueError):
+        return None, ""
+    shown = np.flatnonzero([px.get(f"queries/{f.name}", 0.0) >= min_px for f in queries.files])
+    if len(shown) < count:
+        return None, ""
+    return shown[np.linspace(0, len(shown) - 1, count).round().astype(int)], str(name)

@@ -15,6 +15,7 @@ A spec file::
     lookahead_jitter_m = 0.5   # and follows it with a lookahead of 2.0 m +- U(0.5) m
     seed = 1                   # draws the offsets (and the sensor noise streams)
     radius_m = 2.0             # positives radius of the evaluation
+    landmark = "habitat"       # share of frames showing this asset (default: center_asset)
     scene_seed = 7
     [camera]                   # CameraConfig keys (docs/camera.md); depth is not written
     width_px = 640
@@ -86,8 +87,16 @@ class VprSpec:
     scene_seed: int = 7
     radius_m: float = 2.0
     jpeg_quality: int = 95
+    landmark: str | None = None
+    """A placed asset whose presence in each frame is measured (``poses.csv`` ``landmark_px``,
+    ``dataset.json``); default: the route's ``center_asset``."""
     name: str = "vpr"
     source: str = "<dict>"
+
+    @property
+    def landmark_name(self) -> str | None:
+        """The asset measured in view (``landmark``, else the route's ``center_asset``)."""
+        return self.landmark or self.scene.route.center_asset
 
     def __post_init__(self) -> None:
         check_range("vpr.spacing_m", self.spacing_m, 0.01, 100.0)

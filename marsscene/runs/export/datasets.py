@@ -1,13 +1,19 @@
 """SLAM dataset folders from a run folder: TUM RGB-D and EuRoC MAV (numpy + Pillow only).
 
-* ``tum-rgbd`` (Sturm et al. 2012): ``rgb/``, ``depth/`` (16-bit PNG, 5000 per metre, 0 = no
-  return), ``rgb.txt``, ``depth.txt``, ``groundtruth.txt`` (navcam optical frame in ``map``),
-  ``associations.txt`` and an ORB-SLAM3 settings file ``orbslam3_rgbd.yaml``.
+* ``tum-rgbd`` (Sturm et al. 2012): ``rgb/``, ``depth/`` (16-bit PNG, 0 = no return),
+  ``rgb.txt``, ``depth.txt``, ``groundtruth.txt`` (navcam optical frame in ``map``),
+  ``associations.txt`` and an ORB-SLAM3 settings file ``orbslam3_rgbd.yaml``. The depth
+  scale (counts per metre) is in ``depth.txt``'s header and the settings'
+  ``RGBD.DepthMapFactor`` (:func:`tum_depth_per_m`): the run's own 1000 when the images are
+  linked (``images="link"``, the default: the folder hard-links the run's PNGs, no second
+  copy), the TUM reference datasets' 5000 when converted (``images="convert"``).
 * ``euroc`` (Burri et al. 2016): ``mav0/cam0`` (navcam or stereo left), ``mav0/cam1`` (stereo
   right, when logged), ``mav0/imu0`` (noisy IMU, body = ``base_link``),
   ``mav0/state_groundtruth_estimate0``, each with ``data.csv`` and ``sensor.yaml``, plus
   ``timestamps.txt`` and ORB-SLAM3 settings (``orbslam3_stereo_inertial.yaml`` or
-  ``orbslam3_mono_inertial.yaml``). Images are mono8, as in EuRoC.
+  ``orbslam3_mono_inertial.yaml``). Images are the run's RGB PNGs, hard-linked
+  (``images="link"``; ORB-SLAM3 turns them grey itself), or mono8 copies as in EuRoC
+  (``images="convert"``).
 
 Commands to run ORB-SLAM3 on them: ``docs/ros.md``.
 """
@@ -27,15 +33,19 @@ from marsscene._atomic import replacing_dir
 from marsscene.errors import ExportError, RuntimeSimError
 from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
 from marsscene.runs.export.imu_noise import EUROC_IMU_KEYS, imu_noise_declared, rate_hz
-from marsscene.runs.export.options import DATASET_FORMATS
+from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES
 from marsscene.runs.logs import png_bytes
 from marsscene.runs.runlog import CameraStream, RunLog, read_image
 
-__all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset"]
+__all__ = ["FORMATS", "RUN_DEPTH_PER_M", "TUM_DEPTH_PER_M", "export_dataset",
+           "tum_depth_per_m"]
 
 FORMATS = DATASET_FORMATS
-#: TUM RGB-D depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored as 0).
+#: TUM RGB-D reference depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored
+#: as 0); ``images="convert"`` writes it.
 TUM_DEPTH_PER_M = 5000
+#: The run folder's depth PNGs: millimetres (max 65.5 m); linked TUM RGB-D depth keeps it.
+RUN_DEPTH_PER_M = 1000
 
 
 def export_dataset(
@@ -45,16 +55,21 @@ def export_dataset(
     *,
     overwrite: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    images: str = "link",
 ) -> Path:
     """Write ``RUN_DIR`` as a ``tum-rgbd`` or ``euroc`` folder (default ``RUN_DIR/<format>``).
 
     Needs camera logs (``euroc`` also uses ``camera/left`` and ``camera/right`` when present);
     a camera-less run raises :class:`~marsscene.errors.RuntimeSimError`, an existing output
     folder :class:`~marsscene.errors.ExportError` unless ``overwrite``. ``progress(done,
-    total)`` is called per image written. Returns the folder.
+    total)`` is called per image written. ``images``: ``"link"`` hard-links the run's PNGs
+    (TUM depth at 1000 per metre, EuRoC in RGB; copied where the file system cannot link),
+    ``"convert"`` writes TUM depth at 5000 per metre and EuRoC mono8. Returns the folder.
     """
     if fmt not in FORMATS:
         raise ExportError(f"format = {fmt!r}; expected one of {', '.join(FORMATS)}")
+    if images not in DATASET_IMAGES:
+        raise ExportError(f"images = {images!r}; expected one of {', '.join(DATASET_IMAGES)}")
     run = RunLog(run_dir)
     cams = run.camera_streams()
     if not cams:
@@ -76,10 +91,21 @@ def export_dataset(
 
     with replacing_dir(final, overwrite=overwrite, create=False) as tmp:
         if fmt == "tum-rgbd":
-            _tum_rgbd(run, cams[0], statics, tmp, tick)
+            _tum_rgbd(run, cams[0], statics, tmp, tick, link=images == "link")
         else:
-            _euroc(run, used, statics, tmp, tick)
+            _euroc(run, used, statics, tmp, tick, link=images == "link")
     return final
+
+
+def tum_depth_per_m(folder: str | os.PathLike[str]) -> float:
+    """Depth counts per metre of a TUM RGB-D folder: its ``orbslam3_rgbd.yaml``'s
+    ``RGBD.DepthMapFactor`` (5000, the TUM reference, for folders without one)."""
+    path = Path(folder) / "orbslam3_rgbd.yaml"
+    if path.is_file():
+        for line in path.read_text(encoding="utf-8").splitlines():
+            if line.startswith("RGBD.DepthMapFactor:"):
+                return float(line.split(":", 1)[1])
+    return float(TUM_DEPTH_PER_M)
 
 
 def camera_trajectory(
@@ -106,23 +132,28 @@ def _link_or_copy(src: Path, dst: Path) -> None:
 
 
 def _tum_rgbd(
-    run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None]
+    run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None], *,
+    link: bool
 ) -> None:
     (out / "rgb").mkdir(parents=True)
     (out / "depth").mkdir()
     stamps = [f"{t:.6f}" for t in cam.stamps_s]
+    per_m = RUN_DEPTH_PER_M if link else TUM_DEPTH_PER_M
     for s, rgb, dep in zip(stamps, cam.rgb_files, cam.depth_files, strict=True):
         _link_or_copy(rgb, out / "rgb" / f"{s}.png")
-        mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // 1000)
-        (out / "depth" / f"{s}.png").write_bytes(
-            png_bytes(np.where(mm > 65535, 0, mm).astype(np.uint16)))
+        if link:
+            _link_or_copy(dep, out / "depth" / f"{s}.png")
+        else:
+            mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // RUN_DEPTH_PER_M)
+            (out / "depth" / f"{s}.png").write_bytes(
+                png_bytes(np.where(mm > 65535, 0, mm).astype(np.uint16)))
         tick()
     src = f"# file: marsscene run {run.path.name}\n"
     (out / "rgb.txt").write_text(_lines([f"{s} rgb/{s}.png" for s in stamps],
                                         "# color images\n" + src + "# timestamp filename\n"))
     (out / "depth.txt").write_text(_lines(
         [f"{s} depth/{s}.png" for s in stamps],
-        f"# depth maps ({TUM_DEPTH_PER_M} per metre, 0 = no return)\n" + src
+        f"# depth maps ({per_m} per metre, 0 = no return)\n" + src
         + "# timestamp filename\n"))
     (out / "associations.txt").write_text(
         _lines([f"{s} rgb/{s}.png {s} depth/{s}.png" for s in stamps], ""))
@@ -136,12 +167,13 @@ def _tum_rgbd(
         + "# timestamp tx ty tz qx qy qz qw\n"))
     i = cam.intrinsics
     (out / "orbslam3_rgbd.yaml").write_text(_orb_head(cam, run) + _orb_cam(1, i) + (
-        f"Stereo.ThDepth: 40.0\nStereo.b: 0.07\nRGBD.DepthMapFactor: {TUM_DEPTH_PER_M:.1f}\n"
+        f"Stereo.ThDepth: 40.0\nStereo.b: 0.07\nRGBD.DepthMapFactor: {per_m:.1f}\n"
     ) + _ORB_TAIL)
 
 
 def _euroc(
-    run: RunLog, cams: list[CameraStream], statics: list, out: Path, tick: Callable[[], None]
+    run: RunLog, cams: list[CameraStream], statics: list, out: Path, tick: Callable[[], None],
+    *, link: bool
 ) -> None:
     mav = out / "mav0"
     t_b_c = [frame_in_base(statics, camera_frame(c.name)) for c in cams]
@@ -150,15 +182,20 @@ def _euroc(
         (d / "data").mkdir(parents=True)
         ns = [round(t * 1e9) for t in cam.stamps_s]
         for n, rgb in zip(ns, cam.rgb_files, strict=True):
-            img = read_image(rgb)
-            mono = img if img.ndim == 2 else np.round(img @ [0.299, 0.587, 0.114]).astype(np.uint8)
-            (d / "data" / f"{n}.png").write_bytes(png_bytes(mono))
+            if link:
+                _link_or_copy(rgb, d / "data" / f"{n}.png")
+            else:
+                img = read_image(rgb)
+                mono = img if img.ndim == 2 else np.round(img @ [0.299, 0.587, 0.114]).astype(
+                    np.uint8)
+                (d / "data" / f"{n}.png").write_bytes(png_bytes(mono))
             tick()
         (d / "data.csv").write_text(_lines([f"{n},{n}.png" for n in ns],
                                            "#timestamp [ns],filename\n"))
         i = cam.intrinsics
         (d / "sensor.yaml").write_text(
-            f"sensor_type: camera\ncomment: marsscene {camera_frame(cam.name)}\n"
+            f"sensor_type: camera\ncomment: marsscene {camera_frame(cam.name)}"
+            f"{', rgb8 PNGs (links to the run frames)' if link else ''}\n"
             + _t_bs(tbc) + f"rate_hz: {rate_hz(cam.stamps_s):g}\n"
             f"resolution: [{i['width']}, {i['height']}]\ncamera_model: pinhole\n"
             f"intrinsics: [{i['fx']:.9g}, {i['fy']:.9g}, {i['cx']:.9g}, {i['cy']:.9g}]\n"

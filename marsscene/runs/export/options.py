@@ -15,6 +15,7 @@ True
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -26,6 +27,7 @@ __all__ = [
     "BAG_SENSORS",
     "COMPRESSIONS",
     "DATASET_FORMATS",
+    "DATASET_IMAGES",
     "DEPTH_ENCODINGS",
     "DISTROS",
     "IMAGES",
@@ -45,6 +47,10 @@ COMPRESSIONS = ("zstd", "zstd_fast", "zstd_small", "lz4", "none")
 DISTROS = ("jazzy", "humble")
 #: Dataset folder formats of :func:`~marsscene.runs.export.datasets.export_dataset`.
 DATASET_FORMATS = ("tum-rgbd", "euroc")
+#: How a dataset folder holds the run's images: hard links to the run's PNGs (one copy on
+#: disk; TUM depth at the run's 1000 per metre, EuRoC in colour) or converted copies (TUM
+#: depth at 5000 per metre, EuRoC mono8).
+DATASET_IMAGES = ("link", "convert")
 
 
 def _choice(key: str, value: Any, allowed: tuple[str, ...]) -> None:
@@ -151,19 +157,40 @@ class ExportOptions:
         Dataset folders to write (``RUN/tum_rgbd``, ``RUN/euroc``); they need the camera.
     overwrite : bool
         Replace existing export folders (else they are an error, checked before driving).
+    dataset_images : {"link", "convert"}
+        ``link``: the dataset folders hard-link the run's PNGs (one copy of each image on
+        disk; TUM RGB-D depth stays at the run's 1000 counts per metre, declared in
+        ``depth.txt`` and ``orbslam3_rgbd.yaml``; EuRoC images stay RGB, which ORB-SLAM3
+        converts to grey itself); where the file system cannot link, files are copied.
+        ``convert``: converted copies as the formats' reference datasets hold them (TUM depth
+        at 5000 per metre, EuRoC mono8).
+    keep_lidar_files : bool
+        With a bag that holds the LiDAR, also keep the run's ``lidar/*.ply`` (by default they
+        are removed once the bag is written: the scans are kept once, in the bag, and
+        ``lidar/stamps.csv`` stays).
     """
 
     bag: BagOptions | None = None
     datasets: tuple[str, ...] = field(default=())
     overwrite: bool = False
+    dataset_images: str = "link"
+    keep_lidar_files: bool = False
 
     def __post_init__(self) -> None:
+        _choice("dataset_images", self.dataset_images, DATASET_IMAGES)
+        if not isinstance(self.keep_lidar_files, bool):
+            raise ExportError(f"keep_lidar_files = {plain(self.keep_lidar_files)!r}; expected "
+                              "true or false")
         datasets = (self.datasets,) if isinstance(self.datasets, str) else tuple(self.datasets)
         for fmt in datasets:
             _choice("datasets", fmt, DATASET_FORMATS)
         if len(set(datasets)) != len(datasets):
             raise ExportError(f"datasets = {list(datasets)} names a format twice")
         object.__setattr__(self, "datasets", datasets)
+
+    def lidar_into_bag(self) -> bool:
+        """Whether the bag takes the run's LiDAR scans (if it logged any)."""
+        return self.bag is not None and (self.bag.sensors is None or "lidar" in self.bag.sensors)
 
     @property
     def folders(self) -> tuple[str, ...]:
@@ -188,4 +215,4 @@ class ExportOptions:
         else:
             raise ConfigError(f"export.bag = {plain(bag)!r}; expected a table, true or false")
         rest = dataclass_from_mapping(cls, doc, "export")
-        return cls(bag=bag, datasets=rest.datasets, overwrite=rest.overwrite)
+        return dataclasses.replace(rest, bag=bag)

@@ -12,7 +12,12 @@ from scipy.spatial.transform import Rotation
 
 from marsscene.cli import main
 from marsscene.errors import ExportError, RuntimeSimError
-from marsscene.runs.export.datasets import TUM_DEPTH_PER_M, camera_trajectory, export_dataset
+from marsscene.runs.export.datasets import (
+    TUM_DEPTH_PER_M,
+    camera_trajectory,
+    export_dataset,
+    tum_depth_per_m,
+)
 from marsscene.runs.export.frames import frame_in_base, static_transforms
 from marsscene.runs.runlog import RunLog, read_image
 from marsscene.runtime import read_tum
@@ -28,8 +33,34 @@ def _yaml_matrix(text: str, key: str) -> np.ndarray:
     return np.array([float(v) for v in data.split(",")]).reshape(4, 4)
 
 
+def test_tum_rgbd_links_the_run_or_converts_its_depth(bag_run, tmp_path) -> None:
+    """By default every image is a hard link to the run's PNG (depth at the run's 1000 per
+    metre, declared); ``images="convert"`` writes the TUM reference scale, 5000 per metre."""
+    linked = export_dataset(bag_run, "tum-rgbd", tmp_path / "link")
+    cam = RunLog(bag_run).camera_streams()[0]
+    depth = _table(linked / "depth.txt")
+    for (_, f), src in zip(depth, cam.depth_files, strict=True):
+        assert (linked / f).samefile(src)  # no second copy on disk
+    assert "1000 per metre" in (linked / "depth.txt").read_text()
+    assert "RGBD.DepthMapFactor: 1000.0" in (linked / "orbslam3_rgbd.yaml").read_text()
+    assert tum_depth_per_m(linked) == 1000.0
+    out = export_dataset(bag_run, "tum-rgbd", tmp_path / "tum", images="convert")
+    assert tum_depth_per_m(out) == TUM_DEPTH_PER_M == 5000.0
+    for name in ("rgb.txt", "associations.txt", "groundtruth.txt"):  # only the depth differs
+        assert (linked / name).read_text() == (out / name).read_text()
+    for (_, f), src in zip(_table(out / "depth.txt"), cam.depth_files, strict=True):
+        tum, mm = read_image(out / f), read_image(src)
+        assert tum.dtype == np.uint16
+        want = mm.astype(np.int64) * 5
+        np.testing.assert_array_equal(tum, np.where(want > 65535, 0, want))  # > 13.1 m: invalid
+        assert (mm == 0).any() and (tum[mm == 0] == 0).all()  # the sky: no return stays 0
+    assert "5000 per metre" in (out / "depth.txt").read_text()
+    with pytest.raises(ExportError, match="images = 'copy'"):
+        export_dataset(bag_run, "tum-rgbd", tmp_path / "bad", images="copy")
+
+
 def test_tum_rgbd_export_equals_the_run(bag_run, tmp_path) -> None:
-    out = export_dataset(bag_run, "tum-rgbd", tmp_path / "tum")
+    out = export_dataset(bag_run, "tum-rgbd", tmp_path / "tum", images="convert")
     run = RunLog(bag_run)
     cam = run.camera_streams()[0]
     rgb, depth = _table(out / "rgb.txt"), _table(out / "depth.txt")
@@ -38,13 +69,6 @@ def test_tum_rgbd_export_equals_the_run(bag_run, tmp_path) -> None:
     for (_, f), src in zip(rgb, cam.rgb_files, strict=True):
         assert (out / f).read_bytes() == src.read_bytes()
         assert (out / f).samefile(src)  # a hard link: no second copy on disk
-    for (_, f), src in zip(depth, cam.depth_files, strict=True):
-        tum, mm = read_image(out / f), read_image(src)
-        assert tum.dtype == np.uint16
-        want = mm.astype(np.int64) * 5
-        np.testing.assert_array_equal(tum, np.where(want > 65535, 0, want))  # > 13.1 m: invalid
-        assert (mm == 0).any() and (tum[mm == 0] == 0).all()  # the sky: no return stays 0
-    assert "5000 per metre" in (out / "depth.txt").read_text() and TUM_DEPTH_PER_M == 5000
     assoc = _table(out / "associations.txt")
     assert [a[1] for a in assoc] == [r[1] for r in rgb] and [a[3] for a in assoc] == [
         d[1] for d in depth]
@@ -66,7 +90,7 @@ def test_tum_rgbd_export_equals_the_run(bag_run, tmp_path) -> None:
 def test_euroc_export_equals_the_run(stereo_run, tmp_path) -> None:
     calls: list[tuple[int, int]] = []
     out = export_dataset(stereo_run, "euroc", tmp_path / "euroc",
-                         progress=lambda d, n: calls.append((d, n)))
+                         progress=lambda d, n: calls.append((d, n)), images="convert")
     run = RunLog(stereo_run)
     cams = {c.name: c for c in run.camera_streams()}
     for k, side in enumerate(("left", "right")):
@@ -105,11 +129,17 @@ def test_euroc_export_equals_the_run(stereo_run, tmp_path) -> None:
 
 
 def test_euroc_without_stereo_is_mono_inertial(bag_run, tmp_path) -> None:
-    out = export_dataset(bag_run, "euroc", tmp_path / "e")
+    out = export_dataset(bag_run, "euroc", tmp_path / "e", images="convert")
     assert not (out / "mav0" / "cam1").exists()
     assert (out / "orbslam3_mono_inertial.yaml").is_file()
     img = read_image(next((out / "mav0/cam0/data").iterdir()))
     assert img.ndim == 2 and img.dtype == np.uint8  # mono8, as in EuRoC
+    linked = export_dataset(bag_run, "euroc", tmp_path / "l")  # the default: the run's RGB
+    cam = RunLog(bag_run).camera_streams()[0]
+    files = sorted((linked / "mav0/cam0/data").iterdir(), key=lambda p: int(p.stem))
+    assert len(files) == len(cam.rgb_files)
+    assert all(f.samefile(src) for f, src in zip(files, cam.rgb_files, strict=True))
+    assert "rgb8" in (linked / "mav0/cam0/sensor.yaml").read_text()
 
 
 def test_export_errors_and_cli(runner, bag_run, tmp_path) -> None:
