@@ -137,7 +137,7 @@ class MethodSpec:
     """``kind = "tum-file"``: where the estimate is dropped (same placeholders + {method})."""
     timeout_s: float = 3600.0
     options: dict[str, Any] = field(default_factory=dict)
-    """Adapter options (e.g. ``max_features`` for ``opencv-mono``)."""
+    """Adapter options (e.g. ``max_corners`` for ``opencv-mono``)."""
     seeds: tuple[int, ...] | None = None
     """Scene seeds this method runs on (default: ``benchmark.seeds``): a spread over more
     seeds for the methods that are cheap to run, e.g. the wheel odometry (its cells of the
