@@ -7,7 +7,8 @@ Output folder (the layout of ``gmberton/VPR-methods-evaluation``, read unchanged
       queries/@E@N@...@queries@.jpg    E, N: the camera's east / north in scene metres
       poses.csv            split, file, t_s, x_m, y_m, z_m, qx, qy, qz, qw (navcam optical
                            frame in map), yaw_deg, tau, sun_elevation_deg, landmark_px (the
-                           landmark's height in the frame, px; 0: not in view)
+                           landmark's size in the frame, px: the smaller side of its
+                           projected box; 0: not in view)
       dataset.json         the spec, the route, each traversal's offset and lookahead, counts
       route.tum            the route both traversals follow (each shifted sideways)
       scene/               the built scene (reused when its config is unchanged)
