@@ -15,7 +15,8 @@ from marsscene.seeding import STAGE_IDS, stage_rng
 
 pytest.importorskip("pxr")
 
-FILES = ("scene.usda", "assets/terrain.usdc", "mjcf/scene.xml", "mjcf/assets/terrain.bin")
+FILES = ("scene.usda", "assets/terrain.usdc", "assets/rock_colliders.usdc", "mjcf/scene.xml",
+         "mjcf/assets/terrain.bin")
 
 
 def _build(tmp: Path, seed: int, name: str, cfg: ms.SceneConfig) -> Path:

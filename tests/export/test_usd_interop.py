@@ -66,8 +66,11 @@ def _physics_material(prim: Usd.Prim) -> UsdPhysics.MaterialAPI:
 def test_physics_materials_match_the_mjcf_contact(written: Path) -> None:
     stage = Usd.Stage.Open(str(written / "scene.usda"))
     tiles = [p for p in stage.GetPrimAtPath("/World/Terrain").GetChildren() if p.IsA(UsdGeom.Mesh)]
-    colliders = [p for p in Usd.PrimRange(stage.GetPrimAtPath("/World/Rocks"))
+    colliders = [p for p in Usd.PrimRange(stage.GetPrimAtPath("/World/RockColliders"),
+                                          Usd.TraverseInstanceProxies())
                  if p.HasAPI(UsdPhysics.CollisionAPI)]
+    assert not [p for p in Usd.PrimRange(stage.GetPrimAtPath("/World/Rocks"))
+                if p.HasAPI(UsdPhysics.CollisionAPI)]  # the render instancer carries none
     assert tiles and colliders
     for prims, material in ((tiles, "regolith"), (colliders, "rock")):
         mu = _mjcf_friction(written, material)
@@ -87,12 +90,15 @@ def test_physics_materials_match_the_mjcf_contact(written: Path) -> None:
 def test_kind_hierarchy_and_extents(written: Path) -> None:
     stage = Usd.Stage.Open(str(written / "scene.usda"))
     kinds = {p: Usd.ModelAPI(stage.GetPrimAtPath(p)).GetKind() for p in
-             ("/World", "/World/Terrain", "/World/Rocks", "/World/Lights", "/World/Cameras")}
+             ("/World", "/World/Terrain", "/World/Rocks", "/World/RockColliders",
+              "/World/Lights", "/World/Cameras")}
     assert kinds == {"/World": Kind.Tokens.assembly, "/World/Terrain": Kind.Tokens.component,
-                     "/World/Rocks": Kind.Tokens.component, "/World/Lights": Kind.Tokens.group,
-                     "/World/Cameras": Kind.Tokens.group}
+                     "/World/Rocks": Kind.Tokens.component,
+                     "/World/RockColliders": Kind.Tokens.component,
+                     "/World/Lights": Kind.Tokens.group, "/World/Cameras": Kind.Tokens.group}
     components = [p.GetPath() for p in stage.Traverse() if Usd.ModelAPI(p).IsKind("component")]
-    assert sorted(map(str, components)) == ["/World/Rocks", "/World/Terrain"]
+    assert sorted(map(str, components)) == ["/World/RockColliders", "/World/Rocks",
+                                            "/World/Terrain"]
     for prim in stage.Traverse():  # every boundable prim carries its authored extent
         if prim.IsA(UsdGeom.Boundable):
             ext = np.asarray(UsdGeom.Boundable(prim).GetExtentAttr().Get())
@@ -111,6 +117,7 @@ def test_every_usd_file_is_byte_reproducible(scene: ms.Scene, tmp_path: Path) ->
     files = sorted(p.relative_to(tmp_path / "a") for p in (tmp_path / "a").rglob("*")
                    if p.is_file() and p.name != "manifest.json")
     assert {f.as_posix() for f in files} >= {"scene.usdc", "assets/terrain.usdc",
-                                             "assets/rocks.usdc", "assets/craters.usdc"}
+                                             "assets/rocks.usdc", "assets/craters.usdc",
+                                             "assets/rock_colliders.usdc"}
     for f in files:
         assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f
