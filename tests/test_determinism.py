@@ -15,8 +15,8 @@ from marsscene.seeding import STAGE_IDS, stage_rng
 
 pytest.importorskip("pxr")
 
-FILES = ("scene.usda", "assets/terrain.usdc", "assets/rock_colliders.usdc", "mjcf/scene.xml",
-         "mjcf/assets/terrain.bin")
+FILES = ("scene.usda", "assets/terrain.usdc", "assets/rock_colliders.usdc", "assets/rover.usda",
+         "mjcf/scene.xml", "mjcf/assets/terrain.bin")
 
 
 def _build(tmp: Path, seed: int, name: str, cfg: ms.SceneConfig) -> Path:
@@ -34,7 +34,7 @@ def _manifest_without_timings(path: Path) -> dict:
 @pytest.fixture(scope="module")
 def config() -> ms.SceneConfig:
     # The embedded default DEM, cropped by post spacing to keep the test quick.
-    return ms.SceneConfig.from_dict({"terrain": {"post_m": 0.5}})
+    return ms.SceneConfig.from_dict({"terrain": {"post_m": 0.5}, "export": {"rover": True}})
 
 
 def test_same_seed_gives_identical_bytes(tmp_path: Path, config: ms.SceneConfig) -> None:

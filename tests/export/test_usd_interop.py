@@ -19,7 +19,7 @@ CFG = {
     "terrain": {"source": "procedural", "size_m": [100.0, 100.0], "post_m": 1.0},
     "rocks": {"k": 0.05, "d_min_m": 0.35},
     "craters": {"d_min_m": 1.0},
-    "export": {"max_tile_posts": 33},
+    "export": {"max_tile_posts": 33, "rover": True},
 }
 
 
@@ -91,14 +91,15 @@ def test_kind_hierarchy_and_extents(written: Path) -> None:
     stage = Usd.Stage.Open(str(written / "scene.usda"))
     kinds = {p: Usd.ModelAPI(stage.GetPrimAtPath(p)).GetKind() for p in
              ("/World", "/World/Terrain", "/World/Rocks", "/World/RockColliders",
-              "/World/Lights", "/World/Cameras")}
+              "/World/Lights", "/World/Cameras", "/World/Rover")}
     assert kinds == {"/World": Kind.Tokens.assembly, "/World/Terrain": Kind.Tokens.component,
                      "/World/Rocks": Kind.Tokens.component,
                      "/World/RockColliders": Kind.Tokens.component,
-                     "/World/Lights": Kind.Tokens.group, "/World/Cameras": Kind.Tokens.group}
+                     "/World/Lights": Kind.Tokens.group, "/World/Cameras": Kind.Tokens.group,
+                     "/World/Rover": Kind.Tokens.component}
     components = [p.GetPath() for p in stage.Traverse() if Usd.ModelAPI(p).IsKind("component")]
     assert sorted(map(str, components)) == ["/World/RockColliders", "/World/Rocks",
-                                            "/World/Terrain"]
+                                            "/World/Rover", "/World/Terrain"]
     for prim in stage.Traverse():  # every boundable prim carries its authored extent
         if prim.IsA(UsdGeom.Boundable):
             ext = np.asarray(UsdGeom.Boundable(prim).GetExtentAttr().Get())
@@ -118,6 +119,6 @@ def test_every_usd_file_is_byte_reproducible(scene: ms.Scene, tmp_path: Path) ->
                    if p.is_file() and p.name != "manifest.json")
     assert {f.as_posix() for f in files} >= {"scene.usdc", "assets/terrain.usdc",
                                              "assets/rocks.usdc", "assets/craters.usdc",
-                                             "assets/rock_colliders.usdc"}
+                                             "assets/rock_colliders.usdc", "assets/rover.usda"}
     for f in files:
         assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f

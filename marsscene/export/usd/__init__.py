@@ -17,6 +17,8 @@
                                 instance per rock: the colliders every physics loader sees)
       /Lights                   group: Sun (DistantLight), Sky (textured DomeLight)
       /Cameras                  group: Navcam (runtime mast camera), Overview
+      /Rover                    with [export] rover = true: payload assets/rover.usda (always
+                                written; a UsdPhysics articulation) at the runtime's spawn pose
       /Assets                   placed assets (habitat, user files), when [assets] is set
 
 Every default-rule check of NVIDIA's Omniverse Asset Validator passes on ``.usda``, ``.usdc``
@@ -79,6 +81,7 @@ def _import_authors() -> None:
     import marsscene.export.usd.lighting
     import marsscene.export.usd.rock_colliders
     import marsscene.export.usd.rocks
+    import marsscene.export.usd.rover
     import marsscene.export.usd.stage
     import marsscene.export.usd.terrain
     import marsscene.export.usd.terrain_lod
@@ -125,6 +128,7 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None,
     from marsscene.export.usd.lighting import author_lighting
     from marsscene.export.usd.rock_colliders import author_rock_colliders
     from marsscene.export.usd.rocks import author_rocks
+    from marsscene.export.usd.rover import author_rover
     from marsscene.export.usd.stage import create_stage
     from marsscene.export.usd.terrain import author_terrain
     from marsscene.export.usd.terrain_lod import author_outer_terrain
@@ -133,7 +137,7 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None,
     assets: dict[str, Any] = _StreamedAssets(Path(stream_to)) if stream_to is not None else {}
     author_terrain(stage, scene, assets, textures=textures)
     for author in (author_outer_terrain, author_craters, author_rocks, author_rock_colliders,
-                   author_lighting, author_cameras, author_assets):
+                   author_lighting, author_cameras, author_assets, author_rover):
         author(stage, scene, assets)
     return stage, assets
 
