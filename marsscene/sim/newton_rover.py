@@ -41,6 +41,8 @@ ROVER_PATH = "/World/Rover"
 ROCKS_PATH = "/World/RockColliders"
 #: Contact buffer of the collision pipeline (the rover makes about 70 contacts on rough ground).
 CONTACTS_MAX = 2048
+#: Candidate shape pairs of the broad phase per step.
+PAIRS_MAX = 16384
 
 
 def _newton() -> tuple[Any, Any]:
@@ -153,8 +155,11 @@ class NewtonRover:
         self.model = builder.finalize(device=device)
         # Steel's step scales with the contact buffer, and the default buffer scales with the
         # number of shapes (21 000 slots for 600 rocks): bound it; a rover makes ~70 contacts
+        # the default candidate-pair buffer grows with the square of the shape count (120 000
+        # rocks: 7e9 pairs, beyond Warp's array size); the rover meets a few shapes at a time
         self._pipeline = newton.CollisionPipeline(self.model, broad_phase="sap",
-                                                  rigid_contact_max=CONTACTS_MAX)
+                                                  rigid_contact_max=CONTACTS_MAX,
+                                                  shape_pairs_max=PAIRS_MAX)
         self.model.rigid_contact_max = CONTACTS_MAX
         self.contacts = self._pipeline.contacts()
         self.solver = newton.solvers.SolverSteel(self.model, enable_joint_limits=True,

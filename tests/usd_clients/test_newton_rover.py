@@ -15,7 +15,8 @@ import pytest
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-pytest.importorskip("newton")
+pytest.importorskip("newton", reason="needs the extra [newton]")
+pytest.importorskip("warp", reason="needs the extra [newton]")
 pytest.importorskip("mujoco")
 
 from benchmarks import bench_newton as bn
@@ -56,15 +57,7 @@ def test_speed_and_path_agree_with_the_mujoco_runtime(tmp_path: Path) -> None:
     procedural scene with rocks, MuJoCo's RoverSim vs Newton with the same rocks. Tolerances:
     speed 3 %, heading 3 deg, path 0.25 m: two solvers with different contact models (MuJoCo's
     soft convex contacts vs Steel's projected Gauss-Seidel rows) on the same geometry."""
-    import marsscene as ms
-
-    cfg = ms.SceneConfig.from_dict({
-        "terrain": {"source": "procedural", "size_m": [40, 40], "post_m": 0.25,
-                    "rms_height_m": 0.05},
-        "craters": {"enabled": False}, "rocks": {"k": 0.05, "d_min_m": 0.5},
-        "export": {"rover": True}})
-    out = tmp_path / "gentle"
-    ms.write_scene(ms.build_scene(cfg, seed=3), out)
+    out = bn.gentle_scene(tmp_path)
     res = bn.compare_drive(out, straight_m=4.0, turn_deg=45.0)
     mj, nt = res["mujoco"], res["newton"]
     assert nt["straight_speed_m_s"] == pytest.approx(mj["straight_speed_m_s"], rel=0.03)
