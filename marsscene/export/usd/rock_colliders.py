@@ -30,7 +30,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from pxr import Gf, Sdf, UsdGeom, UsdPhysics, Vt
+from pxr import Sdf, UsdGeom, UsdPhysics, Vt
 
 from marsscene.export.usd.physics import (
     ROCK_PHYSICS,
@@ -90,14 +90,14 @@ def _instances(layer: Sdf.Layer, root: Sdf.Path, rocks: Any, index: Any,
     m[:, :3, :3] = np.swapaxes(rot, 1, 2) * np.asarray(rocks.scale_xyz_m)[:, :, None]
     m[:, 3, :3] = rocks.position_xyz_m
     m[:, 3, 3] = 1.0
-    rows = m.tolist()
+    matrices = Vt.Matrix4dArray.FromNumpy(m)  # one copy; indexing it is faster than lists
     kind = np.asarray(rocks.prototype, dtype=np.int64).tolist()
     names = [f"rock_{i}" for i in np.asarray(index, dtype=np.int64).tolist()]
     with Sdf.ChangeBlock():
         for j, name in enumerate(names):  # no vectorised prim creation in USD: a spec per rock
             spec = Sdf.PrimSpec(parent, name, Sdf.SpecifierDef)
             spec.referenceList.Prepend(refs[kind[j]])
-            Sdf.AttributeSpec(spec, _ORDER[0], matrix4d).default = Gf.Matrix4d(rows[j])
+            Sdf.AttributeSpec(spec, _ORDER[0], matrix4d).default = matrices[j]
 
 
 def author_collider_layer(rocks: Any, index: Any, prototypes: tuple[Any, ...]) -> Sdf.Layer:
