@@ -52,6 +52,7 @@ def _merged_layer(rocks: Any, protos: tuple[Any, ...], bounds: list[Any]) -> Any
     from marsscene.transforms import quat_to_matrix
 
     stage = create_asset_stage("RockColliders")
+    UsdGeom.Scope.Define(stage, "/RockColliders/Looks")
     physics = author_physics_material(stage, Sdf.Path("/RockColliders/Looks"), ROCK_PHYSICS)
     xy = rocks.position_xyz_m[:, :2]
     rot = quat_to_matrix(rocks.orientation_wxyz)
@@ -145,17 +146,17 @@ def _write() -> dict[str, Any]:
 
 def _variant_b(out: Path) -> Path:
     """scene_B.usdc: the A scene with /World/RockColliders replaced by B's merged layer."""
-    from pxr import Usd
+    from pxr import Sdf
 
-    stage = Usd.Stage.Open(str(out / "A" / "scene.usdc"), load=Usd.Stage.LoadNone)
-    prim = stage.GetPrimAtPath("/World/RockColliders")
-    for child in list(prim.GetChildren()):  # level-of-detail scenes: a group of payloads
-        stage.RemovePrim(child.GetPath())
-    prim.GetPayloads().ClearPayloads()
-    prim.GetPayloads().AddPayload("./b_colliders.usdc")
-    prim.SetMetadata("kind", "component")
+    layer = Sdf.Layer.FindOrOpen(str(out / "A" / "scene.usdc"))
+    spec = layer.GetPrimAtPath("/World/RockColliders")
+    for child in list(spec.nameChildren):  # level-of-detail scenes: a group of payloads
+        spec.RemoveNameChild(child)
+    spec.payloadList.ClearEdits()
+    spec.payloadList.Prepend(Sdf.Payload("./b_colliders.usdc"))
+    spec.SetInfo("kind", "component")
     target = out / "A" / "scene_B.usdc"
-    stage.GetRootLayer().Export(str(target))
+    layer.Export(str(target))
     (out / "A" / "b_colliders.usdc").write_bytes((out / "b_colliders.usdc").read_bytes())
     return target
 
