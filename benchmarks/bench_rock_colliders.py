@@ -150,8 +150,8 @@ def _variant_b(out: Path) -> Path:
 
     layer = Sdf.Layer.FindOrOpen(str(out / "A" / "scene.usdc"))
     spec = layer.GetPrimAtPath("/World/RockColliders")
-    for child in list(spec.nameChildren):  # level-of-detail scenes: a group of payloads
-        spec.RemoveNameChild(child)
+    for name in list(spec.nameChildren.keys()):  # level-of-detail scenes: a group of payloads
+        del spec.nameChildren[name]
     spec.payloadList.ClearEdits()
     spec.payloadList.Prepend(Sdf.Payload("./b_colliders.usdc"))
     spec.SetInfo("kind", "component")
