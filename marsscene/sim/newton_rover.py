@@ -134,7 +134,7 @@ class NewtonRover:
                  dt_s: float = 0.002,
                  control_hz: float = 50.0, edit_builder: Callable[[Any], None] | None = None,
                  device: str = "cpu") -> None:
-        newton, wp = _newton()
+        newton, _ = _newton()
         from pxr import Usd
 
         self.rover = rover if rover is not None else RoverConfig()
@@ -153,10 +153,9 @@ class NewtonRover:
             edit_builder(builder)
         self.builder = builder
         self.model = builder.finalize(device=device)
-        # Steel's step scales with the contact buffer, and the default buffer scales with the
-        # number of shapes (21 000 slots for 600 rocks): bound it; a rover makes ~70 contacts
-        # the default candidate-pair buffer grows with the square of the shape count (120 000
-        # rocks: 7e9 pairs, beyond Warp's array size); the rover meets a few shapes at a time
+        # Bounded buffers: Steel's step time grows with the contact buffer, which Newton sizes
+        # by shape count (21 000 slots for 600 rocks; a rover makes ~70 contacts), and the
+        # candidate-pair buffer with its square (120 000 rocks: 7e9 pairs, beyond Warp's arrays)
         self._pipeline = newton.CollisionPipeline(self.model, broad_phase="sap",
                                                   rigid_contact_max=CONTACTS_MAX,
                                                   shape_pairs_max=PAIRS_MAX)
@@ -189,7 +188,6 @@ class NewtonRover:
                   if lab == f"{ROVER_PATH}/base_link"]
         self.base_body = bodies[0]
         self.cmd = (0.0, 0.0)
-        self._wp = wp
 
     @staticmethod
     def _add_rocks(builder: Any, stage: Any, within_m: float | None, only: Any) -> int:
