@@ -17,7 +17,7 @@ from pxr import Kind, Usd, UsdGeom, UsdPhysics, UsdShade  # noqa: E402
 
 CFG = {
     "terrain": {"source": "procedural", "size_m": [100.0, 100.0], "post_m": 1.0},
-    "rocks": {"k": 0.05, "d_min_m": 0.35},
+    "rocks": {"k": 0.05, "d_min_m": 0.5},  # 123 rocks: each is a collider prim to validate
     "craters": {"d_min_m": 1.0},
     "export": {"max_tile_posts": 33, "rover": True},
 }
