@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from marsscene.benchmark.kiss_icp import lidar_ground_truth, run_kiss_icp, score_lidar_odometry
+from marsscene.benchmark.slam.kiss_icp import lidar_ground_truth, run_kiss_icp, score_lidar_odometry
 from marsscene.runs.evaluation import ate
 from marsscene.runs.runlog import RunLog
 from marsscene.runs.tum import read_tum

@@ -5,8 +5,8 @@ The build side, in pipeline order (wired only by ``pipeline/``)::
     dem/ -> terrain/ -> craters/ -> rocks/ -> lighting/ -> scene.py -> export/ (USD, MJCF)
 
 and the run side: ``sim/`` (MuJoCo rover) with ``sensors/`` -> ``runs/`` (run folder, ATE/RPE)
--> ``runs/export/`` (ROS 2 bags, SLAM datasets); ``marsscene.runtime`` re-exports it. The
-layers and which way imports run: ``docs/architecture.md``.
+-> ``runs/export/`` (ROS 2 bags, SLAM datasets), driven by one call, :func:`drive`
+(:mod:`marsscene.runtime`). The layers and which way imports run: ``docs/architecture.md``.
 
 Examples
 --------
@@ -14,6 +14,8 @@ Examples
 >>> cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [10, 10]}})
 >>> ms.build_scene(cfg, seed=7).heightfield.shape
 (41, 41)
+>>> ms.RunConfig(lidar=ms.LidarConfig(model="vlp16")).lidar.spec.channels
+16
 """
 
 from __future__ import annotations
@@ -31,24 +33,55 @@ from marsscene.scene import Scene as Scene
 
 if TYPE_CHECKING:
     from marsscene.dem.io import read_dem as read_dem
+    from marsscene.rover.config import CameraConfig as CameraConfig
+    from marsscene.rover.config import LidarConfig as LidarConfig
+    from marsscene.rover.config import NoiseConfig as NoiseConfig
+    from marsscene.rover.config import RunConfig as RunConfig
+    from marsscene.runs.export.options import BagOptions as BagOptions
+    from marsscene.runs.export.options import ExportOptions as ExportOptions
+    from marsscene.runtime.api import DriveRun as DriveRun
+    from marsscene.runtime.api import drive as drive
+    from marsscene.sim.control import Observation as Observation
+    from marsscene.sim.mission import DriveOptions as DriveOptions
 
 logging.getLogger("marsscene").addHandler(logging.NullHandler())
 
 __all__ = [
+    "BagOptions",
+    "CameraConfig",
+    "DriveOptions",
+    "DriveRun",
+    "ExportOptions",
+    "LidarConfig",
     "MarsSceneError",
+    "NoiseConfig",
+    "Observation",
+    "RunConfig",
     "Scene",
     "SceneConfig",
     "__version__",
     "build_scene",
+    "drive",
     "read_dem",
     "show_versions",
     "write_scene",
 ]
 
+#: Loaded on first use: rasterio with ``read_dem``, the run side (mujoco) with ``drive``.
+_LAZY = {
+    "read_dem": "marsscene.dem.io",
+    **dict.fromkeys(("CameraConfig", "LidarConfig", "NoiseConfig", "RunConfig"),
+                    "marsscene.rover.config"),
+    **dict.fromkeys(("BagOptions", "ExportOptions"), "marsscene.runs.export.options"),
+    **dict.fromkeys(("DriveRun", "drive"), "marsscene.runtime.api"),
+    "Observation": "marsscene.sim.control",
+    "DriveOptions": "marsscene.sim.mission",
+}
 
-def __getattr__(name: str) -> Any:  # rasterio is imported only when a DEM is read
-    if name == "read_dem":
-        from marsscene.dem.io import read_dem
 
-        return read_dem
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'marsscene' has no attribute {name!r}")

@@ -1,7 +1,9 @@
-"""Atomic output folders: build in a temporary sibling, then swap it in with renames.
+"""Atomic outputs: files and folders are built under a temporary name, then renamed in.
 
-One mechanism for every writer (scene folders, sweep cells, ROS bags and dataset exports): a
-reader never sees a half-written folder, and a failure leaves the previous folder untouched.
+Two helpers for every writer: :func:`write_atomic` for a file written in one go (JSON, tables,
+trajectories, PLY scans, caches) and :func:`replacing_dir` for a folder (scene folders, sweep
+cells, ROS bags and dataset exports). A reader never sees a half-written output, and a failure
+leaves the previous one untouched. Files inside a :func:`replacing_dir` folder need no more.
 
 A killed writer leaves its ``.<name>.<8 random chars>.tmp`` behind, so each write of ``<name>``
 first sweeps those whose owner is provably gone. Each names its owner in ``owner.json`` (pid,
@@ -24,6 +26,7 @@ import shutil
 import socket
 import stat
 import tempfile
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager, nullcontext, suppress
@@ -36,7 +39,7 @@ try:
 except ImportError:  # pragma: no cover - Windows: the pid check alone
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["STALE_AFTER_S", "probe_writable", "replacing_dir"]
+__all__ = ["STALE_AFTER_S", "probe_writable", "replacing_dir", "write_atomic"]
 
 log = logging.getLogger("marsscene")
 STALE_AFTER_S = 24 * 3600.0  # foreign or ownerless temporary folders: removed after this idle
@@ -135,6 +138,27 @@ def _sweep(final: Path) -> None:
             _reap(tmp, final)
         except Exception as err:  # a live owner's lock, or cleanup failed: the write goes on
             log.debug("left the temporary folder %s: %s", tmp, err)
+
+
+def write_atomic(path: str | os.PathLike[str], data: bytes | str) -> Path:
+    """Write ``data`` (``str`` as UTF-8) to ``path`` whole or not at all.
+
+    The bytes go to a temporary sibling named for this process and thread
+    (``.<name>.<pid>.<thread>.part``: concurrent writers never share one) and are renamed over
+    ``path``; on any error the sibling is removed and ``path`` is untouched. Returns the path.
+    """
+    final = Path(path)
+    blob = data.encode("utf-8") if isinstance(data, str) else data
+    tmp = final.with_name(f".{final.name}.{os.getpid()}.{threading.get_ident()}.part")
+    try:
+        with open(tmp, "wb") as fh:
+            fh.write(blob)
+        os.replace(tmp, final)
+    except BaseException:
+        with suppress(OSError):
+            tmp.unlink()
+        raise
+    return final
 
 
 def _temp_beside(final: Path) -> Path:

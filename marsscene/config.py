@@ -71,14 +71,21 @@ class SceneConfig:
     to :func:`marsscene.build_scene` but may also be given here as ``seed``)."""
 
     seed: int | None = None
+    """Seed of the build when :func:`marsscene.build_scene` is not given one (default 0)."""
     preset: str | None = None
     """Reference-scene preset expanded under the other keys (see :mod:`marsscene.presets`)."""
     terrain: TerrainConfig = field(default_factory=TerrainConfig)
+    """``[terrain]``: the DEM or procedural terrain (:class:`marsscene.terrain.TerrainConfig`)."""
     craters: CraterConfig = field(default_factory=CraterConfig)
+    """``[craters]``: the crater population (:class:`marsscene.craters.CraterConfig`)."""
     rocks: RockConfig = field(default_factory=RockConfig)
+    """``[rocks]``: the rock population (:class:`marsscene.rocks.RockConfig`)."""
     lighting: LightingConfig = field(default_factory=LightingConfig)
+    """``[lighting]``: sun and sky (:class:`marsscene.lighting.LightingConfig`)."""
     export: ExportConfig = field(default_factory=ExportConfig)
+    """``[export]``: output formats, USD encoding, rock catalogue format."""
     assets: AssetConfig = field(default_factory=AssetConfig)
+    """``[assets]``: habitats and user assets (:class:`marsscene.assets.AssetConfig`)."""
 
     def __post_init__(self) -> None:
         if self.seed is not None and (

@@ -1,4 +1,4 @@
-"""Mars constants used across marsscene (SCIENCE.md section 7.1)."""
+"""Mars constants used across marsscene (docs/science/dem.md)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,6 @@
-"""Shared fixtures: tiny synthetic inputs built in code (cf. rasterio tests/conftest.py)."""
+"""Shared fixtures: tiny synthetic inputs built in code (cf. rasterio tests/conftest.py), and the
+scenes and runs the run-side tests drive on (a gentle procedural terrain, a flat plane, a 15 deg
+slope, a short run with every sensor); those skip without mujoco."""
 
 from __future__ import annotations
 
@@ -9,11 +11,16 @@ from pathlib import Path
 if not os.environ.get("DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")
 
+import math
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
 import marsscene as ms
+from marsscene.scene import Provenance, Scene
+from marsscene.terrain.from_dem import GeoFrame
+from marsscene.terrain.heightfield import Heightfield
 
 SHARED_REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
@@ -57,3 +64,105 @@ def synthetic_dem_path(tmp_path: Path) -> Path:
     ) as ds:
         ds.write(z.astype(np.float32), 1)
     return path
+
+
+_PROC = {
+    "terrain": {"source": "procedural", "size_m": [40, 40], "post_m": 0.25, "rms_height_m": 0.05},
+    "craters": {"enabled": False},
+    "rocks": {"enabled": False},
+}
+
+
+def _write(z: np.ndarray, out: Path, cell_m: float = 0.25) -> Path:
+    pytest.importorskip("mujoco")
+    cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [10, 10]}})
+    scene = Scene(
+        heightfield=Heightfield.centered(z, cell_m),
+        config=cfg,
+        seed=0,
+        provenance=Provenance(frame=GeoFrame(0.0, None, None, "", 1.0)),
+    )
+    ms.write_scene(scene, out, formats=("mjcf",))
+    return out
+
+
+@pytest.fixture(scope="session")
+def gentle_scene(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """40 m x 40 m procedural terrain, 0.05 m RMS height."""
+    pytest.importorskip("mujoco")
+    scene = ms.build_scene(ms.SceneConfig.from_dict(_PROC), seed=3)
+    out = tmp_path_factory.mktemp("gentle") / "scene"
+    ms.write_scene(scene, out, formats=("mjcf",))
+    return out
+
+
+@pytest.fixture(scope="session")
+def flat_scene(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """30 m x 30 m perfectly flat terrain at z = 0."""
+    return _write(np.zeros((121, 121), np.float32), tmp_path_factory.mktemp("flat") / "scene")
+
+
+@pytest.fixture(scope="session")
+def slope_scene(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """40 m (x) x 16 m (y) plane rising at 15 deg towards +x."""
+    x = (np.arange(161) - 80) * 0.25
+    z = np.tile(math.tan(math.radians(15.0)) * x, (65, 1)).astype(np.float32)
+    return _write(z, tmp_path_factory.mktemp("slope") / "scene")
+
+
+@pytest.fixture(scope="session")
+def bag_run(gentle_scene: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A 3 s run folder with noisy IMU/odometry, an 80 x 60 RGB-D camera and a 3-ring LiDAR."""
+    from marsscene.errors import RuntimeSimError
+    from marsscene.runtime import CameraConfig, LidarConfig, NoiseConfig, RunConfig
+    from marsscene.seeding import stage_rng
+    from marsscene.sim.driver import drive_sim
+    from marsscene.sim.rover_sim import RoverSim
+
+    run = RunConfig(
+        noise=NoiseConfig(wheel_rate_sigma_rad_s=0.05, accel_sigma_m_s2=0.05,
+                          gyro_sigma_rad_s=0.01),
+        camera=CameraConfig(width_px=80, height_px=60),
+        lidar=LidarConfig(channels=3, horizontal_samples=90, vertical_fov_deg=(-30.0, -10.0)),
+    )
+    sim = RoverSim(gentle_scene, run=run)
+    out = tmp_path_factory.mktemp("bagrun") / "run"
+    try:
+        drive_sim(sim, command=(0.3, 0.05), seconds=3.0, out_dir=out, rng=stage_rng(0, "sensors"))
+    except RuntimeSimError as err:
+        pytest.skip(f"no headless OpenGL (EGL/OSMesa) here: {err}")
+    return out
+
+
+@pytest.fixture(scope="session")
+def stereo_run(bag_run: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``bag_run`` plus ``camera/left`` and ``camera/right`` folders made here (0.3 m baseline).
+
+    The right images are the left ones shifted by 4 px, mono8; each folder has its own
+    ``intrinsics.json`` with ``baseline_m``, as a stereo head would log it.
+    """
+    import json
+    import shutil
+
+    from marsscene.runs.logs import png_bytes
+    from marsscene.runs.runlog import read_image
+
+    out = tmp_path_factory.mktemp("stereorun") / "run"
+    shutil.copytree(bag_run, out)
+    cam = out / "camera"
+    intr = json.loads((cam / "intrinsics.json").read_text()) | {"baseline_m": 0.3}
+    lines = (cam / "stamps.csv").read_text().splitlines()[1:]
+    for side in ("left", "right"):
+        (cam / side / "rgb").mkdir(parents=True)
+        rows = ["t,rgb"]
+        for line in lines:
+            t, rgb, _ = line.split(",")
+            img = read_image(cam / rgb)
+            mono = img.mean(axis=2).astype(np.uint8)
+            if side == "right":
+                mono = np.roll(mono, -4, axis=1)
+            (cam / side / rgb).write_bytes(png_bytes(mono))
+            rows.append(f"{t},{rgb}")
+        (cam / side / "stamps.csv").write_text("\n".join(rows) + "\n")
+        (cam / side / "intrinsics.json").write_text(json.dumps(intr))
+    return out

@@ -7,7 +7,11 @@ Timings are the only thing allowed to differ: ``manifest.json`` is hashed withou
 Usage::
 
     python tools/output_digest.py build   OUT_DIGEST.json   # builds the default scene + a drive
+    python tools/output_digest.py digest  SCENE_DIR RUN_DIR OUT_DIGEST.json   # existing folders
     python tools/output_digest.py compare A.json B.json
+
+``build`` drives 6 s with the camera, the LiDAR, a bag and both dataset exports (TUM RGB-D,
+EuRoC).
 """
 
 from __future__ import annotations
@@ -50,9 +54,13 @@ def build(dest: Path) -> None:
         subprocess.run(run, check=True)
         drive = ["marsscene", "drive", str(t / "scene"), "--waypoints", str(t / "wp.txt"),
                  "--seconds", "6", "--camera", "--camera-size", "160x120", "--lidar", "--bag",
-                 "--out", str(t / "run")]
+                 "--dataset", "tum-rgbd", "--dataset", "euroc", "--out", str(t / "run")]
         subprocess.run(drive, check=True)
-        doc = {"scene": _digest(t / "scene"), "run": _digest(t / "run")}
+        digest(t / "scene", t / "run", dest)
+
+
+def digest(scene: Path, run: Path, dest: Path) -> None:
+    doc = {"scene": _digest(scene), "run": _digest(run)}
     dest.write_text(json.dumps(doc, indent=1, sort_keys=True))
 
 
@@ -72,5 +80,7 @@ def compare(a: Path, b: Path) -> int:
 if __name__ == "__main__":
     if sys.argv[1] == "build":
         build(Path(sys.argv[2]))
+    elif sys.argv[1] == "digest":
+        digest(Path(sys.argv[2]), Path(sys.argv[3]), Path(sys.argv[4]))
     else:
         sys.exit(compare(Path(sys.argv[2]), Path(sys.argv[3])))

@@ -68,6 +68,7 @@ def _register() -> None:
     from marsscene.cli.eval import eval_cmd
     from marsscene.cli.export import export_cmd
     from marsscene.cli.info import info
+    from marsscene.cli.serve import serve
     from marsscene.cli.sun import sun
     from marsscene.cli.sweep import sweep
 
@@ -75,6 +76,7 @@ def _register() -> None:
     main.add_command(info)
     main.add_command(sun)
     main.add_command(drive)
+    main.add_command(serve)
     main.add_command(eval_cmd)
     main.add_command(bag)
     main.add_command(export_cmd)

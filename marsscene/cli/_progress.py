@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import sys
 import time
+from contextlib import ExitStack
 from typing import Any, TextIO
 
-__all__ = ["DriveMeter", "format_eta"]
+import click
+
+__all__ = ["DriveMeter", "ProgressBar", "format_eta"]
 
 
 def format_eta(seconds: float) -> str:
@@ -61,3 +64,18 @@ class DriveMeter:
         if self.tty and self._width:
             self.stream.write("\n")
             self.stream.flush()
+
+
+class ProgressBar:
+    """``progress(done, total)`` as a click progress bar on stderr, started at the first call
+    (once the work's input proved valid)."""
+
+    def __init__(self, stack: ExitStack, label: str) -> None:
+        self.stack, self.label = stack, label
+        self.bar: Any = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            self.bar = self.stack.enter_context(click.progressbar(
+                length=total, label=self.label, file=sys.stderr))
+        self.bar.update(done - self.bar.pos)

@@ -27,8 +27,13 @@ def benchmark() -> None:
 @click.option("--method-workers", type=click.IntRange(1, 16), default=2, show_default=True,
               help="Methods of one cell run side by side on this many threads (KISS-ICP and "
               "command methods are processes of their own; results do not depend on it).")
+@click.option("--length-m", type=click.FloatRange(min=5.0), default=None,
+              help="A quick check: every automatic route shortened to this length (m).")
+@click.option("--scene", "scenes", multiple=True,
+              help="Only this scene of the spec (repeat for several).")
 def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | None,
-         serial: bool, resume: bool, method_workers: int) -> None:
+         serial: bool, resume: bool, method_workers: int, length_m: float | None,
+         scenes: tuple[str, ...]) -> None:
     """Run the SLAM benchmark SPEC_TOML into OUT.
 
     Every cell (scene x tau x seed) is built, driven along its route with the camera (and, in
@@ -42,9 +47,10 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
       marsscene benchmark slam docs/examples/benchmark_slam_quick.toml --out bench/quick
       marsscene benchmark slam paper.toml --out /shared/bench --scheduler tcp://head:8786
       marsscene benchmark slam paper.toml --out bench/paper --resume
+      marsscene benchmark slam paper.toml --out bench/p40 --length-m 40 --scene mars-base
     """
-    from marsscene.benchmark.slam_run import run_slam_benchmark, slam_cells
-    from marsscene.benchmark.slam_spec import load_slam_spec
+    from marsscene.benchmark.slam.run import run_slam_benchmark, slam_cells
+    from marsscene.benchmark.slam.spec import SlamSpec
 
     where = dask_where(workers, scheduler, serial)
 
@@ -58,7 +64,9 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
                    f"{row.get('error') if row['status'] == 'failed' else methods}", err=True)
 
     with user_errors():
-        spec = load_slam_spec(spec_toml)
+        spec = SlamSpec.from_toml(spec_toml)
+        if length_m is not None or scenes:
+            spec = spec.shortened(length_m=length_m, scenes=scenes or None)
         n = len(slam_cells(spec))
         click.echo(f"benchmark slam: {n} cells x {len(spec.methods)} methods {where}", err=True)
         res = run_slam_benchmark(spec, out_dir, workers=workers, scheduler=scheduler,

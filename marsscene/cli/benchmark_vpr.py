@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import os
 import sys
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
 import click
 
+from marsscene.benchmark.vpr.score import BASELINES
 from marsscene.cli._common import user_errors
+from marsscene.cli._progress import ProgressBar
 
 __all__ = ["vpr", "vpr_eval"]
-
-BASELINES = ("sift-vlad", "patch-normalised")
 
 
 @click.command(short_help="Generate a VPR dataset (database + queries traversals, frames every "
@@ -43,12 +44,12 @@ def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, r
       marsscene benchmark vpr day-dark --out vpr/daydark --length-m 40
     Then any method: marsscene benchmark vpr-eval vpr/dust --descriptors my_descs/
     """
-    from marsscene.benchmark.vpr_dataset import generate_vpr
-    from marsscene.benchmark.vpr_spec import load_vpr_spec
+    from marsscene.benchmark.vpr.dataset import generate_vpr
+    from marsscene.benchmark.vpr.spec import VprSpec
     from marsscene.cli._progress import DriveMeter
 
     with user_errors():
-        spec = load_vpr_spec(protocol)
+        spec = VprSpec.from_toml(protocol)
         if length_m is not None:
             spec = spec.with_length(length_m)
         meters: dict[str, DriveMeter] = {}
@@ -81,38 +82,12 @@ def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, r
 
 def _evaluate(dataset: Path, descriptors: Path | None, radii: tuple[float, ...],
               out: Path, method: str | None = None, baseline: str = "sift-vlad") -> None:
-    from marsscene.benchmark.vpr_eval import (
-        load_descriptors,
-        pairs_figure,
-        patch_normalised,
-        read_split,
-        recall_at,
-        retrieve,
-        write_results,
-    )
+    from marsscene.benchmark.vpr.score import evaluate_vpr
 
-    with user_errors():
-        db, q = read_split(dataset, "database"), read_split(dataset, "queries")
-        if descriptors is None:
-            n = len(db.files) + len(q.files)
-            with click.progressbar(length=n, label=f"{baseline} descriptors ({n} images)",
-                                   file=sys.stderr) as bar:
-                if baseline == "sift-vlad":
-                    from marsscene.benchmark.vpr_vlad import sift_vlad
-
-                    d_db, d_q = sift_vlad(db.files, q.files, tick=lambda: bar.update(1))
-                else:
-                    d_db, d_q = patch_normalised(db.files), patch_normalised(q.files)
-                    bar.update(n)
-            name = method or baseline
-        else:
-            d_db, d_q = load_descriptors(descriptors, db), load_descriptors(descriptors, q)
-            name = method or descriptors.name
-        ranked = retrieve(d_db, d_q, k=20)
-        results = [recall_at(ranked, db.xy_m, q.xy_m, r, name) for r in radii]
-        write_results(out, results)
-        pairs_figure(out / "pairs.png", db, q, ranked, radii[0],
-                     title=f"{dataset.name}: {name}, top-1 within {radii[0]:g} m")
+    with user_errors(), ExitStack() as stack:
+        bar = ProgressBar(stack, f"{baseline} descriptors")
+        evaluate_vpr(dataset, descriptors, radii_m=radii, out_dir=out, method=method,
+                     baseline=baseline, progress=bar if descriptors is None else None)
     sys.stdout.write((out / "recall.md").read_text(encoding="utf-8"))
     click.echo(f"    eval: {out / 'recall.csv'}, {out / 'recall.md'}, {out / 'pairs.png'}")
 

@@ -3,18 +3,19 @@
 from __future__ import annotations
 
 import sys
-import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
 import click
 
 from marsscene.cli._common import user_errors
-from marsscene.cli.bag import bag_options, write_run_bag
+from marsscene.cli._progress import DriveMeter, ProgressBar
+from marsscene.cli.bag import BAG_OPTION_NAMES, bag_options, bag_options_of, echo_bag
 from marsscene.rover.config import noise_profiles
 from marsscene.rover.lidar import lidar_models
+from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
 
@@ -109,7 +110,8 @@ def _size(text: str) -> tuple[int, int]:
 @click.option("--noise-profile", type=click.Choice(_NOISE_PROFILES), default=None,
               help="Named IMU + wheel-odometry noise profile from datasheets (docs/runtime.md); "
               "keys set in --noise-config / --run-config still win. Default: the config's "
-              "profile, else none (noise-free).")
+              "profile, else none: a noise-free IMU and exact encoders, an optimistic "
+              "odometry (the SLAM benchmark uses ln200s).")
 @click.option(
     "--seed",
     type=click.IntRange(min=0),
@@ -140,95 +142,171 @@ def _size(text: str) -> tuple[int, int]:
     help="Only MJCF rocks within this distance of the route are simulated (m); widened to "
     "the LiDAR range / camera window when those sensors are on.",
 )
+@click.option("--controller", "controller_ref", metavar="MODULE:NAME", default=None,
+              help="Steer with your controller instead of pure pursuit: a callable "
+              "controller(observation) -> (v, omega), or a class (instantiated with the route "
+              "when it takes one); MODULE is imported from the current folder too "
+              "(docs/runtime.md). Without --route/--waypoints it starts at the terrain centre "
+              "and needs --seconds.")
 @click.option("--bag", "write_bag", is_flag=True,
               help="Also write RUN_DIR/bag, a ROS 2 bag of the run (see `marsscene bag`).")
-@click.option("--overwrite", is_flag=True, help="With --bag: replace an existing RUN_DIR/bag.")
+@click.option("--dataset", "datasets", multiple=True, type=click.Choice(DATASET_FORMATS),
+              help="Also write RUN_DIR/tum_rgbd or RUN_DIR/euroc (see `marsscene export`; "
+              "needs --camera); repeat for both.")
+@click.option("--overwrite", is_flag=True,
+              help="With --bag / --dataset: replace existing RUN_DIR/bag and dataset folders.")
+@click.option("--dataset-images", type=click.Choice(DATASET_IMAGES), default="link",
+              show_default=True,
+              help="link: dataset folders hard-link the run's PNGs (TUM depth at 1000 per m, "
+              "EuRoC in RGB); convert: TUM depth at 5000 per m and EuRoC mono8 copies.")
+@click.option("--keep-lidar-files", is_flag=True,
+              help="With --bag and --lidar: keep RUN_DIR/lidar/*.ply beside the bag (by "
+              "default the scans are kept once, in the bag).")
 @bag_options
-def drive(
-    scene_dir: Path,
-    route_path: Path | None,
-    waypoints_path: Path | None,
-    seconds: float | None,
-    out_dir: Path,
-    camera: bool,
-    lidar: bool,
-    lidar_model: str | None,
-    run_config: Path | None,
-    noise_config: Path | None,
-    noise_profile: str | None,
-    seed: int,
-    lookahead: float,
-    max_slope: float,
-    write_rover_xml: bool,
-    corridor: float,
-    camera_size: str,
-    camera_hz: float,
-    stereo: bool,
-    exposure: str,
-    exposure_gain: float,
-    camera_noise: bool,
-    no_shadows: bool,
-    tau: float | None,
-    sun_elevation: float | None,
-    write_bag: bool = False,
-    overwrite: bool = False,
-    **bag_opts: Any,
-) -> None:
-    """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz).
+def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
+          seconds: float | None, out_dir: Path, seed: int, write_rover_xml: bool,
+          controller_ref: str | None, write_bag: bool, datasets: tuple[str, ...],
+          overwrite: bool, dataset_images: str, keep_lidar_files: bool, **opts: Any) -> None:
+    """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz),
+    or with your controller.
 
     \b
     Examples:
       marsscene drive scenes/demo --waypoints wp.txt --lidar --out runs/r1
       marsscene drive scenes/demo --route route.tum --seconds 60 --camera
+      marsscene drive scenes/demo --waypoints wp.txt --camera --bag --dataset euroc
+      marsscene drive scenes/demo --waypoints wp.txt --lidar --controller my_nav:Planner
     """
-    if (route_path is None) == (waypoints_path is None):
-        raise click.UsageError("give exactly one of --route or --waypoints")
-    if write_bag and (out_dir / "bag").exists() and not overwrite:
-        raise click.ClickException(f"{out_dir / 'bag'} exists; pass --overwrite to replace it")
+    import marsscene as ms
+    from marsscene.runs.export.options import ExportOptions
+    from marsscene.sim.driver import DriveInterrupted
+    from marsscene.sim.pursuit import PursuitConfig
+
+    if route_path is not None and waypoints_path is not None:
+        raise click.UsageError("give --route or --waypoints, not both")
+    if route_path is None and waypoints_path is None and controller_ref is None:
+        raise click.UsageError("give --route or --waypoints (or a --controller)")
+    bag_values = {k: opts.pop(k) for k in list(opts) if k in BAG_OPTION_NAMES}
     with user_errors():
-        run = _run_config(run_config, noise_config, lidar, lidar_model, camera or stereo,
-                          camera_size=camera_size, noise_profile=noise_profile,
-                          rate_hz=camera_hz, stereo=stereo, exposure=exposure,
-                          exposure_gain=exposure_gain, sensor_noise=camera_noise,
-                          shadows=not no_shadows, tau=tau, sun_elevation_deg=sun_elevation)
-        sim, route = _prepare(scene_dir, run, route_path, waypoints_path, out_dir,
-                              max_slope=max_slope, corridor=corridor,
-                              write_rover_xml=write_rover_xml)
-    if write_bag:
-        from marsscene.runs.export.bag_writer import require_backends
-
-        with user_errors():
-            require_backends(bag_opts.get("bag_compression", "zstd"))
-    cache = _jpeg_cache(out_dir, bag_opts) if write_bag and run.camera is not None else None
-    try:  # SIGTERM is Ctrl-C until the JPEG cache is gone, the bag's writing included
-        with _sigterm_interrupts():
-            try:
-                with user_errors():
-                    res, wall = _drive(sim, route, seconds, out_dir, seed, lookahead, cache)
-                _report(res.summary, wall, out_dir)
-                if write_bag:
-                    t0 = time.perf_counter()
-                    with user_errors():
-                        write_run_bag(out_dir, None, overwrite=overwrite, jpeg_cache=cache,
-                                      **bag_opts)
-                    click.echo(f"          bag written in {time.perf_counter() - t0:.1f} s "
-                               f"(drive: {wall:.1f} s)")
-            finally:
-                if cache is not None:
-                    cache.remove()
-    except KeyboardInterrupt:  # while writing the bag: the run folder is whole, no bag
-        click.echo(f"marsscene: interrupted while writing the bag; {out_dir} holds the whole "
-                   f"drive (`marsscene bag {out_dir}` writes the bag)", err=True)
-        sys.exit(130)
+        run = _run_config(**opts)
+        options = ms.DriveOptions(max_slope_deg=opts["max_slope"], corridor_m=opts["corridor"],
+                                  pursuit=PursuitConfig(lookahead_m=opts["lookahead"]))
+        export = ExportOptions(bag=bag_options_of(bag_values) if write_bag else None,
+                               datasets=datasets, overwrite=overwrite,
+                               dataset_images=dataset_images,
+                               keep_lidar_files=keep_lidar_files)
+        waypoints = _read_waypoints(waypoints_path) if waypoints_path else None
+        controller = (_load_controller(controller_ref, route_path, waypoints, scene_dir,
+                                       options) if controller_ref else None)
+        if write_rover_xml:
+            click.echo(f"   rover: {_write_rover_xml(scene_dir, run)}")
+    with ExitStack() as stack, _sigterm_interrupts():
+        meter = _Progress(stack)
+        try:
+            with user_errors():
+                res = ms.drive(scene_dir, route=route_path, waypoints=waypoints,
+                               controller=controller, seconds=seconds, config=run,
+                               options=options, export=export, out_dir=out_dir, seed=seed,
+                               progress=meter)
+        except DriveInterrupted as stop:
+            meter.close()
+            s = stop.result.summary
+            _exit_interrupted(f"interrupted after {s['path_length_m']:.1f} m and "
+                              f"{s['sim_time_s']:.1f} sim s; {out_dir} holds the drive up to "
+                              f"there (`marsscene bag {out_dir}` and `marsscene export` read it)")
+        except KeyboardInterrupt:  # while exporting: the run folder is whole
+            meter.close()
+            _exit_interrupted(f"interrupted while writing the bag; {out_dir} holds the whole "
+                              f"drive (`marsscene bag {out_dir}` writes the bag)")
+        meter.close()
+    _report(res, out_dir)
 
 
-def _report(s: dict[str, Any], wall: float, out_dir: Path) -> None:
+def _load_controller(ref: str, route_path: Path | None, waypoints: Any, scene_dir: Path,
+                     options: Any) -> Any:
+    """The controller named ``MODULE:NAME`` (a class is instantiated, with the route if its
+    constructor takes one)."""
+    import importlib
+    import inspect
+    import os
+
+    from marsscene.errors import ConfigError
+
+    module_name, _, name = ref.partition(":")
+    if not module_name or not name:
+        raise ConfigError(f"--controller {ref!r}: give MODULE:NAME, e.g. my_nav:Planner")
+    if os.getcwd() not in sys.path:
+        sys.path.insert(0, os.getcwd())
+    try:
+        obj: Any = getattr(importlib.import_module(module_name), name)
+    except (ImportError, AttributeError) as err:
+        raise ConfigError(f"--controller {ref!r}: {type(err).__name__}: {err}") from None
+    if not inspect.isclass(obj):
+        if not callable(obj):
+            raise ConfigError(f"--controller {ref!r} is not callable")
+        return obj
+    params = inspect.signature(obj).parameters
+    if "route" not in params:
+        return obj()
+    route = None
+    if route_path is not None or waypoints is not None:
+        from marsscene.runs.tum import read_tum
+        from marsscene.sim.route import Route, author_route
+        from marsscene.sim.world import load_world
+
+        if route_path is not None:
+            route = Route.from_trajectory(read_tum(route_path))
+        else:
+            world = load_world(scene_dir)
+            route = author_route(waypoints, world.heightfield, obstacles=world.obstacles,
+                                 max_slope_deg=options.max_slope_deg)
+    factory: Any = obj
+    return factory(route=route)
+
+
+def _exit_interrupted(message: str) -> None:
+    click.echo(f"marsscene: {message}", err=True)
+    sys.exit(130)
+
+
+class _Progress:
+    """The drive's progress line, then a bar per export."""
+
+    def __init__(self, stack: ExitStack) -> None:
+        self.stack, self.meter = stack, DriveMeter()
+        self.bars: dict[str, Any] = {}
+        self.closed = False
+
+    def __call__(self, p: Any) -> None:
+        from marsscene.sim.driver import DriveProgress
+
+        if isinstance(p, DriveProgress):
+            self.meter(p)
+            return
+        self.close()
+        if p.stage not in self.bars:
+            label = "writing bag (messages)" if p.stage == "bag" else f"writing {p.stage}"
+            self.bars[p.stage] = ProgressBar(self.stack, label)
+        self.bars[p.stage](p.done, p.total)
+
+    def close(self) -> None:
+        if not self.closed:
+            self.meter.close()
+            self.closed = True
+
+
+def _report(run: Any, out_dir: Path) -> None:
+    s = run.summary
     click.echo(
         f"   drove: {s['path_length_m']:.2f} m in {s['sim_time_s']:.2f} sim s "
-        f"({s['sim_time_s'] / max(wall, 1e-9):.1f}x real time), goal reached: "
+        f"({s['sim_time_s'] / max(run.wall_s, 1e-9):.1f}x real time), goal reached: "
         f"{s['goal_reached']}, cross-track RMS "
         f"{s.get('cross_track_rms_m', float('nan')):.3f} m"
     )
+    if run.bag is not None:
+        echo_bag(run.bag)
+    for fmt, folder in run.datasets.items():
+        click.echo(f"  {fmt}: {folder}")
     click.echo(f"    logs: {out_dir}")
 
 
@@ -251,88 +329,41 @@ def _sigterm_interrupts() -> Iterator[None]:
             signal.signal(signal.SIGTERM, previous)
 
 
-def _jpeg_cache(out_dir: Path, bag_opts: dict[str, Any]) -> Any:
-    """The JPEGs the bag will want, encoded while driving (none for PNG-only or raw images)."""
-    from marsscene.runs.export.bag_images import JpegCache
+def _write_rover_xml(scene_dir: Path, run: Any) -> Path:
+    """``SCENE_DIR/mjcf/rover.xml``: the rover the drive attaches to the scene."""
+    from marsscene._atomic import write_atomic
+    from marsscene.rover.config import RoverConfig
+    from marsscene.sim.rover_model import rover_mjcf
 
-    if (bag_opts.get("bag_images", "compressed") == "raw"
-            or bag_opts.get("bag_image_format", "jpeg") != "jpeg"):
-        return None
-    return JpegCache.fresh(out_dir, bag_opts.get("jpeg_quality", 95))
+    fovy = run.camera.fovy_deg if run.camera is not None else 60.0
+    target = scene_dir / "mjcf" / "rover.xml"
+    return write_atomic(target, rover_mjcf(RoverConfig(), camera_fovy_deg=fovy))
 
 
-def _run_config(run_config: Path | None, noise_config: Path | None, lidar: bool,
-                lidar_model: str | None, camera: bool, *, camera_size: str,
-                noise_profile: str | None = None, **camera_kw: Any) -> Any:
+def _run_config(*, run_config: Path | None, noise_config: Path | None, lidar: bool,
+                lidar_model: str | None, camera: bool, stereo: bool, camera_size: str,
+                noise_profile: str | None, camera_hz: float, exposure: str,
+                exposure_gain: float, camera_noise: bool, no_shadows: bool, tau: float | None,
+                sun_elevation: float | None, **_: Any) -> Any:
     """The drive's :class:`~marsscene.rover.config.RunConfig`: the run config file (if any),
     then the command-line options over it."""
     import dataclasses
 
     from marsscene.rover.config import CameraConfig, LidarConfig, NoiseConfig, RunConfig
 
-    run = RunConfig.from_file(run_config) if run_config else RunConfig()
+    run = RunConfig.from_toml(run_config) if run_config else RunConfig()
     if noise_config:
-        run = dataclasses.replace(run, noise=NoiseConfig.from_file(noise_config))
+        run = dataclasses.replace(run, noise=NoiseConfig.from_toml(noise_config))
     if noise_profile:
         run = dataclasses.replace(run, noise=run.noise.with_profile(noise_profile))
     if lidar or lidar_model:
         base = run.lidar if run.lidar is not None else LidarConfig()
         lid = dataclasses.replace(base, model=lidar_model) if lidar_model else base
         run = dataclasses.replace(run, lidar=lid)
-    if camera:
+    if camera or stereo:
         w, h = _size(camera_size)
-        run = dataclasses.replace(run, camera=CameraConfig(width_px=w, height_px=h, **camera_kw))
+        run = dataclasses.replace(run, camera=CameraConfig(
+            width_px=w, height_px=h, rate_hz=camera_hz, stereo=stereo, exposure=exposure,
+            exposure_gain=exposure_gain, sensor_noise=camera_noise, shadows=not no_shadows,
+            tau=tau, sun_elevation_deg=sun_elevation))
     return run
-
-
-def _prepare(scene_dir: Path, run: Any, route_path: Path | None, waypoints_path: Path | None,
-             out_dir: Path, *, max_slope: float, corridor: float, write_rover_xml: bool
-             ) -> tuple[Any, Any]:
-    """Load the scene, author the route, write ``route.tum``: the simulator and the route."""
-    from marsscene.runs.tum import read_tum, write_tum
-    from marsscene.sim.mission import prepare_drive
-    from marsscene.sim.route import Route
-
-    sim, route = prepare_drive(
-        scene_dir, run,
-        route=Route.from_trajectory(read_tum(route_path)) if route_path else None,
-        waypoints_xy_m=_read_waypoints(waypoints_path) if waypoints_path else None,
-        max_slope_deg=max_slope, corridor_m=corridor,
-    )
-    if sim.rocks_kept[1]:
-        click.echo(f"   rocks: {sim.rocks_kept[0]} of {sim.rocks_kept[1]} MJCF rocks lie "
-                   "near the route and are simulated", err=True)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    write_tum(out_dir / "route.tum", route.to_trajectory(sim.heightfield),
-              header="authored route (x, y on the terrain; stamps at 0.5 m/s)")
-    if write_rover_xml:
-        click.echo(f"   rover: {sim.write_rover_xml()}")
-    return sim, route
-
-
-def _drive(sim: Any, route: Any, seconds: float | None, out_dir: Path, seed: int,
-           lookahead: float, jpeg_cache: Any = None) -> tuple[Any, float]:
-    """Drive with a progress line; the result and the wall time (s). Ctrl-C or SIGTERM stop the
-    drive with the run folder finished up to there (exit code 130)."""
-    from marsscene.cli._progress import DriveMeter
-    from marsscene.seeding import stage_rng
-    from marsscene.sim.driver import DriveInterrupted
-    from marsscene.sim.driver import drive as run_drive
-    from marsscene.sim.pursuit import PursuitConfig
-
-    t0 = time.perf_counter()
-    meter = DriveMeter()
-    try:
-        res = run_drive(sim, route=route, seconds=seconds, out_dir=out_dir,
-                        rng=stage_rng(seed, "sensors"),
-                        pursuit=PursuitConfig(lookahead_m=lookahead), progress=meter,
-                        jpeg_cache=jpeg_cache)
-    except DriveInterrupted as stop:
-        meter.close()
-        s = stop.result.summary
-        click.echo(f"marsscene: interrupted after {s['path_length_m']:.1f} m and "
-                   f"{s['sim_time_s']:.1f} sim s; {out_dir} holds the drive up to there "
-                   f"(`marsscene bag {out_dir}` and `marsscene export` read it)", err=True)
-        sys.exit(130)
-    meter.close()
-    return res, time.perf_counter() - t0

@@ -19,7 +19,13 @@ from marsscene.cli._common import user_errors
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               help="Output folder (default: RUN_DIR/tum_rgbd or RUN_DIR/euroc).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output folder.")
-def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool) -> None:
+@click.option("--images", type=click.Choice(["link", "convert"]), default="link",
+              show_default=True,
+              help="link: hard links to the run's PNGs (TUM depth at 1000 per m, EuRoC in RGB; "
+              "copies where the file system cannot link); convert: TUM depth at 5000 per m, "
+              "EuRoC mono8.")
+def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool,
+               images: str) -> None:
     """Export RUN_DIR's camera, IMU and ground truth for SLAM stacks that read folders
     (ORB-SLAM3 settings files are written beside the data; see docs/ros.md).
 
@@ -27,6 +33,7 @@ def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool) -
     Examples:
       marsscene export runs/r1 --format tum-rgbd
       marsscene export runs/r1 --format euroc --out datasets/r1_euroc
+      marsscene export runs/r1 --format tum-rgbd --images convert   # depth at 5000 per m
     """
     from marsscene.runs.export.datasets import export_dataset
 
@@ -39,5 +46,6 @@ def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool) -
                     length=total, label=f"writing {fmt} (images)", file=sys.stderr)))
             bars[0].update(1)
 
-        out = export_dataset(run_dir, fmt, out_dir, overwrite=overwrite, progress=progress)
+        out = export_dataset(run_dir, fmt, out_dir, overwrite=overwrite, progress=progress,
+                             images=images)
     click.echo(f"  {fmt}: {out}")

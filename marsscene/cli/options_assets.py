@@ -29,8 +29,9 @@ _OPTIONS = compose(
                  help="Asset to place (.usd/.usda/.usdc/.usdz, .obj, .glb/.gltf, .stl, .ply); "
                  "repeatable."),
     click.option("--asset-xy", "asset_xy", type=(float, float), multiple=True,
-                 metavar="X Y", help="Where to place each --asset (m, world frame); default: "
-                 "the flattest suitable site."),
+                 metavar="X Y", help="Where to place an --asset (m, world frame); repeatable: "
+                 "the n-th --asset-xy places the n-th --asset. Default: the flattest "
+                 "suitable site."),
     click.option("--habitat/--no-habitat", "habitat", default=None,
                  help="Place the procedural habitat when no --asset is given."),
 )

@@ -30,7 +30,7 @@ def sweep(sweep_toml: Path, out_dir: Path, workers: int | None, scheduler: str |
       marsscene sweep sweep.toml --out sweeps/tau --workers 2
       marsscene sweep sweep.toml --out /shared/sweeps/tau --scheduler tcp://head:8786
     """
-    from marsscene.sweep import expand_grid, load_sweep, run_sweep
+    from marsscene.sweep import SweepSpec, expand_grid, run_sweep
 
     where = dask_where(workers, scheduler, serial)
 
@@ -43,7 +43,7 @@ def sweep(sweep_toml: Path, out_dir: Path, workers: int | None, scheduler: str |
                    f"(done {p.done}, running {p.running}, failed {p.failed})", err=True)
 
     with user_errors():
-        spec = load_sweep(sweep_toml)
+        spec = SweepSpec.from_toml(sweep_toml)
         n = len(expand_grid(spec))
         click.echo(f"sweep: {n} cells {where}", err=True)
         res = run_sweep(spec, out_dir, workers=workers, scheduler=scheduler, serial=serial,

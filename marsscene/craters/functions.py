@@ -1,4 +1,4 @@
-"""Mars crater production, chronology and equilibrium functions (SCIENCE.md sections 2.1-2.6).
+"""Mars crater production, chronology and equilibrium functions (docs/science/craters.md).
 
 All coefficients live in ``data/mars_crater_functions.toml`` with their references. Public
 functions take diameters in **metres** and return densities **per km^2**; ages are in Ga.

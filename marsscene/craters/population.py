@@ -1,4 +1,4 @@
-"""Seeded crater populations (SCIENCE.md sections 2.5-2.6, 4.1).
+"""Seeded crater populations (docs/science/craters.md).
 
 The catalogue holds the *recognisable* craters of a surface: those whose relief has not been
 degraded below the recognisability limit ``s <= S_ERASE`` (see :mod:`.morphology`). Their

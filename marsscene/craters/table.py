@@ -14,6 +14,9 @@ __all__ = ["CraterTable"]
 class CraterTable:
     """Craters as columns (one row per crater).
 
+    Rows are in formation order (oldest first) when produced by
+    :func:`~marsscene.craters.sample_craters`.
+
     Attributes
     ----------
     center_xy_m : ndarray of shape (N, 2)
@@ -33,8 +36,6 @@ class CraterTable:
         is the equal-area diameter, so the semi-axes are ``R / sqrt(q)`` and ``R sqrt(q)``.
     azimuth_deg : ndarray of shape (N,), optional
         Direction of the major axis, counter-clockwise from +x (east) (in degrees; default 0).
-
-    Rows are in formation order (oldest first) when produced by ``sample_craters``.
     """
 
     center_xy_m: NDArray[np.float64]

@@ -3,7 +3,7 @@
 GeoTIFF/COG, ISIS3 cubes, PDS4 and PDS3 ``.IMG`` (attached label) or ``.LBL`` (detached) all
 open through GDAL. PDS3 labels are also parsed here (:mod:`marsscene.dem.pvl`) and checked
 against the file before any pixel is read (truncated files, wrong ``^IMAGE`` pointers), and the
-label — not GDAL — gives the transform and CRS (GDAL's convention, SCIENCE.md §7.3). Only the
+label — not GDAL — gives the transform and CRS (GDAL's convention, docs/science/dem.md). Only the
 requested window is read. Missing values become NaN by **bit pattern** on the raw samples:
 ``MISSING_CONSTANT``, the ISIS special pixels and the dataset nodata.
 """

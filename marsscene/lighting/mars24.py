@@ -3,7 +3,7 @@
 Allison, M. & McEwen, M. (2000), "A post-Pathfinder evaluation of areocentric solar coordinates
 with improved timing recipes for Mars seasonal/diurnal climate studies", Planet. Space Sci. 48,
 215-235, doi:10.1016/S0032-0633(99)00092-6; current constants from the NASA GISS Mars24
-algorithm page (SCIENCE.md section 6). Longitudes are planetocentric **east** (0-360); the
+algorithm page (docs/science/sun.md). Longitudes are planetocentric **east** (0-360); the
 azimuth is measured clockwise from north (east = 90 deg).
 """
 

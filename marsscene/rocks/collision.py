@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from marsscene._atomic import write_atomic
 from marsscene.errors import missing_dependency
 
 if TYPE_CHECKING:
@@ -112,9 +113,7 @@ def convex_decompose(
         arrays |= {f"f{i}": np.asarray(f) for i, (_, f) in enumerate(raw)}
         arrays["n"] = np.array(len(raw))
         np.savez(buf, **arrays)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_bytes(buf.getvalue())
-        tmp.replace(path)  # atomic: concurrent builds never read half a file
+        write_atomic(path, buf.getvalue())  # concurrent builds never read half a file
     parts = [convex_hull(trimesh.Trimesh(vertices=v, faces=f), max_vertices=max_hull_vertices)
              for v, f in raw]
     return tuple(p for p in parts if p.volume > 0)

@@ -33,13 +33,13 @@ def _read_doc(path: str | Path, what: str) -> Any:
         raise ConfigError(f"cannot read {what} {p}: {err}") from None
 
 
-def _check_rate(key: str, rate_hz: float) -> None:
-    check_range(key, rate_hz, 0.0, _PHYSICS_HZ, lo_open=True)
-    ratio = _PHYSICS_HZ / rate_hz
+def _check_rate(key: str, rate_hz: float, physics_hz: float = _PHYSICS_HZ) -> None:
+    check_range(key, rate_hz, 0.0, physics_hz, lo_open=True)
+    ratio = physics_hz / rate_hz
     if abs(ratio - round(ratio)) > 1e-9:
-        raise ConfigError(
-            f"{key} = {rate_hz!r} must divide the 500 Hz physics rate (e.g. 10, 50, 100, 250)"
-        )
+        examples = ", ".join(f"{physics_hz / n:g}" for n in (50, 10, 5, 2) if physics_hz >= n)
+        raise ConfigError(f"{key} = {rate_hz!r} must divide the {physics_hz:g} Hz physics rate "
+                          f"(e.g. {examples})")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -133,14 +133,24 @@ class NoiseConfig:
     """
 
     profile: str = "none"
+    """Named profile the other fields start from: ``none`` (the default: noise-free, an
+    optimistic odometry), ``ln200s`` (the SLAM benchmark's default) or ``adis16495``."""
     wheel_rate_sigma_rad_s: float = math.nan
+    """Additive Gaussian noise per wheel-rate sample, rad/s (NaN: the profile's)."""
     slip_mean: float = math.nan
+    """Mean of the multiplicative slip of the measured wheel rates (NaN: the profile's)."""
     slip_sigma: float = math.nan
+    """Standard deviation of that slip per sample and wheel (NaN: the profile's)."""
     steer_sigma_rad: float = math.nan
+    """Steering-encoder noise, rad (NaN: the profile's)."""
     accel_sigma_m_s2: float = 0.0
+    """Extra white accelerometer noise per sample, m/s^2."""
     gyro_sigma_rad_s: float = 0.0
+    """Extra white gyro noise per sample, rad/s."""
     accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Fixed accelerometer bias (x, y, z), m/s^2."""
     gyro_bias_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Fixed gyro bias (x, y, z), rad/s."""
     gyro_noise_density_rad_s_rthz: float = math.nan
     """White rate noise, rad/s/sqrt(Hz) (ARW; EuRoC ``gyroscope_noise_density``)."""
     gyro_bias_walk_rad_s2_rthz: float = math.nan
@@ -148,8 +158,11 @@ class NoiseConfig:
     gyro_turn_on_bias_rad_s: float = math.nan
     """1-sigma constant bias drawn once per run (bias repeatability)."""
     accel_noise_density_m_s2_rthz: float = math.nan
+    """White acceleration noise, m/s^2/sqrt(Hz) (VRW; EuRoC ``accelerometer_noise_density``)."""
     accel_bias_walk_m_s3_rthz: float = math.nan
+    """Bias random walk, m/s^3/sqrt(Hz) (EuRoC ``accelerometer_random_walk``)."""
     accel_turn_on_bias_m_s2: float = math.nan
+    """1-sigma constant bias drawn once per run (bias repeatability)."""
 
     def __post_init__(self) -> None:
         profiles = _noise_profiles()
@@ -178,12 +191,16 @@ class NoiseConfig:
             object.__setattr__(self, key, tuple(float(v) for v in value))
 
     @classmethod
-    def from_file(cls, path: str | Path) -> NoiseConfig:
-        """Read a ``.toml`` (optionally with a ``[noise]`` table) or ``.json`` noise config."""
-        doc = _read_doc(path, "noise config")
-        if isinstance(doc, dict) and "noise" in doc:
-            doc = doc["noise"]
-        return dataclass_from_mapping(cls, doc, "noise")
+    def from_dict(cls, mapping: Any) -> NoiseConfig:
+        """From a table (optionally wrapped in a ``noise`` key); unknown keys are an error."""
+        if isinstance(mapping, dict) and "noise" in mapping:
+            mapping = mapping["noise"]
+        return dataclass_from_mapping(cls, mapping, "noise")
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> NoiseConfig:
+        """Read a ``.toml`` (optionally with a ``[noise]`` table) noise config (``.json`` too)."""
+        return cls.from_dict(_read_doc(path, "noise config"))
 
     def with_profile(self, name: str) -> NoiseConfig:
         """The same config on profile ``name``: fields that differ from the current profile's
@@ -213,10 +230,15 @@ class CameraConfig:
     """
 
     width_px: int = 640
+    """Image width in pixels."""
     height_px: int = 480
+    """Image height in pixels."""
     fovy_deg: float = 60.0
+    """Vertical field of view in degrees (pinhole, no distortion)."""
     rate_hz: float = 10.0
+    """Frame rate in Hz (must divide the 500 Hz physics rate)."""
     depth: bool = True
+    """Also log a metric depth image (uint16 mm PNG) registered to the colour image."""
     shadows: bool = True
     """Sun shadow map (3072 texels over +-20 m around the camera: 1.3 cm texels, locked to the
     world)."""
@@ -233,6 +255,7 @@ class CameraConfig:
     exposure: str = "auto"
     """``"auto"`` (mean sRGB intensity -> ``target_mean``) or ``"fixed"`` (``exposure_gain``)."""
     target_mean: float = 0.45
+    """Auto mode: mean sRGB intensity the exposure aims for."""
     exposure_gain: float = 1.0
     """Fixed mode: linear 1.0 = albedo 0.5 under 600 W/m^2, times this gain."""
     sensor_noise: bool = False
@@ -240,10 +263,13 @@ class CameraConfig:
     stereo: bool = False
     """Also render a rectified Navcam-like stereo pair (camera/left, camera/right)."""
     stereo_baseline_m: float = 0.424
+    """Stereo baseline in m (Perseverance's Navcams: 0.424 m)."""
     tau: float | None = None
     """Override the scene's dust optical depth (lighting is recomputed)."""
     sun_elevation_deg: float | None = None
+    """Override the sun's elevation in degrees (lighting is recomputed)."""
     sun_azimuth_deg: float | None = None
+    """Override the sun's azimuth in degrees clockwise from north (lighting is recomputed)."""
     trigger_distance_m: float | None = None
     """Capture a frame every this many metres driven (horizontal path, checked at the control
     rate) instead of at ``rate_hz``: place-recognition datasets sample space, not time."""
@@ -278,21 +304,45 @@ class CameraConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class RunConfig:
-    """Rates of the control loop and of the logs (all divide the 500 Hz physics rate)."""
+    """Rates of the physics, the control loop and the logs, the sensors and their noise.
+
+    Every rate divides the physics rate: the scene's 500 Hz (a 2 ms step), or ``physics_hz``.
+    A coarser physics step is faster and stays close to the 2 ms reference: 100 Hz (10 ms) runs
+    about 4x faster and drives the same route to within a few centimetres over 20 s
+    (``docs/runtime.md``, "Physics rate").
+    """
 
     control_hz: float = 50.0
+    """Control rate in Hz: pure pursuit or the controller, odometry and ground truth logs."""
     imu_hz: float = 100.0
+    """IMU rate in Hz."""
     lidar: LidarConfig | None = None
+    """The LiDAR, or None for none (the default)."""
     camera: CameraConfig | None = None
+    """The mast camera, or None for none (the default)."""
     noise: NoiseConfig = field(default_factory=NoiseConfig)
+    """IMU and wheel-odometry noise; the default is the ``none`` profile (noise-free: an
+    optimistic odometry; the SLAM benchmark uses ``ln200s``)."""
+    physics_hz: float | None = None
+    """Physics rate (Hz); None: the scene's (``scene.xml`` timestep 2 ms, 500 Hz)."""
 
     def __post_init__(self) -> None:
-        _check_rate("run.control_hz", self.control_hz)
-        _check_rate("run.imu_hz", self.imu_hz)
+        if self.physics_hz is None:
+            _check_rate("run.control_hz", self.control_hz)
+            _check_rate("run.imu_hz", self.imu_hz)
+            return
+        check_range("run.physics_hz", self.physics_hz, 50.0, 2000.0)
+        rates = {"run.control_hz": self.control_hz, "run.imu_hz": self.imu_hz}
+        if self.lidar is not None:
+            rates["lidar.rate_hz"] = self.lidar.spec.rate_hz
+        if self.camera is not None and self.camera.trigger_distance_m is None:
+            rates["camera.rate_hz"] = self.camera.rate_hz
+        for key, rate in rates.items():
+            _check_rate(key, rate, self.physics_hz)
 
     @classmethod
-    def from_file(cls, path: str | Path) -> RunConfig:
-        r"""Read a run config: ``.toml`` or ``.json`` with optional tables ``[run]``
+    def from_toml(cls, path: str | Path) -> RunConfig:
+        r"""Read a run config: ``.toml`` (or ``.json``) with optional tables ``[run]``
         (``control_hz``, ``imu_hz``), ``[lidar]`` (e.g. ``model = "vlp16"``), ``[camera]`` and
         ``[noise]``; a sensor without its table is off.
 
@@ -301,11 +351,17 @@ class RunConfig:
         >>> import tempfile, pathlib
         >>> p = pathlib.Path(tempfile.mkdtemp()) / "run.toml"
         >>> _ = p.write_text('[lidar]\nmodel = "vlp16"\n')
-        >>> RunConfig.from_file(p).lidar.spec.channels
+        >>> RunConfig.from_toml(p).lidar.spec.channels
         16
         """
         p = Path(path)
-        doc = _read_doc(p, "run config")
+        return cls.from_dict(_read_doc(p, "run config"), source=str(p))
+
+    @classmethod
+    def from_dict(cls, doc: Any, *, source: str = "run config") -> RunConfig:
+        """From a table of tables ``run``, ``lidar``, ``camera``, ``noise`` (a sensor without
+        its table is off)."""
+        p = source
         if not isinstance(doc, dict):
             raise ConfigError(f"{p}: a run config is a table of tables")
         unknown = sorted(set(doc) - {"run", "lidar", "camera", "noise"})
@@ -313,8 +369,9 @@ class RunConfig:
             raise ConfigError(f"{p}: unknown table(s) {unknown}; allowed: run, lidar, camera, "
                               "noise")
         rates = doc.get("run", {})
-        if not isinstance(rates, dict) or set(rates) - {"control_hz", "imu_hz"}:
-            raise ConfigError(f"{p}: [run] takes control_hz and imu_hz; got {rates!r}")
+        if not isinstance(rates, dict) or set(rates) - {"control_hz", "imu_hz", "physics_hz"}:
+            raise ConfigError(f"{p}: [run] takes control_hz, imu_hz and physics_hz; got "
+                              f"{rates!r}")
         sensors = {
             key: dataclass_from_mapping(kind, doc[key], key)
             for key, kind in (("lidar", LidarConfig), ("camera", CameraConfig),

@@ -108,17 +108,27 @@ class LidarConfig:
     """
 
     model: str = DEFAULT_LIDAR_MODEL
+    """Datasheet model: ``simple``, ``vlp16``, ``os1-64`` or ``os1-128`` (the default)."""
     channels: int | None = None
+    """Number of beams (None: the model's)."""
     vertical_fov_deg: tuple[float, float] | None = None
+    """Lowest and highest beam elevation in degrees (None: the model's)."""
     vertical_angles_deg: tuple[float, ...] | None = None
+    """Explicit beam elevations in degrees, instead of uniform spacing."""
     horizontal_samples: int | None = None
+    """Columns per revolution (None: the model's)."""
     rate_hz: float | None = None
+    """Revolutions per second (None: the model's, 10 Hz for all four)."""
     range_m: tuple[float, float] | None = None
+    """Minimum and maximum range in m (None: the model's)."""
     range_noise_sigma_m: float | None = None
+    """Gaussian range noise, 1 sigma in m (None: the model's datasheet accuracy)."""
     dropout_probability: float | None = None
+    """Chance that a return within range is lost (None: the model's, 0)."""
     motion_distortion: bool = True
     """Cast each column from the pose at its firing time (the sensor moves during the sweep)."""
     dust_extinction_per_m: float = 0.0
+    """Dust extinction alpha in 1/m: intensity falls as exp(-2 alpha r); range is unaffected."""
 
     def __post_init__(self) -> None:
         self.spec  # noqa: B018 - resolves and validates

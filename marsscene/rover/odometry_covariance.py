@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 from marsscene.rover.config import NoiseConfig, RoverConfig
 from marsscene.rover.geometry import _STEERED, _odometry_pinv
 
-__all__ = ["pose_covariance", "twist_covariance"]
+__all__ = ["PoseCovarianceStep", "pose_covariance", "twist_covariance"]
 
 
 def twist_covariance(
@@ -95,3 +95,35 @@ def pose_covariance(
     out[1:] = (m1 + np.einsum("na,nb->nab", sk, w) + np.einsum("na,nb->nab", w, sk)
                + m3[:, None, None] * np.einsum("na,nb->nab", sk, sk))
     return out
+
+
+class PoseCovarianceStep:
+    """:func:`pose_covariance` one stamp at a time, for odometry published as it is made.
+
+    ``step(dt_s, v_m_s, yaw_prev_rad, twist_cov)`` integrates the step from the previous stamp
+    (heading ``yaw_prev_rad`` there) with the twist ``v_m_s`` and its (2, 2) covariance read at
+    the new stamp, and returns the (3, 3) covariance of ``(x, y, yaw)`` there; the same sums as
+    the batch function, kept as running totals.
+    """
+
+    def __init__(self) -> None:
+        self.s = np.zeros(2)
+        self.m1 = np.zeros((3, 3))
+        self.w = np.zeros(3)
+        self.m3 = 0.0
+
+    def step(self, dt_s: float, v_m_s: float, yaw_prev_rad: float,
+             twist_cov: NDArray[np.float64]) -> NDArray[np.float64]:
+        c = np.asarray(twist_cov, dtype=np.float64)
+        heading = np.array([np.cos(yaw_prev_rad), np.sin(yaw_prev_rad)])
+        self.s = self.s + dt_s * v_m_s * np.array([-heading[1], heading[0]])
+        h = np.zeros((3, 2))
+        h[:2, 0] = dt_s * heading
+        h[:2, 1] = -dt_s * self.s
+        h[2, 1] = dt_s
+        self.m1 = self.m1 + h @ c @ h.T
+        self.w = self.w + dt_s * (h @ c[:, 1])
+        self.m3 += dt_s**2 * float(c[1, 1])
+        sk = np.array([self.s[0], self.s[1], 0.0])
+        return (self.m1 + np.outer(sk, self.w) + np.outer(self.w, sk)
+                + self.m3 * np.outer(sk, sk))

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import io
 import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -30,7 +29,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CsvLog", "TumLog", "ply_bytes", "png_bytes", "write_file", "write_json"]
+from marsscene._atomic import write_atomic
+
+__all__ = ["CsvLog", "TumLog", "depth_mm", "ply_bytes", "png_bytes", "scan_record", "write_file",
+           "write_json"]
 
 
 #: One LiDAR point as the run folder's PLY files and the bag's PointCloud2 hold it.
@@ -90,11 +92,9 @@ class TumLog:
 
 
 def write_file(path: Path, data: bytes) -> None:
-    """Write ``path`` whole or not at all (a temporary sibling renamed over it), so a killed
-    drive never leaves a truncated image or scan behind."""
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
+    """Write ``path`` whole or not at all, so a killed drive never leaves a truncated image or
+    scan behind (:func:`~marsscene._atomic.write_atomic`)."""
+    write_atomic(path, data)
 
 
 def ply_bytes(
@@ -103,19 +103,34 @@ def ply_bytes(
 ) -> bytes:
     """Binary little-endian PLY of a LiDAR scan: ``x y z intensity`` float32, ``t`` uint32
     (nanoseconds after the scan's stamp, as ``ouster-ros`` names it) and ``ring`` uint16."""
-    n = len(xyz_m)
-    t_ns = np.zeros(n, dtype=np.uint32) if t_s is None else np.round(
-        np.asarray(t_s, dtype=np.float64) * 1e9).astype(np.uint32)
+    rec = scan_record(xyz_m, intensity, ring, t_s)
     head = (
         "ply\nformat binary_little_endian 1.0\ncomment marsscene lidar, sensor frame; "
         "t: ns after the scan stamp\n"
-        f"element vertex {n}\nproperty float x\nproperty float y\nproperty float z\n"
+        f"element vertex {len(rec)}\nproperty float x\nproperty float y\nproperty float z\n"
         "property float intensity\nproperty uint t\nproperty ushort ring\nend_header\n"
     ).encode("ascii")
+    return head + rec.tobytes()
+
+
+def scan_record(
+    xyz_m: NDArray[np.float32], intensity: NDArray[np.float32], ring: NDArray[np.uint16],
+    t_s: NDArray[np.float64] | None = None,
+) -> NDArray[Any]:
+    """A LiDAR scan as the PLY's records (``PLY_DTYPE``): what :func:`ply_bytes` writes and
+    :func:`~marsscene.runs.runlog.read_ply` reads back, and the live cloud's points."""
+    n = len(xyz_m)
+    t_ns = np.zeros(n, dtype=np.uint32) if t_s is None else np.round(
+        np.asarray(t_s, dtype=np.float64) * 1e9).astype(np.uint32)
     rec = np.zeros(n, dtype=PLY_DTYPE)
     rec["x"], rec["y"], rec["z"] = xyz_m[:, 0], xyz_m[:, 1], xyz_m[:, 2]
     rec["intensity"], rec["t"], rec["ring"] = intensity, t_ns, ring
-    return head + rec.tobytes()
+    return rec
+
+
+def depth_mm(depth_m: NDArray[np.float32]) -> NDArray[np.uint16]:
+    """A depth image in m as the run's uint16 millimetres (0 = no return, 65535 = too far)."""
+    return np.clip(np.round(depth_m * 1000.0), 0, 65535).astype(np.uint16)
 
 
 #: zlib's ``Z_RLE`` strategy (Pillow's ``compress_type``).
@@ -180,6 +195,5 @@ class ImageWriter:
 
 
 def write_json(path: Path, doc: dict[str, Any]) -> None:
-    path.write_text(
-        json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    """``doc`` as sorted, indented JSON, written whole or not at all."""
+    write_atomic(path, json.dumps(doc, indent=2, sort_keys=True, allow_nan=False) + "\n")

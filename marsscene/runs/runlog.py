@@ -19,14 +19,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene._atomic import write_atomic
 from marsscene.errors import MarsSceneWarning, RuntimeSimError
 from marsscene.rover.config import RoverConfig
 from marsscene.runs.tum import Trajectory, read_tum
 
-__all__ = ["CameraStream", "IncompleteRunWarning", "RunLog", "read_image", "read_numeric_csv",
+__all__ = ["LIDAR_IN_BAG", "CameraStream", "IncompleteRunWarning", "RunLog",
+           "move_lidar_into_bag", "read_image", "read_numeric_csv",
            "read_ply"]
 
 _REQUIRED = ("run.json", "gt.tum", "odom.tum", "cmd.csv", "wheels.csv", "imu.csv")
+#: Marker in ``lidar/`` of a run whose PLY scans were removed once its bag held them.
+LIDAR_IN_BAG = "scans_in_bag.txt"
 
 
 class IncompleteRunWarning(MarsSceneWarning):
@@ -193,11 +197,25 @@ class RunLog:
                           IncompleteRunWarning, stacklevel=2)
 
     @property
+    def lidar_stamps_s(self) -> NDArray[np.float64] | None:
+        """LiDAR scan stamps (s), also of a run whose scans were moved into its bag; None
+        when the run has no LiDAR."""
+        stamps = self.path / "lidar" / "stamps.csv"
+        if not stamps.is_file():
+            return None
+        _, rows = _read_csv(stamps, self.incomplete)
+        return np.array([float(r[0]) for r in rows], dtype=np.float64)
+
+    @property
     def lidar(self) -> tuple[NDArray[np.float64], tuple[Path, ...]] | None:
         """LiDAR stamps (s) and PLY files, or None when the run has no LiDAR."""
         stamps = self.path / "lidar" / "stamps.csv"
         if not stamps.is_file():
             return None
+        if (stamps.parent / LIDAR_IN_BAG).is_file():
+            raise RuntimeSimError(f"{stamps.parent}: the scans were moved into the run's bag "
+                                  f"({self.path / 'bag'}, topic /rover/lidar/points); drive with "
+                                  "keep_lidar_files (--keep-lidar-files) to keep the PLYs too")
         _, rows = _read_csv(stamps, self.incomplete)
         if self.incomplete:
             rows = _written_prefix(rows, stamps.parent, 2)
@@ -224,3 +242,20 @@ class RunLog:
             if base is not None and "baseline_m" not in cam.intrinsics:
                 cam.intrinsics.setdefault("stereo_baseline_m", base)
         return [main, *extra]
+
+
+def move_lidar_into_bag(run_dir: str | os.PathLike[str]) -> int:
+    """Remove a run's ``lidar/*.ply`` once its bag holds the scans (one copy of the stream on
+    disk); ``lidar/stamps.csv`` stays, with a :data:`LIDAR_IN_BAG` note. Returns the number
+    of files removed."""
+    folder = Path(run_dir) / "lidar"
+    if not (folder / "stamps.csv").is_file():
+        return 0
+    scans = sorted(folder.glob("*.ply"))
+    write_atomic(folder / LIDAR_IN_BAG,
+                 f"The {len(scans)} LiDAR scans of this run are in ../bag (topic "
+                 "/rover/lidar/points, the same points as the PLYs were); stamps.csv lists "
+                 "them.\n")
+    for p in scans:
+        p.unlink()
+    return len(scans)

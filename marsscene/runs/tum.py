@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene._atomic import write_atomic
 from marsscene._validate import plain
 from marsscene.errors import RuntimeSimError
 
@@ -135,5 +136,4 @@ def write_tum(path: str | os.PathLike[str], traj: Trajectory, *, header: str | N
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     head = "".join(f"# {h}\n" for h in header.splitlines()) if header else ""
-    p.write_text(head + format_tum(traj), encoding="utf-8")
-    return p
+    return write_atomic(p, head + format_tum(traj))

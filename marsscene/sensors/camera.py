@@ -55,10 +55,12 @@ _SKY_ZFAR_FRACTION = 0.45
 class MastCamera:
     """Offscreen renderer of a :class:`~marsscene.sim.rover_sim.RoverSim`'s mast camera(s)."""
 
-    def __init__(self, sim: Any, *, rng: np.random.Generator | None = None) -> None:
+    def __init__(self, sim: Any, *, rng: np.random.Generator | None = None,
+                 config: Any = None) -> None:
         from marsscene.rover.config import CameraConfig
 
-        cam = sim.run.camera if sim.run.camera is not None else CameraConfig()
+        cam = config if config is not None else (
+            sim.run.camera if sim.run.camera is not None else CameraConfig())
         self.config = cam
         self.width, self.height = cam.width_px, cam.height_px
         self.depth = cam.depth
@@ -80,6 +82,7 @@ class MastCamera:
             near_m=cam.near_window_m, far_stride=cam.far_post_stride,
             terrain_shadows=bool(cam.shadows),
             sun_radius_rad=math.radians(lt.sun_angular_diameter_deg / 2.0),
+            outer=getattr(sim, "outer_heightfield", None),
         )
         rows, cols = sim.heightfield.shape
         self.windowed = self.world.nr < rows or self.world.nc < cols
@@ -98,6 +101,8 @@ class MastCamera:
             & (m.geom_contype != 0))
         if self.world.sun_shadow is not None:  # MJCF rocks standing in terrain shadows
             shade_mesh_geoms(m, self.rock_geoms, self.world.sun_shadow)
+        if self.world.rocks_baked:  # their shadows are in the ground's sun layer
+            m.geom_castshadow[self.rock_geoms] = 0
         self._show_window_rocks()
         self._flags = {mujoco.mjtRndFlag.mjRND_SHADOW: bool(cam.shadows),
                        mujoco.mjtRndFlag.mjRND_REFLECTION: False,
@@ -106,9 +111,10 @@ class MastCamera:
         # the render's linear values in the fixed mode's units (the render itself is scaled to
         # use the 8 bits of the GL buffer in either mode: no banding in dark fixed exposures)
         scale = 1.0 / (FIXED_REFERENCE_W_M2 * self.render_scale)
+        self._exposure_args = {"target_mean": cam.target_mean, "fixed_gain": cam.exposure_gain,
+                               "input_scale": scale, "max_gain": MAX_EXPOSURE_GAIN}
         self.exposure, self.exposure_stereo = (
-            Exposure(cam.exposure, target_mean=cam.target_mean, fixed_gain=cam.exposure_gain,
-                     input_scale=scale, max_gain=MAX_EXPOSURE_GAIN) for _ in range(2))
+            Exposure(cam.exposure, **self._exposure_args) for _ in range(2))
         try:
             self.view = OffscreenView(self.model, width=self.width, height=self.height)
         except Exception as err:
@@ -122,11 +128,17 @@ class MastCamera:
     # ---- model edits ---------------------------------------------------------------------------
     def _edit(self, spec: Any, sim: Any, lt: Any) -> None:
         cam = self.config
-        terrain = spec.geom("terrain")
-        terrain.group = 5  # hidden: the window mesh is drawn instead
-        outer = spec.geom("terrain_outer")  # level-of-detail scenes: its focus posts are lowered
-        if outer is not None:
-            outer.group = 5
+        # the terrain hfields (and a level-of-detail scene's coarse outer one) are not drawn:
+        # the window meshes are. Left in the camera's model, hidden, MuJoCo's GL context would
+        # still upload them as triangles (~170 B per post: 4.3 GB and 28 s for grand-canyon's
+        # 25 M posts), so they are taken out of this model (the simulation keeps them)
+        for name in ("terrain", "terrain_outer"):
+            geom = spec.geom(name)
+            if geom is not None:
+                hfield = spec.hfield(geom.hfieldname) if geom.hfieldname else None
+                spec.delete(geom)
+                if hfield is not None:
+                    spec.delete(hfield)
         for geom in spec.geoms:  # MJCF collision rocks: literature rock colour
             if geom.material == "rock":
                 geom.material = "cam_rock_geom"
@@ -202,6 +214,18 @@ class MastCamera:
             if near:
                 self.view.upload_mesh(mesh("cam_terrain_near" + layer))
                 self.view.upload_texture(tex("cam_ground_near" + layer))
+
+    def restart(self, sim: Any, *, rng: np.random.Generator | None = None) -> None:
+        """Start a new drive with this renderer (its scene is built once): fresh exposure
+        state, a new noise stream, the terrain window placed at the rover's pose as a new
+        renderer would place it."""
+        cam = self.config
+        self.noise_rng = rng if cam.sensor_noise else None
+        self.exposure, self.exposure_stereo = (
+            Exposure(cam.exposure, **self._exposure_args) for _ in range(2))
+        self.world.update(self.model, tuple(sim.pose()[0][:2]), _forward_xy(sim), force=True)
+        self._upload()
+        self._show_window_rocks()
 
     # ---- rendering -----------------------------------------------------------------------------
     def _sync(self, sim: Any) -> None:

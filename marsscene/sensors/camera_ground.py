@@ -16,7 +16,9 @@ into two world-anchored textures, each over its own mesh:
 Both meshes are world-anchored: texture coordinates follow the posts, so the pattern stays
 fixed to the ground as the meshes move. Textures hold ``albedo / ALBEDO_SCALE`` in 8 bits.
 With terrain shadows, :meth:`GroundWindow.sunlit` multiplies a texture by the sun's
-visibility for the ground's sun layer (:mod:`marsscene.sensors.camera_shadow`).
+visibility for the ground's sun layer (:mod:`marsscene.sensors.camera_shadow`), and at a low
+sun by the rocks' shadows too (:mod:`marsscene.sensors.rock_shadow`, on the rendered mesh's
+surface).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.sensors.camera_shadow import texel_visibility
+from marsscene.sensors.rock_shadow import rock_visibility
 from marsscene.terrain.albedo_field import AlbedoField
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.horizon import SunShadow
@@ -116,9 +119,12 @@ class GroundWindow:
 
     def __init__(self, hf: Heightfield, *, window_m: float, near_m: float, far_stride: int,
                  tile_u8: NDArray[np.uint8], tile_m: float, field: AlbedoField,
-                 sun_shadow: SunShadow | None = None) -> None:
+                 sun_shadow: SunShadow | None = None,
+                 shadow_rocks: NDArray[np.float64] | None = None) -> None:
         self.hf = hf
         self.sun_shadow = sun_shadow  # the terrain's shadows (the sun layer); None: none
+        #: rocks whose shadows are baked into the sun layer (catalogue rows); None: the map's
+        self.shadow_rocks = shadow_rocks
         rows, cols = hf.shape
         cell = hf.cell_size_m
         n = int(window_m / cell) // 2 * 2 + 1
@@ -238,7 +244,37 @@ class GroundWindow:
         block = NEAR_SHADOW_BLOCK if near else FAR_SHADOW_BLOCK
         vis = texel_visibility(self.sun_shadow, x0_m=float(x0), y0_m=float(y0),
                                size_px=texture.shape[:2], texel_m=texel, block=block)
+        if self.shadow_rocks is not None and len(self.shadow_rocks):
+            n_r, n_c = vis.shape
+            xc = float(x0) + (np.arange(n_c) + 0.5) * block * texel
+            yc = float(y0) + (np.arange(n_r) + 0.5) * block * texel
+            xy = np.stack(np.broadcast_arrays(xc[None, :], yc[:, None]), axis=-1)
+            z = self.mesh_height(xy, origin=(r0, c0), stride=1 if near else self.s)
+            rocks = rock_visibility(self.shadow_rocks, self.sun_shadow.sun_direction_enu, xy,
+                                    z, step_m=block * texel,
+                                    sun_radius_rad=self.sun_shadow.sun_radius_rad)
+            vis = np.minimum(vis, rocks)
         return shade_texture(texture, vis, block)
+
+    def mesh_height(self, xy_m: NDArray[Any], *, origin: tuple[int, int], stride: int
+                    ) -> NDArray[np.float64]:
+        """Height (m) of a ground mesh at points (..., 2): the posts ``stride`` apart from
+        ``origin`` (row, col), two triangles per cell split along the rising diagonal as the
+        meshes are (:func:`marsscene.sensors.camera_world._grid_faces`)."""
+        hf = self.hf
+        rows, cols = hf.shape
+        r, c = hf.rowcol_of(xy_m[..., 0], xy_m[..., 1])
+        fr = (np.asarray(r, dtype=np.float64) - origin[0]) / stride
+        fc = (np.asarray(c, dtype=np.float64) - origin[1]) / stride
+        i0 = np.clip(np.floor(fr), 0, (rows - 1 - origin[0]) // stride - 1).astype(np.int64)
+        j0 = np.clip(np.floor(fc), 0, (cols - 1 - origin[1]) // stride - 1).astype(np.int64)
+        a, b = np.clip(fr - i0, 0.0, 1.0), np.clip(fc - j0, 0.0, 1.0)
+        rr, cc = origin[0] + i0 * stride, origin[1] + j0 * stride
+        z00, z01 = hf.z_m[rr, cc], hf.z_m[rr, cc + stride]
+        z10, z11 = hf.z_m[rr + stride, cc], hf.z_m[rr + stride, cc + stride]
+        upper = b >= a  # the triangle (r, c), (r, c+1), (r+1, c+1)
+        return np.where(upper, z00 + b * (z01 - z00) + a * (z11 - z01),
+                        z00 + a * (z10 - z00) + b * (z11 - z10))
 
     # ---- motion -----------------------------------------------------------------------------
     def place(self, xy_m: tuple[float, float], forward_xy: tuple[float, float],

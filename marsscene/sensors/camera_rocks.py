@@ -30,7 +30,7 @@ _VARIANTS = 8
 PEBBLE_MAX_M = 0.15
 
 
-def _read_parquet_catalog(path: Path) -> NDArray[np.float64]:
+def _read_parquet_catalog(path: Path, include_mjcf: bool = False) -> NDArray[np.float64]:
     from marsscene._optional import require_pyarrow
 
     require_pyarrow()
@@ -38,18 +38,18 @@ def _read_parquet_catalog(path: Path) -> NDArray[np.float64]:
 
     t = pq.read_table(str(path))
     col = {name: t.column(name).to_numpy().astype(np.float64) for name in t.column_names}
-    keep = col["in_mjcf"] == 0
+    keep = (col["in_mjcf"] == 0) | include_mjcf
     return np.column_stack([col[k][keep] for k in ("id", "x_m", "y_m", "z_m", "diameter_m")]
                            + [(col["height_m"] + col["burial_m"])[keep]]).reshape(-1, 6)
 
 
-def read_rock_catalog(scene_dir: Path) -> NDArray[np.float64]:
-    """``rocks.csv`` (else ``rocks.parquet``) rows not already MJCF geoms: (N, 6) id, x, y,
-    z, d, h+burial (m)."""
+def read_rock_catalog(scene_dir: Path, *, include_mjcf: bool = False) -> NDArray[np.float64]:
+    """``rocks.csv`` (else ``rocks.parquet``) rows not already MJCF geoms (all rows with
+    ``include_mjcf``): (N, 6) id, x, y, z, d, h+burial (m)."""
     path = scene_dir / "rocks.csv"
     if not path.is_file():
         if (scene_dir / "rocks.parquet").is_file():
-            return _read_parquet_catalog(scene_dir / "rocks.parquet")
+            return _read_parquet_catalog(scene_dir / "rocks.parquet", include_mjcf)
         return np.zeros((0, 6))
     with open(path, encoding="utf-8") as fh:
         header = next(csv.reader(fh))
@@ -57,7 +57,8 @@ def read_rock_catalog(scene_dir: Path) -> NDArray[np.float64]:
     raw = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     if raw.size == 0:
         return np.zeros((0, 6))
-    keep = raw[:, col["in_mjcf"]] == 0 if "in_mjcf" in col else np.ones(len(raw), bool)
+    keep = (raw[:, col["in_mjcf"]] == 0 if "in_mjcf" in col and not include_mjcf
+            else np.ones(len(raw), bool))
     r = raw[keep]
     return np.column_stack([
         r[:, col["id"]], r[:, col["x_m"]], r[:, col["y_m"]], r[:, col["z_m"]],

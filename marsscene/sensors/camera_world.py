@@ -12,9 +12,12 @@ changed; contacts keep the scene's rule):
   :mod:`marsscene.sensors.camera_rocks`): a jittered icosphere per rock (80 faces near the
   camera, 20 elsewhere), scaled to its diameter and height, coloured per rock from
   :func:`marsscene.terrain.appearance.rock_albedo_rgb` through a texture atlas;
-* at a low sun the terrain's shadows over the whole heightfield
-  (:mod:`marsscene.sensors.camera_shadow`): the terrain meshes cast no shadow-map shadows,
-  rocks in the terrain's shadow neither (they sit in meshes of their own).
+* at a low sun the terrain's shadows over the whole heightfield, and from a level-of-detail
+  scene's coarse outer terrain too (:mod:`marsscene.sensors.camera_shadow`): the terrain
+  meshes cast no shadow-map shadows, rocks in the terrain's shadow neither (they sit in
+  meshes of their own); below ``BAKED_BELOW_DEG`` the rocks' shadows on the ground are baked
+  into the same sun layer (:mod:`marsscene.sensors.rock_shadow`) and the rocks cast none into
+  the shadow map.
 
 All meshes have a fixed vertex count; when they move their vertex, normal and texcoord arrays
 are rewritten in place and re-uploaded to GL (``mjr_uploadMesh``, ``mjr_uploadTexture``).
@@ -23,6 +26,7 @@ Textures hold ``albedo / ALBEDO_SCALE`` so that the renderer's 8 bits cover albe
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -38,10 +42,11 @@ from marsscene.sensors.camera_rocks import (
     read_rock_catalog,
     rock_arrays,
 )
+from marsscene.sensors.rock_shadow import BAKED_BELOW_DEG
 from marsscene.terrain.albedo_field import AlbedoField
 from marsscene.terrain.appearance import bump_shading, regolith_tile, rock_albedo_rgb
 from marsscene.terrain.heightfield import Heightfield
-from marsscene.terrain.horizon import SUN_RADIUS_RAD, SunShadow, sun_shadow
+from marsscene.terrain.horizon import SUN_RADIUS_RAD, SunShadow, shadow_with_outer, sun_shadow
 
 __all__ = ["ALBEDO_SCALE", "PEBBLE_MAX_M", "CameraWorld", "read_rock_catalog"]
 
@@ -69,6 +74,7 @@ class CameraWorld:
         far_stride: int = 2,
         terrain_shadows: bool = True,
         sun_radius_rad: float = SUN_RADIUS_RAD,
+        outer: Heightfield | None = None,
     ) -> None:
         self.hf = heightfield
         tile = regolith_tile(size_px=tile_px, tile_m=tile_m, rng=rng)
@@ -81,11 +87,20 @@ class CameraWorld:
         if terrain_shadows and sun_direction_enu[2] > 0.0:
             self.sun_shadow = sun_shadow(heightfield, sun_direction_enu,
                                          sun_radius_rad=sun_radius_rad)
+            if outer is not None:  # a level-of-detail scene: the coarse outer terrain casts too
+                self.sun_shadow = shadow_with_outer(self.sun_shadow, sun_shadow(
+                    outer, sun_direction_enu, sun_radius_rad=sun_radius_rad))
         self.layers: tuple[str, ...] = ("", "_sky") if self.sun_shadow is not None else ("",)
+        # below BAKED_BELOW_DEG the rocks' shadows are baked into the sun layer too (the shadow
+        # map's texels stretch along a low sun into blocks); then rocks cast none into the map
+        elevation = math.degrees(math.atan2(self.sun[2], math.hypot(self.sun[0], self.sun[1])))
+        self.rocks_baked = self.sun_shadow is not None and elevation < BAKED_BELOW_DEG
         self.ground = GroundWindow(
             heightfield, window_m=window_m, near_m=near_m, far_stride=far_stride,
             tile_u8=_to_u8(tile.albedo_rgb * shade[..., None] / ALBEDO_SCALE), tile_m=tile_m,
-            field=field, sun_shadow=self.sun_shadow)
+            field=field, sun_shadow=self.sun_shadow,
+            shadow_rocks=read_rock_catalog(scene_dir, include_mjcf=True)
+            if self.rocks_baked else None)
         self.nr, self.nc = self.ground.nr, self.ground.nc
         self.rocks = read_rock_catalog(scene_dir)
         colours = rock_albedo_rgb(ATLAS * ATLAS, rng=rng)
@@ -129,9 +144,10 @@ class CameraWorld:
                 # grazing sun; a map of +-20 m misses far terrain)
                 geom.castshadow = self.sun_shadow is None
         for lod in self.lods:
-            spec.worldbody.add_geom(name=lod.name, type=mujoco.mjtGeom.mjGEOM_MESH,
-                                    meshname=lod.name, material="cam_rock", contype=0,
-                                    conaffinity=0, group=0)
+            geom = spec.worldbody.add_geom(name=lod.name, type=mujoco.mjtGeom.mjGEOM_MESH,
+                                           meshname=lod.name, material="cam_rock", contype=0,
+                                           conaffinity=0, group=0)
+            geom.castshadow = not self.rocks_baked
 
     def _ground_textures(self, *, near: bool) -> dict[str, NDArray[np.uint8]]:
         """The near or far ground texture per layer: sun (albedo x visibility), sky (albedo)."""

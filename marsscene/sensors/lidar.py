@@ -153,7 +153,9 @@ class Lidar:
         -------
         dict with ``xyz_m`` (N, 3) float32 (sensor frame at each point's firing time),
         ``intensity`` (N,) float32 in [0, 1], ``ring`` (N,) uint16, ``t_s`` (N,) float64
-        firing time after the stamp, ``range_m`` (N,) float32: only returns, in firing order.
+        firing time after the stamp, ``range_m`` (N,) float32, ``ray`` (N,) int32 (the ray's
+        index, ``column * channels + beam``: where it sits in a range image): only returns, in
+        firing order.
         """
         return self.prepare(model, data, site_id, terrain, twist=twist)()
 
@@ -231,4 +233,5 @@ class Lidar:
             "ring": self.ring[idx],
             "t_s": self.t_s[idx],
             "range_m": r.astype(np.float32),
+            "ray": idx.astype(np.int32),
         }

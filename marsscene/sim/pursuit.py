@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -39,7 +40,11 @@ class PursuitConfig:
 
 
 class PurePursuit:
-    """Follow a :class:`Route`; call :meth:`command` once per control period."""
+    """Follow a :class:`Route`; call :meth:`command` once per control period.
+
+    A controller of a drive (:mod:`marsscene.sim.control`): called with an observation it
+    steers on the ground-truth pose (the MarsLab protocol) and sets :attr:`done` at the goal.
+    """
 
     def __init__(self, route: Route, config: PursuitConfig | None = None) -> None:
         self.route = route
@@ -54,6 +59,10 @@ class PurePursuit:
         win = self.route.xy_m[self.index : hi + 1]
         d = np.hypot(win[:, 0] - x, win[:, 1] - y)
         self.index += int(np.argmin(d))
+
+    def __call__(self, obs: Any) -> tuple[float, float]:
+        """The command for an :class:`~marsscene.sim.control.Observation` (its ground truth)."""
+        return self.command(obs.gt_xyz_m[0], obs.gt_xyz_m[1], obs.gt_yaw_rad)
 
     def command(self, x_m: float, y_m: float, yaw_rad: float) -> tuple[float, float]:
         """``(v, omega)`` for the current pose; ``(0, 0)`` once the goal is reached."""

@@ -34,7 +34,15 @@ from marsscene.terrain.heightfield import Heightfield
 
 log = logging.getLogger("marsscene")
 
-__all__ = ["Obstacles", "Route", "RouteWarning", "author_route", "cross_track_m", "resample_xy"]
+__all__ = [
+    "Obstacles",
+    "Route",
+    "RouteWarning",
+    "author_route",
+    "cross_track_m",
+    "resample_xy",
+    "traversable_grid",
+]
 
 _MAX_NODES = 250_000
 
@@ -54,7 +62,8 @@ class Obstacles:
 
 @dataclass(frozen=True, eq=False)
 class Route:
-    """A path as points every ~``spacing`` m: ``xy_m`` (N, 2), cumulative arc length ``s_m``."""
+    """A path as points about ``spacing`` m apart: ``xy_m`` (N, 2), cumulative arc length
+    ``s_m``."""
 
     xy_m: NDArray[np.float64]
 
@@ -213,6 +222,29 @@ def _shortcut(blocked: NDArray[np.bool_], nodes: NDArray[np.int64]) -> NDArray[n
         keep.append(j)
         i = j
     return nodes[keep]
+
+
+def traversable_grid(
+    hf: Heightfield,
+    *,
+    cell_m: float = 0.5,
+    max_slope_deg: float = 20.0,
+    obstacles: Obstacles | None = None,
+    max_obstacle_height_m: float = 0.3,
+    clearance_m: float = 1.5,
+    inflation_m: float = 1.25,
+) -> tuple[NDArray[np.bool_], float, tuple[float, float]]:
+    """Where :func:`author_route` may plan: ``(free (rows, cols), cell_m, origin_xy_m)``.
+
+    A cell is free when no slope above ``max_slope_deg`` lies within ``inflation_m`` and no
+    obstacle taller than ``max_obstacle_height_m`` within ``clearance_m`` of its edge (the
+    route planner's own rule); cell ``(i, j)`` is centred at ``origin + (j, i) * cell_m``. Two
+    points are joined by a route exactly when they lie in one 8-connected component of free
+    cells.
+    """
+    plan, _, cell, origin = _blocked_grid(hf, cell_m, max_slope_deg, obstacles,
+                                          max_obstacle_height_m, clearance_m, inflation_m)
+    return ~plan, cell, origin
 
 
 def author_route(

@@ -21,6 +21,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene._atomic import write_atomic
 from marsscene.errors import RuntimeSimError
 from marsscene.rover.config import RoverConfig, RunConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
@@ -139,6 +140,8 @@ class RoverSim:
                 self.model.geom_group[gid] = 3
         self._vis = mujoco.MjvOption()
         self._vis.geomgroup[3] = 1
+        if self.run.physics_hz is not None:
+            self.model.opt.timestep = 1.0 / self.run.physics_hz
         self.dt_physics_s = float(self.model.opt.timestep)
         self.substeps = round(1.0 / (self.run.control_hz * self.dt_physics_s))
         self._ids()
@@ -220,6 +223,13 @@ class RoverSim:
         self.data.time = 0.0
         self.cmd = (0.0, 0.0)
 
+    def place(self, *, xy_m: tuple[float, float], yaw_rad: float) -> None:
+        """Move the rover to ``xy_m`` facing ``yaw_rad``, set on the terrain at rest, without
+        settling or resetting the clock (a live session's teleport; :meth:`reset` restarts)."""
+        self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy_m, yaw_rad)
+        self.data.qvel[:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+
     # ---- stepping ----------------------------------------------------------------------------
     def apply(self, v_m_s: float, omega_rad_s: float) -> None:
         """Set actuator targets for ``cmd_vel`` (clipped to the actuator ranges by MuJoCo)."""
@@ -242,6 +252,13 @@ class RoverSim:
             raise RuntimeSimError(f"simulation diverged at t = {self.data.time:.3f} s")
 
     # ---- camera ------------------------------------------------------------------------------
+    @property
+    def outer_heightfield(self) -> Heightfield | None:
+        """A level-of-detail scene's coarse outer terrain (``terrain_outer``; its focus posts
+        lowered under the focus terrain), or None."""
+        gid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "terrain_outer")
+        return scene_heightfield(self.model, "terrain_outer") if gid >= 0 else None
+
     def make_renderer(self, *, rng: np.random.Generator | None = None) -> Any:
         """An offscreen mast-camera renderer (:class:`marsscene.sensors.camera.MastCamera`).
 
@@ -290,8 +307,7 @@ class RoverSim:
     def write_rover_xml(self, path: str | Path | None = None) -> Path:
         """Write the rover MJCF (default: beside ``scene.xml``, as ``rover.xml``)."""
         target = Path(path) if path is not None else self.scene_xml.parent / "rover.xml"
-        target.write_text(self.rover_xml, encoding="utf-8")
-        return target
+        return write_atomic(target, self.rover_xml)
 
     @property
     def time_s(self) -> float:
@@ -336,30 +352,3 @@ class RoverSim:
         g = np.concatenate([self.data.contact.geom1[:n], self.data.contact.geom2[:n]])
         return np.isin(self.wheel_geoms, g)
 
-
-def scene_obstacles(sim: RoverSim) -> Any:
-    """Non-terrain world geoms of the scene (rocks) as :class:`~marsscene.runtime.Obstacles`.
-
-    Radius is the geom's horizontal bounding radius, height its top above the terrain.
-    """
-    from marsscene.sim.route import Obstacles
-
-    m, d = sim.model, sim.data
-    world = np.flatnonzero(
-        (m.geom_bodyid == 0)
-        & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)
-        & (m.geom_type != mujoco.mjtGeom.mjGEOM_PLANE)
-    )
-    if len(world) == 0:
-        return Obstacles(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
-    aabb = m.geom_aabb[world]  # (n, 6): centre offset, half sizes in the geom frame
-    rot = d.geom_xmat[world].reshape(-1, 3, 3)
-    half_world = np.einsum("nij,nj->ni", np.abs(rot), aabb[:, 3:])
-    centre = d.geom_xpos[world] + np.einsum("nij,nj->ni", rot, aabb[:, :3])
-    top = centre[:, 2] + half_world[:, 2]
-    ground = sim.heightfield.sample(centre[:, 0], centre[:, 1])
-    return Obstacles(
-        centre[:, :2].copy(),
-        np.hypot(half_world[:, 0], half_world[:, 1]),
-        np.maximum(top - ground, 0.0),
-    )

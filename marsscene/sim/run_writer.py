@@ -14,10 +14,16 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
-from marsscene.runs.logs import CsvLog, ImageWriter, TumLog, ply_bytes, write_file, write_json
+from marsscene.runs.logs import (
+    CsvLog,
+    ImageWriter,
+    TumLog,
+    depth_mm,
+    ply_bytes,
+    write_file,
+    write_json,
+)
 
 __all__ = ["RunWriter"]
 
@@ -35,7 +41,7 @@ class RunWriter:
     """Writes one drive's run folder ``out``; every method is a no-op without a folder."""
 
     def __init__(self, out: Path | None, sim: Any, *, lidar: bool, camera: bool, stereo: bool,
-                 pursuit: Any = None, jpeg_cache: Any = None):
+                 meta: dict[str, Any] | None = None, jpeg_cache: Any = None):
         self.out = out
         #: a :class:`~marsscene.runs.export.bag_images.JpegCache` to fill beside the PNGs
         self.jpeg_cache = jpeg_cache
@@ -46,7 +52,7 @@ class RunWriter:
         if out is None:
             return
         out.mkdir(parents=True, exist_ok=True)
-        self._meta = _meta(sim, pursuit)
+        self._meta = {**_meta(sim), **(meta or {})}
         write_json(out / "run.json", {"summary": {"status": "running"}, **self._meta})
         self.poses["gt"] = TumLog(out / "gt.tum", GT_HEADER)
         self.poses["odom"] = TumLog(out / "odom.tum", ODOM_HEADER)
@@ -103,8 +109,7 @@ class RunWriter:
         self._jpeg("navcam", name, rgb)
         dname = ""
         if depth is not None:
-            mm = np.clip(np.round(depth * 1000.0), 0, 65535).astype(np.uint16)
-            self.images.submit(self._dir("camera", "depth") / name, mm)
+            self.images.submit(self._dir("camera", "depth") / name, depth_mm(depth))
             dname = "depth/" + name
         self.logs["camera"].row(t, ("rgb/" + name, dname))
 
@@ -159,7 +164,7 @@ GT_HEADER = "ground truth base_link in map (world) frame"
 ODOM_HEADER = "wheel odometry base_link in odom frame (= map at t=0)"
 
 
-def _meta(sim: Any, pursuit: Any) -> dict[str, Any]:
+def _meta(sim: Any) -> dict[str, Any]:
     run = sim.run
     return {
         "rover": asdict(sim.rover),
@@ -173,6 +178,6 @@ def _meta(sim: Any, pursuit: Any) -> dict[str, Any]:
         },
         "lidar": run.lidar.spec.to_dict() if run.lidar else None,
         "camera": asdict(run.camera) if run.camera else None,
-        "pursuit": asdict(pursuit) if pursuit is not None else None,
+        "pursuit": None,
         "frames": _FRAMES,
     }

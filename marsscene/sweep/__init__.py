@@ -7,8 +7,8 @@ only by :mod:`~marsscene.sweep.run`, when :func:`run_sweep` is called.
 
 Examples
 --------
->>> from marsscene.sweep import expand_grid, sweep_from_dict
->>> spec = sweep_from_dict({"sweep": {"seed": [1, 2], "lighting.tau": [0.3, 3.0]}})
+>>> from marsscene.sweep import expand_grid, SweepSpec
+>>> spec = SweepSpec.from_dict({"sweep": {"seed": [1, 2], "lighting.tau": [0.3, 3.0]}})
 >>> for cell in expand_grid(spec):
 ...     print(cell.cell_id)
 seed=1__lighting.tau=0.3
@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 from marsscene.sweep.cell import run_cell
 from marsscene.sweep.grid import Cell, cell_id, expand_grid
-from marsscene.sweep.spec import DriveSpec, SweepSpec, load_sweep, sweep_from_dict
+from marsscene.sweep.spec import DriveSpec, SweepSpec
 
 if TYPE_CHECKING:
     from marsscene.sweep.run import Progress, SweepResult, run_sweep
@@ -36,10 +36,8 @@ __all__ = [
     "SweepSpec",
     "cell_id",
     "expand_grid",
-    "load_sweep",
     "run_cell",
     "run_sweep",
-    "sweep_from_dict",
 ]
 
 

@@ -25,7 +25,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
-from marsscene._atomic import replacing_dir
+from marsscene._atomic import replacing_dir, write_atomic
 from marsscene.errors import ConfigError, MarsSceneError, missing_dependency
 from marsscene.sweep.grid import Cell
 from marsscene.sweep.spec import DriveSpec
@@ -104,8 +104,7 @@ def _scene_row(scene: Any) -> dict[str, Any]:
 
 
 def _write_json(path: Path, doc: dict[str, Any]) -> None:
-    path.write_text(json.dumps(doc, indent=1, sort_keys=True, default=str) + "\n",
-                    encoding="utf-8")
+    write_atomic(path, json.dumps(doc, indent=1, sort_keys=True, default=str) + "\n")
 
 
 def run_cell(

@@ -1,16 +1,16 @@
 """Drive one built cell scene and evaluate wheel odometry against ground truth (ATE/RPE).
 
-Calls the runtime exactly as ``marsscene drive`` does (route authoring, contact corridor,
-settling, pure pursuit) and then :func:`~marsscene.runtime.ate` / :func:`~marsscene.runtime.rpe`.
-``mujoco`` is imported only when a cell is driven.
+Drives with :func:`marsscene.drive`, as ``marsscene drive`` does (route authoring, contact
+corridor, settling, pure pursuit), then :func:`~marsscene.runtime.ate` /
+:func:`~marsscene.runtime.rpe`. ``mujoco`` is imported only when a cell is driven.
 """
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Any
 
+from marsscene.sim.pursuit import PursuitConfig
 from marsscene.sweep.spec import DriveSpec
 
 __all__ = ["drive_cell"]
@@ -27,55 +27,24 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         the 50 Hz control rate), ``sim_wall_ratio`` (simulated / wall-clock seconds),
         ``bag_s`` (seconds to write ``out_dir/bag`` with ``bag = true``, else NaN).
     """
-    from marsscene.runtime import (
-        CameraConfig,
-        LidarConfig,
-        PursuitConfig,
-        Route,
-        RunConfig,
-        ate,
-        read_tum,
-        rpe,
-    )
-    from marsscene.seeding import stage_rng
-    from marsscene.sim.driver import drive
-    from marsscene.sim.mission import prepare_drive
+    import marsscene as ms
+    from marsscene.runtime import ate, rpe
 
-    run = RunConfig(
-        lidar=LidarConfig() if spec.lidar else None,
-        camera=CameraConfig() if spec.camera else None,
+    run = ms.drive(
+        scene_dir,
+        route=spec.route,
+        waypoints=spec.waypoints if spec.route is None else None,
+        seconds=spec.seconds,
+        config=ms.RunConfig(lidar=ms.LidarConfig() if spec.lidar else None,
+                            camera=ms.CameraConfig() if spec.camera else None,
+                            noise=ms.NoiseConfig(profile=spec.noise_profile)),
+        options=ms.DriveOptions(max_slope_deg=spec.max_slope_deg, corridor_m=spec.corridor_m,
+                                pursuit=PursuitConfig(lookahead_m=spec.lookahead_m)),
+        export=ms.ExportOptions(bag=ms.BagOptions() if spec.bag else None),
+        out_dir=out_dir,
+        seed=spec.noise_seed,
     )
-    sim, route = prepare_drive(
-        scene_dir, run,
-        route=Route.from_trajectory(read_tum(spec.route)) if spec.route is not None else None,
-        waypoints_xy_m=spec.waypoints if spec.route is None else None,
-        max_slope_deg=spec.max_slope_deg, corridor_m=spec.corridor_m,
-    )
-    from marsscene.runs.export.bag_images import JpegCache  # no rosbags import
-
-    cache = JpegCache.fresh(out_dir) if spec.bag and spec.camera else None
-    try:
-        t0 = time.perf_counter()
-        res = drive(
-            sim,
-            route=route,
-            seconds=spec.seconds,
-            out_dir=out_dir,
-            rng=stage_rng(spec.noise_seed, "sensors"),
-            pursuit=PursuitConfig(lookahead_m=spec.lookahead_m),
-            jpeg_cache=cache,
-        )
-        wall_s = time.perf_counter() - t0
-        bag_s = float("nan")
-        if spec.bag:
-            from marsscene.runs.export.bag import write_bag
-
-            t1 = time.perf_counter()
-            write_bag(out_dir, jpeg_cache=cache)
-            bag_s = time.perf_counter() - t1
-    finally:
-        if cache is not None:
-            cache.remove()
+    res = run.result
     s = res.summary
     a_err = ate(res.odom, res.gt, align="se3")
     r_err = rpe(res.odom, res.gt, delta_frames=1)
@@ -87,6 +56,6 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         "ate_rmse_m": round(a_err.stats.rmse, 9),
         "rpe_trans_rmse_m": round(r_err.translation.rmse, 9),
         "rpe_rot_rmse_deg": round(r_err.rotation_deg.rmse, 9),
-        "sim_wall_ratio": round(s["sim_time_s"] / max(wall_s, 1e-9), 3),
-        "bag_s": round(bag_s, 3),
+        "sim_wall_ratio": round(s["sim_time_s"] / max(run.wall_s, 1e-9), 3),
+        "bag_s": round(run.export_s, 3) if spec.bag else float("nan"),
     }

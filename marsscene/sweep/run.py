@@ -199,7 +199,7 @@ def run_sweep(
     Parameters
     ----------
     spec : SweepSpec
-        From :func:`~marsscene.sweep.load_sweep`.
+        From :func:`~marsscene.sweep.SweepSpec`.
     out_dir : path-like
         Sweep folder: one sub-folder per cell plus ``results.csv`` (+ ``results.parquet``).
     workers : int, optional

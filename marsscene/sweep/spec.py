@@ -27,8 +27,9 @@ from typing import Any
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.config import SceneConfig, read_config_toml
 from marsscene.errors import ConfigError
+from marsscene.rover.config import noise_profiles
 
-__all__ = ["DriveSpec", "SweepSpec", "load_sweep", "sweep_from_dict"]
+__all__ = ["DriveSpec", "SweepSpec"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -42,11 +43,17 @@ class DriveSpec:
     seconds: float | None = None
     """Sim-time limit in s (default: until the goal)."""
     camera: bool = False
-    """Log the 320x240 RGB-D mast camera at 10 Hz."""
+    """Log the mast RGB-D camera with its defaults (:class:`~marsscene.runtime.CameraConfig`:
+    640 x 480 at 10 Hz)."""
     lidar: bool = False
-    """Log the 16-channel LiDAR at 10 Hz."""
+    """Log the LiDAR with its defaults (:class:`~marsscene.runtime.LidarConfig`: Ouster OS1-128
+    at 10 Hz)."""
     noise_seed: int = 0
     """Seed of the sensor-noise stream (the same in every cell unless swept)."""
+    noise_profile: str = "none"
+    """IMU and wheel-odometry noise profile (:class:`~marsscene.runtime.NoiseConfig`):
+    ``"none"`` (noise-free, as ``marsscene drive``), ``"ln200s"`` (the benchmarks' default) or
+    ``"adis16495"``."""
     lookahead_m: float = 1.0
     """Pure-pursuit lookahead."""
     max_slope_deg: float = 20.0
@@ -82,10 +89,16 @@ class DriveSpec:
         for key in ("camera", "lidar", "bag"):
             if not isinstance(getattr(self, key), bool):
                 raise ConfigError(f"drive.{key} = {getattr(self, key)!r}; must be true or false")
+        profiles = noise_profiles()
+        if not isinstance(self.noise_profile, str) or self.noise_profile not in profiles:
+            raise ConfigError(f"drive.noise_profile = {self.noise_profile!r} is unknown; known "
+                              f"profiles: {', '.join(profiles)}")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict (JSON-serialisable; ``None`` values dropped)."""
         out = {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
+        if out.get("noise_profile") == "none":  # the default: keeps older sweeps' config hashes
+            del out["noise_profile"]
         if "waypoints" in out:
             out["waypoints"] = [list(p) for p in out["waypoints"]]
         return out
@@ -102,6 +115,31 @@ class SweepSpec:
     drive: DriveSpec | None = None
     source: str = "<dict>"
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], *, base_dir: Path | None = None,
+                  source: str = "<dict>") -> SweepSpec:
+        """Check a parsed sweep mapping: a scene config plus ``[sweep]`` axes and an optional
+        ``[drive]`` table; relative route paths resolve against ``base_dir``."""
+        return _spec_from_dict(data, base_dir=base_dir, source=source)
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> SweepSpec:
+        """Read and check a SWEEP.toml (relative DEM/ortho/route paths resolve against its
+        folder)."""
+        p = Path(path)
+        data = read_config_toml(p, what="sweep file")
+        table = data.get("sweep")
+        if isinstance(table, dict):  # swept DEM / ortho paths resolve like the base config's
+            for key in ("terrain.dem_path", "terrain.ortho_path"):
+                values = table.get(key)
+                if isinstance(values, list):
+                    table[key] = [
+                        str((p.parent / v).resolve()) if isinstance(v, str)
+                        and not Path(v).is_absolute() else v
+                        for v in values
+                    ]
+        return _spec_from_dict(data, base_dir=p.parent, source=str(p))
 
 
 def _field_hint(key: str) -> Any:
@@ -169,7 +207,7 @@ def _check_some_cell_valid(base: dict[str, Any], axes: list[tuple[str, tuple[Any
     raise first
 
 
-def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
+def _spec_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
                     source: str = "<dict>") -> SweepSpec:
     """Check a parsed SWEEP.toml mapping and return a :class:`SweepSpec`."""
     data = _deepcopy(data)
@@ -201,20 +239,3 @@ def sweep_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
                 drive_table["route"] = str((base_dir / route).resolve())
         drive = dataclass_from_mapping(DriveSpec, drive_table, "drive")
     return SweepSpec(base=data, axes=tuple(axes), drive=drive, source=source)
-
-
-def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and check a SWEEP.toml (relative DEM/ortho/route paths resolve against its folder)."""
-    p = Path(path)
-    data = read_config_toml(p, what="sweep file")
-    table = data.get("sweep")
-    if isinstance(table, dict):  # swept DEM / ortho paths resolve like the base config's
-        for key in ("terrain.dem_path", "terrain.ortho_path"):
-            values = table.get(key)
-            if isinstance(values, list):
-                table[key] = [
-                    str((p.parent / v).resolve()) if isinstance(v, str)
-                    and not Path(v).is_absolute() else v
-                    for v in values
-                ]
-    return sweep_from_dict(data, base_dir=p.parent, source=str(p))

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import csv
 import io
-import os
 from pathlib import Path
 from typing import Any
+
+from marsscene._atomic import write_atomic
 
 __all__ = ["COLUMNS", "flatten_rows", "write_results"]
 
@@ -45,12 +46,6 @@ def flatten_rows(rows: list[dict[str, Any]], keys: list[str]) -> tuple[list[str]
     return header, table
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_bytes(data)
-    tmp.replace(path)
-
-
 def write_results(rows: list[dict[str, Any]], keys: list[str], out_dir: Path) -> list[Path]:
     """Write ``results.csv`` (always) and ``results.parquet`` (if pyarrow is importable)."""
     header, table = flatten_rows(rows, keys)
@@ -59,7 +54,7 @@ def write_results(rows: list[dict[str, Any]], keys: list[str], out_dir: Path) ->
     writer.writerow(header)
     writer.writerows([["" if v is None else v for v in row] for row in table])
     written = [out_dir / "results.csv"]
-    _atomic_write(written[0], buf.getvalue().encode("utf-8"))
+    write_atomic(written[0], buf.getvalue().encode("utf-8"))
     try:
         import pyarrow as pa
         import pyarrow.parquet as pq
@@ -76,5 +71,5 @@ def write_results(rows: list[dict[str, Any]], keys: list[str], out_dir: Path) ->
     sink = pa.BufferOutputStream()
     pq.write_table(pa.table(columns), sink)
     written.append(out_dir / "results.parquet")
-    _atomic_write(written[1], sink.getvalue().to_pybytes())
+    write_atomic(written[1], sink.getvalue().to_pybytes())
     return written

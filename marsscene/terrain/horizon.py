@@ -30,7 +30,7 @@ from scipy.ndimage import map_coordinates
 
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["SUN_RADIUS_RAD", "SunShadow", "sun_shadow", "sun_visibility"]
+__all__ = ["SUN_RADIUS_RAD", "SunShadow", "shadow_with_outer", "sun_shadow", "sun_visibility"]
 
 #: Angular radius of the sun seen from Mars at its mean distance (0.533 deg / 2 / 1.524 AU).
 SUN_RADIUS_RAD = math.radians(0.533 / 2.0 / 1.524)
@@ -165,3 +165,36 @@ def sun_shadow(hf: Heightfield, sun_direction_enu: tuple[float, float, float], *
         depth[a : a + len(yy)] = np.clip(h_back - z_post, -DEPTH_CLIP_M, DEPTH_CLIP_M)
         distance[a : a + len(yy)] = map_coordinates(occluder, [iv, ju], order=0, mode="nearest")
     return SunShadow(hf, sun, depth, distance, sun_radius_rad)
+
+
+def shadow_with_outer(focus: SunShadow, outer: SunShadow) -> SunShadow:
+    """``focus``'s shadows with those the coarse outer terrain of a level-of-detail scene
+    casts into it (e.g. canyon walls beyond the focus square at a low sun).
+
+    The outer terrain's shadow surface (height above which a point sees the sun's centre over
+    the outer terrain, bilinear between its posts) is compared with the focus's at every focus
+    post; the higher one sets the depth and the occluder distance. Both must be computed for
+    the same sun direction. Focus posts inside the outer grid's lowered focus square see the
+    outer terrain around it only.
+    """
+    if not np.allclose(focus.sun_direction_enu, outer.sun_direction_enu):
+        raise ValueError("focus and outer shadows are for different sun directions")
+    hf, ohf = focus.heightfield, outer.heightfield
+    depth = focus.depth_m.copy()
+    distance = focus.distance_m.copy()
+    xs, ys = hf.grid_xy()
+    for a in range(0, hf.shape[0], _ROW_BLOCK):
+        yy = np.broadcast_to(ys[a : a + _ROW_BLOCK, None], (min(_ROW_BLOCK, len(ys) - a),
+                                                           len(xs)))
+        xx = np.broadcast_to(xs[None, :], yy.shape)
+        r, c = ohf.rowcol_of(xx, yy)
+        z_outer = map_coordinates(ohf.z_m, [r, c], order=1, mode="nearest", output=np.float64)
+        h_outer = z_outer + map_coordinates(outer.depth_m, [r, c], order=1, mode="nearest",
+                                            output=np.float64)
+        z = hf.z_m[a : a + len(yy)].astype(np.float64)
+        higher = h_outer > z + depth[a : a + len(yy)]
+        d_outer = np.clip(h_outer - z, -DEPTH_CLIP_M, DEPTH_CLIP_M)
+        depth[a : a + len(yy)] = np.where(higher, d_outer, depth[a : a + len(yy)])
+        near = map_coordinates(outer.distance_m, [r, c], order=0, mode="nearest")
+        distance[a : a + len(yy)] = np.where(higher, near, distance[a : a + len(yy)])
+    return SunShadow(hf, focus.sun_direction_enu, depth, distance, focus.sun_radius_rad)

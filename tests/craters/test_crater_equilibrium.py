@@ -1,5 +1,5 @@
 """Recognisable craters follow min(production, equilibrium) with steady-state degradation states
-(issue 13 part 2; SCIENCE.md 2.6)."""
+(issue 13 part 2; docs/science/craters.md)."""
 
 from __future__ import annotations
 

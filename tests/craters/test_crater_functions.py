@@ -1,4 +1,4 @@
-"""Production, chronology and equilibrium functions against SCIENCE.md section 2 values."""
+"""Production, chronology and equilibrium functions against docs/science/craters.md values."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from marsscene.errors import ConfigError, ExtrapolationWarning
 
 REL = 1e-6
 
-# SCIENCE.md 2.4: (system, t, N(>=1 km), N(>=100 m), N(>=10 km))
+# docs/science/craters.md: (system, t, N(>=1 km), N(>=100 m), N(>=10 km))
 TABLE = [
     ("ivanov-2001", 1.0, 4.130000e-04, 1.524507e00, 5.902096e-06),
     ("ivanov-2001", 3.5, 2.361610e-03, 8.717410e00, 3.374927e-05),
@@ -56,7 +56,7 @@ def test_extra_n1_values() -> None:
 def test_equilibrium_values() -> None:
     np.testing.assert_allclose(
         mc.equilibrium_density_per_km2([10.0, 100.0, 1000.0]), [331.13, 4.8978, 0.072444],
-        rtol=2e-5,  # SCIENCE.md gives 5 significant digits
+        rtol=2e-5,  # the reference values have 5 significant digits
     )
 
 
@@ -67,7 +67,7 @@ def test_age_inverse_and_formation_age_quantiles() -> None:
             mc.age_from_n1_ga(mc.n1_per_km2(ages, system=system), system=system), ages,
             atol=1e-10,
         )
-    # tau = N1^-1(u N1(T)), H&N CF, T = 3.5 Ga (SCIENCE.md 2.5)
+    # tau = N1^-1(u N1(T)), H&N CF, T = 3.5 Ga (docs/science/craters.md)
     u = np.array([0.1, 0.5, 0.9])
     tau = mc.age_from_n1_ga(u * mc.n1_per_km2(3.5))
     np.testing.assert_allclose(tau, [0.5758, 2.8534, 3.4608], atol=5e-5)

@@ -21,7 +21,7 @@ from marsscene.craters.morphometry import (
 @pytest.mark.parametrize(("d_m", "expected"), [(100.0, 0.1762), (500.0, 0.1500),
                                                (1000.0, 0.1400), (8000.0, 0.1137)])
 def test_fresh_depth_is_the_garvin_frawley_law(d_m: float, expected: float) -> None:
-    """d = 0.14 D^0.90 (km) (Garvin & Frawley 1998): d/D = 0.14 D_km^-0.1 (SCIENCE.md addendum:
+    """d = 0.14 D^0.90 (km) (Garvin & Frawley 1998): d/D = 0.14 D_km^-0.1 (docs/science/craters.md:
     0.18 at 100 m, 0.15 at 500 m, 0.14 at 1 km)."""
     assert float(fresh_depth_to_diameter(d_m)) == pytest.approx(expected, abs=5e-5)
 

@@ -13,7 +13,7 @@ from marsscene.craters.morphology import S_ERASE, profile_over_diameter
 def test_fassett_thomson_reference_values() -> None:
     rho = np.array([0.5, 0.8, 0.98, 1.2, 1.5])
     got = profile_over_diameter(rho, model="fassett-thomson-2014")
-    # SCIENCE.md 3.2(a) (6 decimals): inner(0.98) = 0.036822, outer(1.2) = 0.016375
+    # docs/science/craters.md (6 decimals): inner(0.98) = 0.036822, outer(1.2) = 0.016375
     np.testing.assert_allclose(got, [-0.099201, -0.013812, 0.036822, 0.016375, 2.5e-10],
                                atol=6e-7)
     assert float(profile_over_diameter(0.1, model="fassett-thomson-2014")) == -0.181

@@ -27,7 +27,7 @@ def _fit_age(d: np.ndarray, area_km2: float, d_lo: float, d_hi: float) -> float:
 
 
 def test_science_reference_forward_model() -> None:
-    # C_obs(D) = Phi(D) N1(te) + Phi(max(D, De)) (N1(T) - N1(te)), SCIENCE.md 4.1
+    # C_obs(D) = Phi(D) N1(te) + Phi(max(D, De)) (N1(T) - N1(te)), docs/science/craters.md
     n1 = mc.n1_per_km2
     d = np.array([50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0])
     with warnings.catch_warnings():

@@ -10,8 +10,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
+from marsscene.testing.pds3 import write_pds3_dtm
 from tests.conftest import SHARED_REAL
-from tests.dem.pds3_fixture import write_pds3_dtm
 
 GALE_TIF = Path(__file__).resolve().parents[2] / "marsscene/terrain/data/gale_missionDEM.tif"
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import marsscene as ms
+from marsscene.testing.pds3 import write_hirise_ortho, write_pds3_dtm
 from tests.dem.conftest import real
-from tests.dem.pds3_fixture import write_hirise_ortho, write_pds3_dtm
 
 # DEM upper-left corner and the ground point of a feature drawn into both rasters (projected m,
 # on the real ESP_013951_1955 label's sphere: lat_ts 15 N, lon_0 180, R 3394839.8133163 m)

@@ -1,4 +1,4 @@
-"""PDS3 label parsing and GDAL's label conventions (SCIENCE.md §7.2-7.3), on real labels."""
+"""PDS3 label parsing and GDAL's label conventions (docs/science/dem.md), on real labels."""
 
 from __future__ import annotations
 
@@ -34,7 +34,8 @@ END
 
 
 def test_hidtmgen_fixture_geotransform_matches_science_reference() -> None:
-    # SCIENCE.md §7.3: SPO -10413.5, LPO 760.5, 1000 m -> GT (10413000, 1000, 0, 761000, 0, -1000)
+    # docs/science/dem.md: SPO -10413.5, LPO 760.5, 1000 m
+    # -> GT (10413000, 1000, 0, 761000, 0, -1000)
     label = parse_label(HIDTMGEN_FIXTURE)
     a, b, c, d, e, f = pds3.map_geotransform(label)
     assert (c, a, b, f, d, e) == (10413000.0, 1000.0, 0.0, 761000.0, 0.0, -1000.0)
@@ -55,7 +56,7 @@ def test_missing_constant_is_compared_as_float32_bits() -> None:
     layout = pds3.image_layout(parse_label(HIDTMGEN_FIXTURE))
     assert layout.missing_bits == 0xFF7FFFFB
     value = np.array([layout.missing_bits], dtype="<u4").view("<f4")[0]
-    assert float(value) == -3.4028226550889045e38  # SCIENCE.md §7.2
+    assert float(value) == -3.4028226550889045e38  # docs/science/dem.md
     assert np.float32(-3.4028227e38).view(np.uint32) == 0xFF7FFFFB
     # a rounded float64 literal is a different float32: never compare that way
     assert np.float32(-3.40282e38).view(np.uint32) != 0xFF7FFFFB

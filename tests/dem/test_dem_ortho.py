@@ -12,8 +12,8 @@ from marsscene.dem.model import Ortho
 from marsscene.dem.resample import resample_separable
 from marsscene.dem.texture import texture_rgb
 from marsscene.errors import ConfigError, CRSError
+from marsscene.testing.pds3 import write_hirise_ortho
 from tests.dem.conftest import real
-from tests.dem.pds3_fixture import write_hirise_ortho
 
 SCALE_IF = 1.07543902665525e-04  # the real ESP_013951_1955_RED label's SCALING_FACTOR
 OFFSET_IF = 0.081203337858079

@@ -10,8 +10,8 @@ import pytest
 from marsscene.dem.io import open_source, read_dem
 from marsscene.dem.ops import Crop
 from marsscene.errors import CRSError, DEMReadError, MemoryBudgetError
+from marsscene.testing.pds3 import write_pds3_dtm
 from tests.dem.conftest import GALE_TIF, LPO, SCALE, SPO, real
-from tests.dem.pds3_fixture import write_pds3_dtm
 
 
 @pytest.mark.parametrize("which", ["pds3_attached", "pds3_detached"])

@@ -1,4 +1,5 @@
-"""Irradiance: TOA, air mass, Beer's law, A&F net-flux table and delta-Eddington (SCIENCE.md 5)."""
+"""Irradiance: TOA, air mass, Beer's law, A&F net-flux table and delta-Eddington
+(docs/science/atmosphere.md)."""
 
 from __future__ import annotations
 
@@ -60,7 +61,7 @@ def test_sun_below_horizon_gives_no_light() -> None:
         assert np.all(global_irradiance_w_m2(z, tau=tau) == 0.0)
 
 
-# SCIENCE.md 5.3 reference cells (table, al = 0.1, secant air mass)
+# docs/science/atmosphere.md reference cells (table, al = 0.1, secant air mass)
 AF_CELLS = [  # tau, z, f(table), G_h/(G_ob cos z), diffuse/global, polynomial f
     (0.3, 0, 0.848, 0.9422, 0.214, 0.8485), (0.3, 60, 0.773, 0.8589, 0.361, 0.7749),
     (1, 0, 0.728, 0.8089, 0.545, 0.7275), (1, 60, 0.557, 0.6189, 0.781, 0.5575),

@@ -1,4 +1,4 @@
-"""Mars24 sun position against the SCIENCE.md section 6 worked examples."""
+"""Mars24 sun position against the docs/science/sun.md worked examples."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from marsscene.lighting import (
 from marsscene.lighting.mars24 import mars24_terms
 from marsscene.lighting.timescale import jd_tt_from_utc, tt_minus_utc_s, utc_from_jd_tt
 
-# (utc, lat, lon_east, expected) -- Example A (GISS test case) and Example B (SCIENCE.md 6)
+# (utc, lat, lon_east, expected) -- Example A (GISS test case) and Example B (docs/science/sun.md)
 EXAMPLES = [
     ("2000-01-06T00:00:00Z", 0.0, 0.0, dict(
         jd_tt=2451549.500743, ls=277.187589, mst=23.994249, lmst=23.994249, ltst=23.648400,
@@ -45,7 +45,7 @@ def test_worked_examples(utc: str, lat: float, lon: float, ref: dict[str, float]
 
 
 def test_gray_quoted_values_example_a() -> None:
-    # Bill Gray's marstime comments quoting the GISS test case (SCIENCE.md 6, [S]).
+    # Bill Gray's marstime comments quoting the GISS test case (docs/science/sun.md, [S]).
     p = mars_sun_position("2000-01-06T00:00:00Z", lat_deg=0.0, lon_east_deg=0.0)
     assert p.ls_deg == pytest.approx(277.1875876, abs=1e-5)
     assert p.ltst_h == pytest.approx(23.648333, abs=3e-4)

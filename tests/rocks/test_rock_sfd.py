@@ -1,4 +1,4 @@
-"""Golombek–Huertas SFD: SCIENCE.md §1 reference values, sampling statistics, bad configs."""
+"""Golombek–Huertas SFD: docs/science/rocks.md reference values, sampling, bad configs."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from marsscene.rocks import (
     sample_diameters,
 )
 
-# k, D, F_k(D), N(>D), n(D) — SCIENCE.md §1.2
+# k, D, F_k(D), N(>D), n(D) — docs/science/rocks.md
 REFERENCE = [
     (0.05, 0.1, 3.084649e-02, 1.034198e00, 1.896981e01),
     (0.05, 0.5, 4.468367e-03, 1.355339e-02, 1.099173e-01),
@@ -55,13 +55,13 @@ def test_closed_form_matches_quadrature() -> None:
 
 
 def test_expected_count_reference() -> None:
-    # SCIENCE.md §1.3: N(>0.1) - N(>3) = 1.034198 per m^2 at k = 0.05
+    # docs/science/rocks.md: N(>0.1) - N(>3) = 1.034198 per m^2 at k = 0.05
     np.testing.assert_allclose(expected_count(1.0, k=0.05, d_min_m=0.1, d_max_m=3.0), 1.034198,
                                rtol=1e-6)
 
 
 def test_sampled_quantiles_and_ks() -> None:
-    # SCIENCE.md §1.3 quantiles of D for k = 0.05 on [0.1, 3] m
+    # docs/science/rocks.md quantiles of D for k = 0.05 on [0.1, 3] m
     for u, d_ref in [(0.5, 0.142426), (0.9, 0.275216), (0.99, 0.533738)]:
         d_u = brentq(lambda x, u=u: float(diameter_cdf(x, k=0.05, d_min_m=0.1, d_max_m=3.0)) - u,
                      0.1, 3.0, xtol=1e-12)

@@ -89,13 +89,13 @@ def test_interrupt_while_writing_the_bag_keeps_the_run_and_removes_the_cache(
     import os
     import signal
 
-    from marsscene.cli import drive as cli_drive
+    from marsscene.runs.export import bag as bag_module
 
     def killed(run_dir: Path, *args: object, **kwargs: object) -> None:
         assert (Path(run_dir) / ".bag-cache").is_dir()  # the drive filled the cache
         os.kill(os.getpid(), signal.SIGTERM)  # as `kill PID` would, mid-bag
 
-    monkeypatch.setattr(cli_drive, "write_run_bag", killed)
+    monkeypatch.setattr(bag_module, "write_bag", killed)
     run = tmp_path / "run"
     before = signal.getsignal(signal.SIGTERM)
     res = _drive_with_bag(runner, gentle_scene, tmp_path, run, seconds=1.0)
@@ -105,3 +105,31 @@ def test_interrupt_while_writing_the_bag_keeps_the_run_and_removes_the_cache(
     assert not (run / ".bag-cache").exists() and not (run / "bag").exists()
     assert (run / "gt.tum").is_file() and len(list((run / "camera" / "rgb").glob("*.png"))) >= 5
     assert signal.getsignal(signal.SIGTERM) == before  # the handler is put back
+
+
+def test_lidar_scans_are_kept_once_in_the_bag_unless_asked(runner, gentle_scene, tmp_path):
+    """With --lidar --bag the PLYs go once the bag holds the scans (one copy on disk);
+    --keep-lidar-files keeps both, and the bag's bytes do not depend on it."""
+    from marsscene.errors import RuntimeSimError
+    from marsscene.runs.runlog import LIDAR_IN_BAG, RunLog
+
+    wp = tmp_path / "wp.txt"
+    wp.write_text("-5 -5\n-2 -5\n")
+    runs = {}
+    for keep in (False, True):
+        run = tmp_path / f"run_{keep}"
+        res = runner.invoke(main, ["drive", str(gentle_scene), "--waypoints", str(wp),
+                                   "--seconds", "0.5", "--lidar", "--lidar-model", "vlp16",
+                                   "--out", str(run), "--bag",
+                                   *(["--keep-lidar-files"] if keep else [])])
+        assert res.exit_code == 0, res.output
+        runs[keep] = run
+    moved, kept = RunLog(runs[False]), RunLog(runs[True])
+    assert not list((runs[False] / "lidar").glob("*.ply"))
+    assert (runs[False] / "lidar" / LIDAR_IN_BAG).is_file()
+    assert kept.lidar is not None and len(kept.lidar[1]) >= 5
+    np.testing.assert_array_equal(moved.lidar_stamps_s, kept.lidar[0])
+    with pytest.raises(RuntimeSimError, match="moved into the run's bag"):
+        _ = moved.lidar
+    assert (runs[False] / "bag" / "bag.mcap").read_bytes() == (
+        runs[True] / "bag" / "bag.mcap").read_bytes()

@@ -10,7 +10,7 @@ import pytest
 from sweep_util import assert_same_scene, write_sweep
 
 from marsscene.cli import main
-from marsscene.sweep import load_sweep, run_sweep
+from marsscene.sweep import SweepSpec, run_sweep
 
 GRID = 'seed = [1, 2]\n"lighting.tau" = [0.3, 3.0]\n'
 IDS = ["seed=1__lighting.tau=0.3", "seed=1__lighting.tau=3.0",
@@ -26,7 +26,7 @@ def _csv(path: Path) -> list[dict[str, str]]:
 def local_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any, list[Any]]:
     """The 2 x 2 sweep on a LocalCluster of 2 worker processes."""
     tmp = tmp_path_factory.mktemp("local")
-    spec = load_sweep(write_sweep(tmp / "sweep.toml", GRID))
+    spec = SweepSpec.from_toml(write_sweep(tmp / "sweep.toml", GRID))
     seen: list[Any] = []
     res = run_sweep(spec, tmp / "out", workers=2, progress=seen.append)
     return tmp / "out", res, seen
@@ -57,7 +57,7 @@ def test_local_cluster_cells_equal_serial_builds(local_run, runner, tmp_path: Pa
 def test_rerun_skips_finished_cells_and_force_rebuilds_same_bytes(local_run,
                                                                   tmp_path: Path) -> None:
     out, _, _ = local_run
-    spec = load_sweep(out.parent / "sweep.toml")
+    spec = SweepSpec.from_toml(out.parent / "sweep.toml")
     stamps = {c: (out / c / "result.json").stat().st_mtime_ns for c in IDS}
     again = run_sweep(spec, out, serial=True)
     assert [r["status"] for r in again.rows] == ["skipped"] * 4
@@ -75,7 +75,7 @@ def test_rerun_skips_finished_cells_and_force_rebuilds_same_bytes(local_run,
 def test_remote_scheduler_gives_the_same_bytes(local_run, scheduler_address: str,
                                                tmp_path: Path) -> None:
     out, _, _ = local_run
-    spec = load_sweep(out.parent / "sweep.toml")
+    spec = SweepSpec.from_toml(out.parent / "sweep.toml")
     res = run_sweep(spec, tmp_path / "remote", scheduler=scheduler_address)
     assert [r["status"] for r in res.rows] == ["ok"] * 4
     for cid in IDS:
@@ -88,7 +88,7 @@ def test_remote_scheduler_gives_the_same_bytes(local_run, scheduler_address: str
 
 def test_one_invalid_cell_fails_and_the_others_finish(scheduler_address: str,
                                                       tmp_path: Path) -> None:
-    spec = load_sweep(write_sweep(tmp_path / "s.toml", '"rocks.k" = [0.05, 1.5, 0.1]\n'))
+    spec = SweepSpec.from_toml(write_sweep(tmp_path / "s.toml", '"rocks.k" = [0.05, 1.5, 0.1]\n'))
     res = run_sweep(spec, tmp_path / "out", scheduler=scheduler_address)
     assert [r["status"] for r in res.rows] == ["ok", "failed", "ok"]
     bad = res.rows[1]
@@ -118,7 +118,7 @@ def test_driven_cell_metrics_match_the_logs(tmp_path: Path) -> None:
     from marsscene.runtime import ate, read_tum, rpe
 
     drive = "[drive]\nwaypoints = [[-5.0, 0.0], [5.0, 0.0]]\nnoise_seed = 4\nbag = true\n"
-    spec = load_sweep(write_sweep(tmp_path / "s.toml", "seed = [0]\n", drive))
+    spec = SweepSpec.from_toml(write_sweep(tmp_path / "s.toml", "seed = [0]\n", drive))
     (row,) = run_sweep(spec, tmp_path / "out", serial=True).rows
     assert row["status"] == "ok", row["error"]
     run = tmp_path / "out" / "seed=0" / "drive"

@@ -13,7 +13,7 @@ import pytest
 from sweep_util import write_sweep
 
 from marsscene.errors import SweepError
-from marsscene.sweep import load_sweep, run_sweep
+from marsscene.sweep import SweepSpec, run_sweep
 
 
 def test_importing_the_sweep_package_loads_no_heavy_dependency() -> None:
@@ -27,7 +27,7 @@ def test_importing_the_sweep_package_loads_no_heavy_dependency() -> None:
 
 
 def test_unreachable_scheduler_is_a_one_line_error(tmp_path: Path) -> None:
-    spec = load_sweep(write_sweep(tmp_path / "s.toml", "seed = [1]\n"))
+    spec = SweepSpec.from_toml(write_sweep(tmp_path / "s.toml", "seed = [1]\n"))
     t0 = time.perf_counter()
     addr = "tcp://127.0.0.1:9"  # discard port: nothing listens there
     with pytest.raises(SweepError, match=re.escape(f"cannot reach Dask scheduler {addr!r}")) as e:
@@ -39,7 +39,7 @@ def test_unreachable_scheduler_is_a_one_line_error(tmp_path: Path) -> None:
 
 def test_parquet_table_matches_the_csv(tmp_path: Path) -> None:
     pq = pytest.importorskip("pyarrow.parquet")
-    spec = load_sweep(write_sweep(tmp_path / "s.toml", '"rocks.k" = [0.05, 2.0]\n'))
+    spec = SweepSpec.from_toml(write_sweep(tmp_path / "s.toml", '"rocks.k" = [0.05, 2.0]\n'))
     res = run_sweep(spec, tmp_path / "out", serial=True)
     assert [f.name for f in res.files] == ["results.csv", "results.parquet"]
     table = pq.read_table(tmp_path / "out" / "results.parquet").to_pylist()

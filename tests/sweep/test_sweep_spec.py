@@ -8,12 +8,12 @@ import pytest
 
 from marsscene.cli import main
 from marsscene.errors import ConfigError
-from marsscene.sweep import expand_grid, load_sweep, sweep_from_dict
+from marsscene.sweep import SweepSpec, expand_grid
 from marsscene.sweep.cell import resolve_config, toml_text
 
 
 def test_grid_is_the_cartesian_product_in_axis_order() -> None:
-    spec = sweep_from_dict({
+    spec = SweepSpec.from_dict({
         "terrain": {"source": "procedural", "size_m": [40.0, 40.0]},
         "sweep": {"seed": [1, 2], "lighting.tau": [0.3, 3.0], "rocks.k": [0.02, 0.08]},
     })
@@ -29,7 +29,7 @@ def test_grid_is_the_cartesian_product_in_axis_order() -> None:
 
 
 def test_cell_ids_are_sanitised_and_stable() -> None:
-    spec = sweep_from_dict({"sweep": {"lighting.utc": ["2021-02-18T20:55:00Z"],
+    spec = SweepSpec.from_dict({"sweep": {"lighting.utc": ["2021-02-18T20:55:00Z"],
                                       "terrain.size_m": [[50, 50.5]], "craters.enabled": [False]}})
     (cell,) = expand_grid(spec)
     assert cell.cell_id == (
@@ -43,7 +43,7 @@ def test_resolved_config_round_trips_through_toml() -> None:
 
     import marsscene as ms
 
-    spec = sweep_from_dict({"seed": 9, "terrain": {"source": "procedural", "size_m": [30, 20]},
+    spec = SweepSpec.from_dict({"seed": 9, "terrain": {"source": "procedural", "size_m": [30, 20]},
                             "lighting": {"sun_azimuth_deg": 90.0},
                             "sweep": {"lighting.sun_elevation_deg": [25.0]}})
     cfg = resolve_config(expand_grid(spec)[0])
@@ -67,25 +67,25 @@ def test_resolved_config_round_trips_through_toml() -> None:
 )
 def test_bad_sweep_tables_give_one_line_errors(sweep: dict, message: str) -> None:
     with pytest.raises(ConfigError) as info:
-        sweep_from_dict({"sweep": sweep})
+        SweepSpec.from_dict({"sweep": sweep})
     assert message in str(info.value) and "\n" not in str(info.value)
 
 
 def test_bad_base_config_and_drive_are_rejected() -> None:
     with pytest.raises(ConfigError, match=r"unknown key rocks\.kk"):
-        sweep_from_dict({"rocks": {"kk": 1}, "sweep": {"seed": [1]}})
+        SweepSpec.from_dict({"rocks": {"kk": 1}, "sweep": {"seed": [1]}})
     with pytest.raises(ConfigError, match="exactly one of waypoints or route"):
-        sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"seconds": 3.0}})
+        SweepSpec.from_dict({"sweep": {"seed": [1]}, "drive": {"seconds": 3.0}})
     with pytest.raises(ConfigError, match=r"drive\.waypoints"):
-        sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0]]}})
+        SweepSpec.from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0]]}})
     with pytest.raises(ConfigError, match=r"drive\.bag = 'yes'; must be true or false"):
-        sweep_from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0], [1, 1]],
+        SweepSpec.from_dict({"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0], [1, 1]],
                                                           "bag": "yes"}})
 
 
 def test_route_path_resolves_against_the_sweep_file(tmp_path: Path) -> None:
     (tmp_path / "s.toml").write_text('[sweep]\nseed = [1]\n[drive]\nroute = "r.tum"\n')
-    spec = load_sweep(tmp_path / "s.toml")
+    spec = SweepSpec.from_toml(tmp_path / "s.toml")
     assert spec.drive is not None and spec.drive.route == str((tmp_path / "r.tum").resolve())
 
 
@@ -111,7 +111,7 @@ def test_cli_reports_bad_sweep_files_in_one_line(runner, tmp_path: Path, text: s
 
 def test_example_sweep_file_is_valid() -> None:
     path = Path(__file__).resolve().parents[2] / "examples" / "sweep_tau_sun.toml"
-    spec = load_sweep(path)
+    spec = SweepSpec.from_toml(path)
     cells = expand_grid(spec)
     assert len(cells) == 12 and spec.drive is not None and spec.drive.seconds == 40.0
     cfg = resolve_config(cells[-1])
@@ -134,3 +134,34 @@ def test_cells_of_one_seed_prefer_one_worker() -> None:
     assert all(len(w) == 1 for w in by_seed.values())
     assert [by_seed[s].pop() for s in (7, 3, 9, 5)] == ["tcp://a", "tcp://b", "tcp://a", "tcp://b"]
     assert _seed_affinity(cells, []) == {c.cell_id: [] for c in cells}
+
+
+def test_drive_noise_profile_is_checked_and_reaches_the_drive(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import marsscene as ms
+    from marsscene.sweep.drive import drive_cell
+
+    base = {"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0], [1, 1]]}}
+    default = SweepSpec.from_dict(base).drive
+    assert default is not None and default.noise_profile == "none"
+    assert "noise_profile" not in default.to_dict()  # older sweeps keep their config hashes
+    with pytest.raises(ConfigError, match=r"drive\.noise_profile = 'ln200' is unknown"):
+        SweepSpec.from_dict({**base, "drive": {**base["drive"], "noise_profile": "ln200"}})
+    spec = SweepSpec.from_dict({**base, "drive": {**base["drive"], "noise_profile": "ln200s"}})
+    assert spec.drive is not None and spec.drive.to_dict()["noise_profile"] == "ln200s"
+
+    seen: dict = {}
+
+    class _Stop(Exception):
+        pass
+
+    def fake_drive(scene, **kwargs):
+        seen.update(kwargs)
+        raise _Stop
+
+    monkeypatch.setattr(ms, "drive", fake_drive)
+    with pytest.raises(_Stop):
+        drive_cell(tmp_path, spec.drive, tmp_path / "drive")
+    assert seen["config"].noise.profile == "ln200s"
+    assert seen["config"].noise == ms.NoiseConfig(profile="ln200s")

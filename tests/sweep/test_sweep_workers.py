@@ -81,9 +81,9 @@ def test_remote_workers_with_dask_default_malloc_get_a_warning(
         scheduler_address: str, tmp_path, caplog: pytest.LogCaptureFixture) -> None:
     from sweep_util import write_sweep
 
-    from marsscene.sweep import load_sweep, run_sweep
+    from marsscene.sweep import SweepSpec, run_sweep
 
-    spec = load_sweep(write_sweep(tmp_path / "s.toml", "seed = [3]\n"))
+    spec = SweepSpec.from_toml(write_sweep(tmp_path / "s.toml", "seed = [3]\n"))
     with caplog.at_level("WARNING", logger="marsscene"):
         res = run_sweep(spec, tmp_path / "out", scheduler=scheduler_address)
     assert res.count("ok") == 1

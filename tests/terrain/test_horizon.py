@@ -80,3 +80,29 @@ def test_no_shadows_from_the_zenith_and_points_above_are_lit() -> None:
     np.testing.assert_array_equal(high, 1.0)
     a = sun_shadow(hf, _sun(120.0, 1.0))
     np.testing.assert_array_equal(a.depth_m, shadow.depth_m)  # deterministic
+
+
+def test_outer_terrain_of_a_level_of_detail_scene_casts_into_the_focus() -> None:
+    """A 10 m wall 30-40 m east, on the coarse outer grid only (the outer's focus square is
+    lowered under the focus terrain), shadows the whole focus at a 10 deg sun from the east
+    (shadow 57 m long) and none of it at 30 deg (17 m)."""
+    from marsscene.terrain.horizon import shadow_with_outer
+
+    focus = Heightfield.centered(np.zeros((81, 81), np.float32), 0.25)  # 20 m square
+    z = np.zeros((101, 101), np.float32)  # 100 m at 1 m posts
+    x = (np.arange(101) - 50.0)[None, :] + 0 * (np.arange(101)[:, None])
+    z[(x >= 30.0) & (x <= 40.0)] = 10.0
+    z[40:61, 40:61] = -5.0  # the lowered focus square
+    outer = Heightfield.centered(z, 1.0)
+    for elevation, shadowed in ((10.0, True), (30.0, False)):
+        e = math.radians(elevation)
+        sun = (math.cos(e), 0.0, math.sin(e))
+        alone = sun_shadow(focus, sun)
+        both = shadow_with_outer(alone, sun_shadow(outer, sun))
+        assert (alone.visibility() == 1.0).all()  # the focus alone is flat: no shadows
+        vis = both.visibility()
+        assert (vis == 0.0).all() if shadowed else (vis == 1.0).all(), (elevation, vis.mean())
+        if shadowed:  # the occluder: the wall's west top edge (x = 30 m), 20-40 m away
+            assert 19.0 <= both.distance_m.min() and both.distance_m.max() <= 41.0
+    with pytest.raises(ValueError, match="different sun directions"):
+        shadow_with_outer(sun_shadow(focus, (1.0, 0.0, 0.1)), sun_shadow(outer, (0.0, 1.0, 0.1)))

@@ -31,6 +31,8 @@ from numpy.typing import NDArray
 
 from marsscene.errors import ExportError
 from marsscene.runs.export.bag_data import depth_m
+from marsscene.runs.export.options import IMAGE_CODECS
+from marsscene.runs.logs import png_bytes
 from marsscene.runs.runlog import read_image
 
 __all__ = [
@@ -41,11 +43,12 @@ __all__ = [
     "PNG_LEVEL",
     "JpegCache",
     "compressed_depth",
+    "compressed_depth_mm",
     "compressed_image",
+    "compressed_image_array",
     "inverse_depth",
 ]
 
-IMAGE_CODECS = ("png", "jpeg")
 #: ``compressed_image_transport``'s default ``jpeg_quality``.
 JPEG_QUALITY = 95
 #: ``png_level`` of both publishers' defaults (zlib level 3).
@@ -151,7 +154,18 @@ def compressed_image(path: Path, codec: str, *, jpeg_quality: int = JPEG_QUALITY
     arr = read_image(path)
     if arr.dtype != np.uint8:
         raise ExportError(f"{path}: a {arr.dtype} image cannot be a JPEG (8-bit only)")
-    fmt = "mono8; jpeg compressed mono8" if arr.ndim == 2 else "rgb8; jpeg compressed bgr8"
+    return compressed_image_array(arr, codec, jpeg_quality=jpeg_quality)
+
+
+def compressed_image_array(arr: NDArray[np.uint8], codec: str, *,
+                           jpeg_quality: int = JPEG_QUALITY) -> tuple[str, bytes]:
+    """``(format, data)`` of a ``CompressedImage`` from a rendered RGB (H, W, 3) or mono (H, W)
+    uint8 image: the bytes :func:`compressed_image` makes from the run's PNG of it (``png``: the
+    run folder's own PNG encoding)."""
+    mono = arr.ndim == 2
+    if codec == "png":
+        return ("mono8; png compressed " if mono else "rgb8; png compressed bgr8"), png_bytes(arr)
+    fmt = "mono8; jpeg compressed mono8" if mono else "rgb8; jpeg compressed bgr8"
     return fmt, _jpeg(arr, jpeg_quality)
 
 
@@ -181,17 +195,28 @@ def compressed_depth(path: Path, encoding: str, distro: str = "jazzy",
     ``depth_max``) or ``"32FC1"`` (metres, :func:`~.bag_data.depth_m`, quantised by
     :func:`inverse_depth`).
     """
+    if encoding == "16UC1" and round(depth_max_m * 1000.0) >= 65535:
+        fmt = f"{encoding}; compressedDepth" + (" png" if distro != "humble" else "")
+        return fmt, struct.pack("<iff", _INV_DEPTH, 0.0, 0.0) + path.read_bytes()
+    return compressed_depth_mm(read_image(path), encoding, distro, depth_max_m, z0_m)
+
+
+def compressed_depth_mm(mm: NDArray[np.uint16], encoding: str, distro: str = "jazzy",
+                        depth_max_m: float = DEPTH_MAX_M,
+                        z0_m: float = DEPTH_QUANTIZATION_M) -> tuple[str, bytes]:
+    """``(format, data)`` of a ``compressedDepth`` message from a uint16 mm depth image: the
+    bytes :func:`compressed_depth` makes from the run's PNG of it (``16UC1``: that very PNG,
+    :func:`~marsscene.runs.logs.png_bytes`)."""
     fmt = f"{encoding}; compressedDepth" + (" png" if distro != "humble" else "")
-    data = path.read_bytes()
     if encoding == "16UC1":
         header = struct.pack("<iff", _INV_DEPTH, 0.0, 0.0)  # params unused for 16UC1
         if round(depth_max_m * 1000.0) >= 65535:
-            return fmt, header + data
-        mm = read_image(path).astype(np.uint16)
+            return fmt, header + png_bytes(np.asarray(mm, dtype=np.uint16))
+        mm = np.array(mm, dtype=np.uint16)
         mm[mm > np.uint16(round(depth_max_m * 1000.0))] = 0
         return fmt, header + _png(mm)
     if encoding != "32FC1":
         raise ExportError(f"depth encoding {encoding!r}; expected 32FC1 or 16UC1")
-    q, a, b = inverse_depth(depth_m(read_image(path)), depth_max_m, z0_m)
+    q, a, b = inverse_depth(depth_m(mm), depth_max_m, z0_m)
     return fmt, struct.pack("<iff", _INV_DEPTH, a, b) + _png(q)
 

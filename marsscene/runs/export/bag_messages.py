@@ -1,5 +1,10 @@
 """ROS 2 message builders on one ``rosbags`` typestore and the time-ordered queue of a bag's
-messages (the only module that touches ``rosbags`` types; :mod:`.bag` writes the bag)."""
+messages (the only module that touches ``rosbags`` types; :mod:`.bag` writes the bag).
+
+Each builder makes one message from one sample's values; the bag (:mod:`.bag_topics`, from a
+run folder's files) and the live publisher (:mod:`.sample_messages`, from a drive's samples as
+they are made) call the same builders, and :meth:`MessageBuilder.serialize` gives the CDR bytes
+that both the bag and the DDS wire carry."""
 
 from __future__ import annotations
 
@@ -43,6 +48,14 @@ class MessageBuilder:
         order = list(self.topics).index(topic)
         self.events.append((round(float(t_s) * 1e9), order, len(self.events), build, args))
 
+    def serialize(self, msg: Any) -> bytes | memoryview:
+        """CDR bytes of ``msg`` (little-endian, with the 4-byte encapsulation header)."""
+        return self.store.serialize_cdr(msg, msg.__msgtype__)
+
+    def stamp(self, t_s: float) -> Any:
+        ns = round(t_s * 1e9)
+        return self.T["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+
     def header(self, t_s: float, frame: str) -> Any:
         ns = round(t_s * 1e9)
         return self.T["std_msgs/msg/Header"](
@@ -79,14 +92,38 @@ class MessageBuilder:
                 twist=twist, covariance=np.zeros(36) if twist_cov is None else twist_cov),
         )
 
-    def imu(self, t_s: float, row: Any, gyro_var: float, accel_var: float) -> Any:
+    def clock(self, t_s: float) -> Any:
+        """``rosgraph_msgs/Clock`` at ``t_s``."""
+        return self.T["rosgraph_msgs/msg/Clock"](clock=self.stamp(t_s))
+
+    def tf_message(self, transforms: list[Any]) -> Any:
+        return self.T["tf2_msgs/msg/TFMessage"](transforms=transforms)
+
+    def state_tf(self, t_s: float, map_odom: tuple[Any, Any], odom_base: tuple[Any, Any]) -> Any:
+        """``/tf``: ``map -> odom`` and ``odom -> base_link``, each ``(xyz_m, quat_xyzw)``."""
+        return self.tf_message([self.tf(t_s, "map", "odom", *map_odom),
+                                self.tf(t_s, "odom", "base_link", *odom_base)])
+
+    def twist(self, v_m_s: float, omega_rad_s: float) -> Any:
+        """``geometry_msgs/Twist`` of a ``cmd_vel`` ``(v, omega)``."""
+        return self.T["geometry_msgs/msg/Twist"](linear=self.vec((v_m_s, 0, 0)),
+                                                 angular=self.vec((0, 0, omega_rad_s)))
+
+    def joint_state(self, t_s: float, names: list[str], position: Any, velocity: Any) -> Any:
+        return self.T["sensor_msgs/msg/JointState"](
+            header=self.header(t_s, "base_link"), name=names, position=position,
+            velocity=velocity, effort=np.zeros(0))
+
+    def imu(self, t_s: float, accel_m_s2: Any, gyro_rad_s: Any, gyro_var: float,
+            accel_var: float) -> Any:
+        """``sensor_msgs/Imu`` (no orientation, REP-145) with diagonal noise variances."""
         cov_o = np.zeros(9)
         cov_o[0] = -1.0  # REP-145: no orientation estimate
         return self.T["sensor_msgs/msg/Imu"](
             header=self.header(t_s, "imu_link"), orientation=self.quat((0, 0, 0, 1)),
-            orientation_covariance=cov_o, angular_velocity=self.vec(row[4:7]),
+            orientation_covariance=cov_o, angular_velocity=self.vec(gyro_rad_s),
             angular_velocity_covariance=np.diag([gyro_var] * 3).ravel(),
-            linear_acceleration=self.vec(row[1:4]),
+            linear_acceleration=self.vec(accel_m_s2),
             linear_acceleration_covariance=np.diag([accel_var] * 3).ravel(),
         )
 
@@ -106,14 +143,20 @@ class MessageBuilder:
         )
 
     def camera_info(self, t_s: float, frame: str, cam: CameraStream, tx: float) -> Any:
-        k = cam.k
+        """``sensor_msgs/CameraInfo`` of a run folder's camera stream."""
+        return self.camera_info_k(t_s, frame, cam.k, int(cam.intrinsics["width"]),
+                                  int(cam.intrinsics["height"]), tx)
+
+    def camera_info_k(self, t_s: float, frame: str, k: Any, width: int, height: int,
+                      tx: float) -> Any:
+        """``sensor_msgs/CameraInfo``: plumb_bob, no distortion, ``P = [K | (tx, 0, 0)]``."""
         p = np.hstack([k, [[tx], [0.0], [0.0]]])
         roi = self.T["sensor_msgs/msg/RegionOfInterest"](
             x_offset=0, y_offset=0, height=0, width=0, do_rectify=False
         )
         return self.T["sensor_msgs/msg/CameraInfo"](
-            header=self.header(t_s, frame), height=int(cam.intrinsics["height"]),
-            width=int(cam.intrinsics["width"]), distortion_model="plumb_bob", d=np.zeros(5),
+            header=self.header(t_s, frame), height=height,
+            width=width, distortion_model="plumb_bob", d=np.zeros(5),
             k=k.ravel(), r=np.eye(3).ravel(), p=p.ravel(), binning_x=0, binning_y=0, roi=roi,
         )
 
@@ -132,6 +175,14 @@ class MessageBuilder:
             row_step=rec.dtype.itemsize * shape[1], data=data, is_dense=False,
         )
 
+    def laser_scan(self, t_s: float, scan: dict[str, Any], period_s: float,
+                   horizontal_samples: int) -> Any:
+        """``sensor_msgs/LaserScan`` from :func:`~.bag_data.laser_scan`'s fields."""
+        return self.T["sensor_msgs/msg/LaserScan"](
+            header=self.header(t_s, "lidar_link"), time_increment=period_s / horizontal_samples,
+            scan_time=period_s,
+            **{k: v for k, v in scan.items() if k not in ("ring", "elevation_deg")})
+
     #: Threads that build and serialise messages ahead of the writer (image codecs and file
     #: reads release the GIL; the writer's chunk compression runs beside them).
     workers = min(4, os.cpu_count() or 1)
@@ -139,7 +190,7 @@ class MessageBuilder:
     def _encode(self, event: tuple[Any, ...]) -> tuple[int, int, bytes | memoryview]:
         ns, order, _, build, args = event
         msg = build(*args)
-        return ns, order, self.store.serialize_cdr(msg, msg.__msgtype__)
+        return ns, order, self.serialize(msg)
 
     def write(self, path: Path, storage: str, compression: str,
               progress: Callable[[int, int], None] | None) -> dict[str, int]:

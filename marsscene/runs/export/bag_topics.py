@@ -20,8 +20,8 @@ from marsscene.errors import RuntimeSimError
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.runs.export import bag_data as bd
 from marsscene.runs.export import bag_images as bi
-from marsscene.runs.export.datasets import imu_noise_declared
 from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
+from marsscene.runs.export.imu_noise import imu_noise_declared
 from marsscene.runs.runlog import CameraStream, RunLog, read_image, read_ply
 
 if TYPE_CHECKING:
@@ -69,18 +69,15 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
                      ("/rover/joint_states", "sensor_msgs/msg/JointState"),
                      ("/rover/imu_noisy", "sensor_msgs/msg/Imu")):
         bag.topic(name, mt)
-    tfm = bag.T["tf2_msgs/msg/TFMessage"]
-
     def tf_static() -> Any:
-        return tfm(transforms=[bag.tf(t0, s.parent, s.child, s.xyz_m, s.quat_xyzw)
+        return bag.tf_message([bag.tf(t0, s.parent, s.child, s.xyz_m, s.quat_xyzw)
                                for s in statics])
 
     bag.add("/tf_static", t0, tf_static)
     bag.add("/rover/robot_description", t0, bag.T["std_msgs/msg/String"],
             rover_urdf(run.rover, statics))
-    clock = bag.T["rosgraph_msgs/msg/Clock"]
     for t in run.imu[:, 0]:
-        bag.add("/clock", t, lambda t: clock(clock=bag.header(t, "").stamp), t)
+        bag.add("/clock", t, bag.clock, t)
     mo_xyz, mo_q = bd.map_to_odom(run.gt, run.odom)
     pos, vel, twist = bd.joint_states(run.wheels, run.rover)
     gt_lin, gt_ang = bd.body_twist_from_poses(run.gt)
@@ -89,12 +86,9 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     pose_cov, twist_cov = bd.odometry_covariances(run.meta, run.wheels, twist, od.timestamps_s,
                                                   np.unwrap(od_yaw), run.rover)
     names = [*DRIVE_JOINTS, *STEER_JOINTS]
-    js = bag.T["sensor_msgs/msg/JointState"]
-    tw = bag.T["geometry_msgs/msg/Twist"]
 
     def tf(i: int, t: float) -> Any:
-        return tfm(transforms=[bag.tf(t, "map", "odom", mo_xyz[i], mo_q[i]),
-                               bag.tf(t, "odom", "base_link", od.xyz_m[i], od.quat_xyzw[i])])
+        return bag.state_tf(t, (mo_xyz[i], mo_q[i]), (od.xyz_m[i], od.quat_xyzw[i]))
 
     def odom(i: int, t: float) -> Any:
         return bag.odometry(t, "odom", od.xyz_m[i], od.quat_xyzw[i], (twist[i, 0], 0, 0),
@@ -109,11 +103,10 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
         bag.add("/rover/GT_Trajectory", t, truth, i, t)
 
     def joints(i: int, t: float) -> Any:
-        return js(header=bag.header(t, "base_link"), name=names, position=pos[i],
-                  velocity=vel[i], effort=np.zeros(0))
+        return bag.joint_state(t, names, pos[i], vel[i])
 
     def cmd(row: np.ndarray) -> Any:
-        return tw(linear=bag.vec((row[1], 0, 0)), angular=bag.vec((0, 0, row[2])))
+        return bag.twist(row[1], row[2])
 
     for i, t in enumerate(run.wheels[:, 0]):
         bag.add("/rover/joint_states", t, joints, i, t)
@@ -124,11 +117,11 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     g_var = nd["gyroscope_noise_density"] ** 2 * nd["rate_hz"]
     a_var = nd["accelerometer_noise_density"] ** 2 * nd["rate_hz"]
     for row in run.imu:
-        bag.add("/rover/imu_noisy", row[0], bag.imu, row[0], row, g_var, a_var)
+        bag.add("/rover/imu_noisy", row[0], bag.imu, row[0], row[1:4], row[4:7], g_var, a_var)
     if run.imu_true is not None:
         bag.topic("/rover/imu", "sensor_msgs/msg/Imu")
         for row in run.imu_true:
-            bag.add("/rover/imu", row[0], bag.imu, row[0], row, 0.0, 0.0)
+            bag.add("/rover/imu", row[0], bag.imu, row[0], row[1:4], row[4:7], 0.0, 0.0)
 
 
 def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> None:
@@ -230,15 +223,12 @@ def add_lidar(
         raise RuntimeSimError(f"{run.path / 'run.json'} has no LiDAR configuration")
     bag.topic("/rover/lidar/points", "sensor_msgs/msg/PointCloud2")
     bag.topic("/rover/scan", "sensor_msgs/msg/LaserScan")
-    scan_t = bag.T["sensor_msgs/msg/LaserScan"]
     period = 1.0 / float(cfg.get("rate_hz", 10.0))
     load = _Shared(lambda i: read_ply(files[i]), 2)  # the cloud and the scan share one read
 
     def laser(i: int, t: float) -> Any:
-        s = bd.laser_scan(load(i), cfg)
-        return scan_t(header=bag.header(t, "lidar_link"),
-                      time_increment=period / int(cfg["horizontal_samples"]), scan_time=period,
-                      **{k: v for k, v in s.items() if k not in ("ring", "elevation_deg")})
+        return bag.laser_scan(t, bd.laser_scan(load(i), cfg), period,
+                              int(cfg["horizontal_samples"]))
 
     def cloud(i: int, t: float) -> Any:
         rec = load(i)

@@ -27,7 +27,8 @@ from io import StringIO
 from pathlib import Path
 from typing import Any
 
-from marsscene.errors import ExportError, missing_dependency
+from marsscene.errors import missing_dependency
+from marsscene.runs.export.options import DISTROS, BagOptions
 
 __all__ = ["COMPRESSIONS", "DISTROS", "HUMBLE_FIELDS", "METADATA_VERSION", "check_options",
            "finish_metadata", "humble_metadata", "open_writer", "require_backends"]
@@ -37,7 +38,6 @@ COMPRESSIONS: dict[str, tuple[str, int] | None] = {
     "none": None, "lz4": ("lz4", 0), "zstd_fast": ("zstd", -5), "zstd": ("zstd", 3),
     "zstd_small": ("zstd", 19),
 }
-DISTROS = ("jazzy", "humble")
 METADATA_VERSION = {"jazzy": 9, "humble": 5}
 #: Fields of rosbag2 metadata version 5 (Humble ``metadata_io.cpp``: the keys it encodes).
 HUMBLE_FIELDS = {
@@ -51,15 +51,9 @@ HUMBLE_FIELDS = {
 
 
 def check_options(storage: str, compression: str, distro: str) -> None:
-    """Refuse settings rosbag2 cannot write or read (:class:`~marsscene.errors.ExportError`)."""
-    if compression not in COMPRESSIONS:
-        raise ExportError(f"compression = {compression!r}; expected one of "
-                          f"{', '.join(COMPRESSIONS)}")
-    if distro not in DISTROS:
-        raise ExportError(f"ros_distro = {distro!r}; expected one of {', '.join(DISTROS)}")
-    if storage == "sqlite3" and compression == "lz4":
-        raise ExportError("compression 'lz4' is MCAP chunk compression; sqlite3 bags take "
-                          "zstd (rosbag2 message compression) or none")
+    """Refuse settings rosbag2 cannot write or read (:class:`~marsscene.errors.ExportError`):
+    the rules of :class:`~marsscene.runs.export.options.BagOptions`."""
+    BagOptions(storage=storage, compression=compression, ros_distro=distro)
 
 
 def require_backends(compression: str = "zstd") -> None:

@@ -1,20 +1,25 @@
 """SLAM dataset folders from a run folder: TUM RGB-D and EuRoC MAV (numpy + Pillow only).
 
-* ``tum-rgbd`` (Sturm et al. 2012): ``rgb/``, ``depth/`` (16-bit PNG, 5000 per metre, 0 = no
-  return), ``rgb.txt``, ``depth.txt``, ``groundtruth.txt`` (navcam optical frame in ``map``),
-  ``associations.txt`` and an ORB-SLAM3 settings file ``orbslam3_rgbd.yaml``.
+* ``tum-rgbd`` (Sturm et al. 2012): ``rgb/``, ``depth/`` (16-bit PNG, 0 = no return),
+  ``rgb.txt``, ``depth.txt``, ``groundtruth.txt`` (navcam optical frame in ``map``),
+  ``associations.txt`` and an ORB-SLAM3 settings file ``orbslam3_rgbd.yaml``. The depth
+  scale (counts per metre) is in ``depth.txt``'s header and the settings'
+  ``RGBD.DepthMapFactor`` (:func:`tum_depth_per_m`): the run's own 1000 when the images are
+  linked (``images="link"``, the default: the folder hard-links the run's PNGs, no second
+  copy), the TUM reference datasets' 5000 when converted (``images="convert"``).
 * ``euroc`` (Burri et al. 2016): ``mav0/cam0`` (navcam or stereo left), ``mav0/cam1`` (stereo
   right, when logged), ``mav0/imu0`` (noisy IMU, body = ``base_link``),
   ``mav0/state_groundtruth_estimate0``, each with ``data.csv`` and ``sensor.yaml``, plus
   ``timestamps.txt`` and ORB-SLAM3 settings (``orbslam3_stereo_inertial.yaml`` or
-  ``orbslam3_mono_inertial.yaml``). Images are mono8, as in EuRoC.
+  ``orbslam3_mono_inertial.yaml``). Images are the run's RGB PNGs, hard-linked
+  (``images="link"``; ORB-SLAM3 turns them grey itself), or mono8 copies as in EuRoC
+  (``images="convert"``).
 
 Commands to run ORB-SLAM3 on them: ``docs/ros.md``.
 """
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -27,14 +32,20 @@ from scipy.spatial.transform import Rotation
 from marsscene._atomic import replacing_dir
 from marsscene.errors import ExportError, RuntimeSimError
 from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
+from marsscene.runs.export.imu_noise import EUROC_IMU_KEYS, imu_noise_declared, rate_hz
+from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES
 from marsscene.runs.logs import png_bytes
 from marsscene.runs.runlog import CameraStream, RunLog, read_image
 
-__all__ = ["FORMATS", "TUM_DEPTH_PER_M", "export_dataset", "imu_noise_declared"]
+__all__ = ["FORMATS", "RUN_DEPTH_PER_M", "TUM_DEPTH_PER_M", "export_dataset",
+           "tum_depth_per_m"]
 
-FORMATS = ("tum-rgbd", "euroc")
-#: TUM RGB-D depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored as 0).
+FORMATS = DATASET_FORMATS
+#: TUM RGB-D reference depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored
+#: as 0); ``images="convert"`` writes it.
 TUM_DEPTH_PER_M = 5000
+#: The run folder's depth PNGs: millimetres (max 65.5 m); linked TUM RGB-D depth keeps it.
+RUN_DEPTH_PER_M = 1000
 
 
 def export_dataset(
@@ -44,16 +55,21 @@ def export_dataset(
     *,
     overwrite: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    images: str = "link",
 ) -> Path:
     """Write ``RUN_DIR`` as a ``tum-rgbd`` or ``euroc`` folder (default ``RUN_DIR/<format>``).
 
     Needs camera logs (``euroc`` also uses ``camera/left`` and ``camera/right`` when present);
     a camera-less run raises :class:`~marsscene.errors.RuntimeSimError`, an existing output
     folder :class:`~marsscene.errors.ExportError` unless ``overwrite``. ``progress(done,
-    total)`` is called per image written. Returns the folder.
+    total)`` is called per image written. ``images``: ``"link"`` hard-links the run's PNGs
+    (TUM depth at 1000 per metre, EuRoC in RGB; copied where the file system cannot link),
+    ``"convert"`` writes TUM depth at 5000 per metre and EuRoC mono8. Returns the folder.
     """
     if fmt not in FORMATS:
         raise ExportError(f"format = {fmt!r}; expected one of {', '.join(FORMATS)}")
+    if images not in DATASET_IMAGES:
+        raise ExportError(f"images = {images!r}; expected one of {', '.join(DATASET_IMAGES)}")
     run = RunLog(run_dir)
     cams = run.camera_streams()
     if not cams:
@@ -75,10 +91,21 @@ def export_dataset(
 
     with replacing_dir(final, overwrite=overwrite, create=False) as tmp:
         if fmt == "tum-rgbd":
-            _tum_rgbd(run, cams[0], statics, tmp, tick)
+            _tum_rgbd(run, cams[0], statics, tmp, tick, link=images == "link")
         else:
-            _euroc(run, used, statics, tmp, tick)
+            _euroc(run, used, statics, tmp, tick, link=images == "link")
     return final
+
+
+def tum_depth_per_m(folder: str | os.PathLike[str]) -> float:
+    """Depth counts per metre of a TUM RGB-D folder: its ``orbslam3_rgbd.yaml``'s
+    ``RGBD.DepthMapFactor`` (5000, the TUM reference, for folders without one)."""
+    path = Path(folder) / "orbslam3_rgbd.yaml"
+    if path.is_file():
+        for line in path.read_text(encoding="utf-8").splitlines():
+            if line.startswith("RGBD.DepthMapFactor:"):
+                return float(line.split(":", 1)[1])
+    return float(TUM_DEPTH_PER_M)
 
 
 def camera_trajectory(
@@ -105,23 +132,28 @@ def _link_or_copy(src: Path, dst: Path) -> None:
 
 
 def _tum_rgbd(
-    run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None]
+    run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None], *,
+    link: bool
 ) -> None:
     (out / "rgb").mkdir(parents=True)
     (out / "depth").mkdir()
     stamps = [f"{t:.6f}" for t in cam.stamps_s]
+    per_m = RUN_DEPTH_PER_M if link else TUM_DEPTH_PER_M
     for s, rgb, dep in zip(stamps, cam.rgb_files, cam.depth_files, strict=True):
         _link_or_copy(rgb, out / "rgb" / f"{s}.png")
-        mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // 1000)
-        (out / "depth" / f"{s}.png").write_bytes(
-            png_bytes(np.where(mm > 65535, 0, mm).astype(np.uint16)))
+        if link:
+            _link_or_copy(dep, out / "depth" / f"{s}.png")
+        else:
+            mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // RUN_DEPTH_PER_M)
+            (out / "depth" / f"{s}.png").write_bytes(
+                png_bytes(np.where(mm > 65535, 0, mm).astype(np.uint16)))
         tick()
     src = f"# file: marsscene run {run.path.name}\n"
     (out / "rgb.txt").write_text(_lines([f"{s} rgb/{s}.png" for s in stamps],
                                         "# color images\n" + src + "# timestamp filename\n"))
     (out / "depth.txt").write_text(_lines(
         [f"{s} depth/{s}.png" for s in stamps],
-        f"# depth maps ({TUM_DEPTH_PER_M} per metre, 0 = no return)\n" + src
+        f"# depth maps ({per_m} per metre, 0 = no return)\n" + src
         + "# timestamp filename\n"))
     (out / "associations.txt").write_text(
         _lines([f"{s} rgb/{s}.png {s} depth/{s}.png" for s in stamps], ""))
@@ -135,12 +167,13 @@ def _tum_rgbd(
         + "# timestamp tx ty tz qx qy qz qw\n"))
     i = cam.intrinsics
     (out / "orbslam3_rgbd.yaml").write_text(_orb_head(cam, run) + _orb_cam(1, i) + (
-        f"Stereo.ThDepth: 40.0\nStereo.b: 0.07\nRGBD.DepthMapFactor: {TUM_DEPTH_PER_M:.1f}\n"
+        f"Stereo.ThDepth: 40.0\nStereo.b: 0.07\nRGBD.DepthMapFactor: {per_m:.1f}\n"
     ) + _ORB_TAIL)
 
 
 def _euroc(
-    run: RunLog, cams: list[CameraStream], statics: list, out: Path, tick: Callable[[], None]
+    run: RunLog, cams: list[CameraStream], statics: list, out: Path, tick: Callable[[], None],
+    *, link: bool
 ) -> None:
     mav = out / "mav0"
     t_b_c = [frame_in_base(statics, camera_frame(c.name)) for c in cams]
@@ -149,16 +182,21 @@ def _euroc(
         (d / "data").mkdir(parents=True)
         ns = [round(t * 1e9) for t in cam.stamps_s]
         for n, rgb in zip(ns, cam.rgb_files, strict=True):
-            img = read_image(rgb)
-            mono = img if img.ndim == 2 else np.round(img @ [0.299, 0.587, 0.114]).astype(np.uint8)
-            (d / "data" / f"{n}.png").write_bytes(png_bytes(mono))
+            if link:
+                _link_or_copy(rgb, d / "data" / f"{n}.png")
+            else:
+                img = read_image(rgb)
+                mono = img if img.ndim == 2 else np.round(img @ [0.299, 0.587, 0.114]).astype(
+                    np.uint8)
+                (d / "data" / f"{n}.png").write_bytes(png_bytes(mono))
             tick()
         (d / "data.csv").write_text(_lines([f"{n},{n}.png" for n in ns],
                                            "#timestamp [ns],filename\n"))
         i = cam.intrinsics
         (d / "sensor.yaml").write_text(
-            f"sensor_type: camera\ncomment: marsscene {camera_frame(cam.name)}\n"
-            + _t_bs(tbc) + f"rate_hz: {_rate(cam.stamps_s):g}\n"
+            f"sensor_type: camera\ncomment: marsscene {camera_frame(cam.name)}"
+            f"{', rgb8 PNGs (links to the run frames)' if link else ''}\n"
+            + _t_bs(tbc) + f"rate_hz: {rate_hz(cam.stamps_s):g}\n"
             f"resolution: [{i['width']}, {i['height']}]\ncamera_model: pinhole\n"
             f"intrinsics: [{i['fx']:.9g}, {i['fy']:.9g}, {i['cx']:.9g}, {i['cy']:.9g}]\n"
             "distortion_model: radial-tangential\ndistortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n"
@@ -176,8 +214,8 @@ def _euroc(
     (imu / "sensor.yaml").write_text(
         f"sensor_type: imu\ncomment: marsscene IMU (body = base_link), noise profile "
         f"{nd['profile']}: white noise, per-run turn-on bias, bias random walk\n"
-        + _t_bs(np.eye(4)) + f"rate_hz: {_rate(run.imu[:, 0]):g}\n"
-        + "".join(f"{k}: {nd[k]:.9g}\n" for k in _EUROC_IMU_KEYS)
+        + _t_bs(np.eye(4)) + f"rate_hz: {rate_hz(run.imu[:, 0]):g}\n"
+        + "".join(f"{k}: {nd[k]:.9g}\n" for k in EUROC_IMU_KEYS)
     )
     gt = mav / "state_groundtruth_estimate0"
     gt.mkdir()
@@ -197,7 +235,7 @@ def _euroc(
         text += "Stereo.ThDepth: 60.0\n" + _cv_mat("Stereo.T_c1_c2",
                                                    np.linalg.inv(t_b_c[0]) @ t_b_c[1])
     text += _cv_mat("IMU.T_b_c1", t_b_c[0]) + "IMU.InsertKFsWhenLost: 0\n" + _orb_imu(nd) + (
-        f"IMU.Frequency: {_rate(run.imu[:, 0]):.1f}\n")
+        f"IMU.Frequency: {rate_hz(run.imu[:, 0]):.1f}\n")
     (out / f"orbslam3_{name}.yaml").write_text(text + _ORB_TAIL)
 
 
@@ -209,46 +247,11 @@ _EUROC_GT_HEAD = (
 )
 
 
-def _rate(stamps: NDArray[np.float64]) -> float:
-    return float(1.0 / np.median(np.diff(stamps))) if len(stamps) > 1 else 0.0
-
-
-#: EuRoC imu0/sensor.yaml noise keys (Kalibr convention: continuous-time densities).
-_EUROC_IMU_KEYS = ("gyroscope_noise_density", "gyroscope_random_walk",
-                   "accelerometer_noise_density", "accelerometer_random_walk")
 #: ORB-SLAM3 key, EuRoC key, floor used only where the simulated value is 0 (profile none).
 _ORB_IMU = (("IMU.NoiseGyro", "gyroscope_noise_density", 1e-5),
             ("IMU.NoiseAcc", "accelerometer_noise_density", 1e-4),
             ("IMU.GyroWalk", "gyroscope_random_walk", 1e-6),
             ("IMU.AccWalk", "accelerometer_random_walk", 1e-5))
-
-
-def imu_noise_declared(run: RunLog) -> dict[str, Any]:
-    """The simulated IMU noise of a run in the EuRoC/Kalibr convention (from ``run.json``).
-
-    White-noise densities (rad/s/sqrt(Hz), m/s^2/sqrt(Hz)) combine the profile's density with
-    any per-sample sigma: ``sqrt(density^2 + sigma^2 / rate)``; random walks are the bias
-    random-walk densities (rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)). Keys: ``profile``, ``rate_hz``
-    and :data:`_EUROC_IMU_KEYS`. Runs from before noise profiles read as profile ``none``.
-    """
-    noise, rate = run.meta.get("noise", {}), _rate(run.imu[:, 0])
-
-    def get(key: str) -> float:
-        return float(noise.get(key, 0.0))
-
-    def density(nd_key: str, sigma_key: str) -> float:
-        per_rate = get(sigma_key) ** 2 / rate if rate > 0 else get(sigma_key) ** 2
-        return math.sqrt(get(nd_key) ** 2 + per_rate)
-
-    return {
-        "profile": str(noise.get("profile", "none")),
-        "rate_hz": rate,
-        "gyroscope_noise_density": density("gyro_noise_density_rad_s_rthz", "gyro_sigma_rad_s"),
-        "gyroscope_random_walk": get("gyro_bias_walk_rad_s2_rthz"),
-        "accelerometer_noise_density": density("accel_noise_density_m_s2_rthz",
-                                               "accel_sigma_m_s2"),
-        "accelerometer_random_walk": get("accel_bias_walk_m_s3_rthz"),
-    }
 
 
 def _orb_imu(nd: dict[str, Any]) -> str:
@@ -299,7 +302,7 @@ def _orb_head(cam: CameraStream, run: RunLog) -> str:
     i = cam.intrinsics
     return (f'%YAML:1.0\n# ORB-SLAM3 settings for marsscene run {run.path.name}\n'
             f'File.version: "1.0"\nCamera.type: "PinHole"\nCamera.width: {i["width"]}\n'
-            f'Camera.height: {i["height"]}\nCamera.fps: {round(_rate(cam.stamps_s))}\n'
+            f'Camera.height: {i["height"]}\nCamera.fps: {round(rate_hz(cam.stamps_s))}\n'
             "Camera.RGB: 1\n")
 
 

@@ -1,0 +1,211 @@
+"""One SLAM benchmark cell (scene x tau x seed): build, route, drive, export, run the methods.
+
+A cell folder ``DIR/cells/<cell_id>/`` holds::
+
+    config.toml, scene/, result.json   the build, by :func:`marsscene.sweep.run_cell`
+    drive/                             the run folder (gt.tum, odom.tum, camera/, lidar/ ...),
+                                       route.tum, tum_rgbd/ and euroc/ exports, bag/ (if needed)
+    estimates/<method>.tum             each method's raw estimate
+    methods/<method>.json              each method's score row (written last: marks it done)
+
+Every stage is atomic and keyed by a hash of its inputs, so a resumed benchmark redoes only
+what changed or never finished. Errors never escape :func:`run_slam_cell`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import logging
+import math
+import time
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from marsscene._atomic import replacing_dir, write_atomic
+from marsscene.benchmark.slam.methods import CellData, estimate
+from marsscene.benchmark.slam.metrics import failed_score, score_estimate
+from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
+from marsscene.errors import MarsSceneError
+from marsscene.sweep.cell import run_cell
+from marsscene.sweep.grid import Cell
+
+__all__ = ["DRIVE_FILE", "run_slam_cell"]
+
+log = logging.getLogger("marsscene")
+DRIVE_FILE = "benchmark_drive.json"
+
+
+def _digest(doc: Any) -> str:
+    blob = json.dumps(doc, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(blob.encode("utf-8")).hexdigest()
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return doc if isinstance(doc, dict) else None
+
+
+def _write_json(path: Path, doc: dict[str, Any]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(path, json.dumps(doc, indent=1, sort_keys=True, default=str) + "\n")
+
+
+def is_lidar_cell(spec: SlamSpec, tau: float) -> bool:
+    """The cell of each scene and seed that logs the LiDAR and runs the tau-free methods."""
+    return math.isclose(tau, float(spec.lidar_tau or spec.tau[0]))
+
+
+def _route(scene: SceneSpec, scene_dir: Path) -> dict[str, Any]:
+    """The route arguments of :func:`marsscene.drive` (automatic routes authored here)."""
+    spec = scene.route
+    if spec.file is not None:
+        return {"route": spec.file}
+    if spec.waypoints is not None:
+        return {"waypoints": spec.waypoints}
+    from marsscene.benchmark.routes import auto_route, centred_on_asset
+    from marsscene.sim.world import load_world
+
+    world = load_world(scene_dir)
+    return {"route": auto_route(centred_on_asset(spec, scene_dir), world.heightfield,
+                                world.obstacles)}
+
+
+def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_hash: str,
+           force: bool, camera: bool = True) -> dict[str, Any]:
+    """Drive the cell's route with its sensors into ``cell_dir/drive`` (unless done)."""
+    final = cell_dir / "drive"
+    route_doc: dict[str, Any] = dataclasses.asdict(scene.route)
+    if scene.route.file is not None:
+        route_doc["file_sha256"] = hashlib.sha256(Path(scene.route.file).read_bytes()).hexdigest()
+    run = spec.run_config(lidar=lidar, camera=camera)
+    bag = (lidar and spec.needs_bag()) or (bool(spec.sensors.get("bag", False))
+                                           and (run.camera is not None or run.lidar is not None))
+    key = _digest({"scene": scene_hash, "route": route_doc, "seconds": scene.seconds,
+                   "sensors": {k: v for k, v in spec.sensors.items()
+                               if (lidar or k != "lidar") and (camera or k != "camera")},
+                   "noise": dataclasses.asdict(run.noise),  # the profile's values, defaults too
+                   "lidar": lidar, "bag": bag})
+    done = None if force else _read_json(final / DRIVE_FILE)
+    if done is not None and done.get("key") == key:
+        return dict(done["summary"])
+    import marsscene as ms
+
+    # the LiDAR alone for KISS-ICP; every sensor when [sensors] bag = true
+    bag_options = ms.BagOptions(sensors=None if spec.sensors.get("bag") else ("lidar",))
+    with replacing_dir(final) as tmp:
+        t0 = time.perf_counter()
+        drv = ms.drive(
+            cell_dir / "scene", **_route(scene, cell_dir / "scene"), seconds=scene.seconds,
+            config=run, out_dir=tmp, seed=spec.noise_seed,
+            options=ms.DriveOptions(max_slope_deg=scene.route.max_slope_deg,
+                                    route_note=f"route of scene {scene.name}: {{length_m:.1f}} m"),
+            export=ms.ExportOptions(bag=bag_options if bag else None,
+                                    datasets=("tum-rgbd", "euroc") if run.camera else ()))
+        summary = {"route_m": round(drv.route.length_m, 3) if drv.route else None,
+                   "t_drive_s": time.perf_counter() - t0 - drv.export_s,
+                   **{k: drv.summary.get(k) for k in ("path_length_m", "sim_time_s",
+                                                      "goal_reached", "cross_track_rms_m")}}
+        _write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
+    return summary
+
+
+def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_key: str,
+           force: bool) -> dict[str, Any]:
+    """The method's row, from ``methods/<name>.json`` when its inputs did not change."""
+    path = data.cell_dir / "methods" / f"{method.name}.json"
+    key = _digest({"method": dataclasses.asdict(method), "drive": drive_key,
+                   "min_tracked": spec.min_tracked_fraction, "rpe_m": spec.rpe_distance_m})
+    done = None if force or method.kind == "tum-file" else _read_json(path)
+    if done is not None and done.get("key") == key:
+        return dict(done["row"])
+    t0 = time.perf_counter()
+    out_tum = data.cell_dir / "estimates" / f"{method.name}.tum"
+    est = estimate(method, data, out_tum)
+    try:
+        gt = data.ground_truth(str(method.frame))
+        if est.trajectory is None:
+            score = failed_score(est.status, est.note, align=str(method.align),
+                                 path_m=gt.path_length_m())
+        else:
+            score = score_estimate(
+                est.trajectory, gt, align=str(method.align),
+                frames_total=data.frames(str(method.sensor)), frames_tracked=est.frames_tracked,
+                min_tracked_fraction=spec.min_tracked_fraction,
+                rpe_distance_m=spec.rpe_distance_m)
+            if est.note and not score.note:
+                score = dataclasses.replace(score, note=est.note)
+    except MarsSceneError as err:
+        score = failed_score("failed", f"{type(err).__name__}: {err}", align=str(method.align))
+    row = {"method": method.name, "kind": method.kind, **score.as_row(),
+           "t_method_s": round(time.perf_counter() - t0, 3)}
+    _write_json(path, {"key": key, "row": row})
+    return row
+
+
+def _score_or_fail(spec: SlamSpec, method: MethodSpec, **kw: Any) -> dict[str, Any]:
+    """:func:`_score`, with an unexpected error as the method's ``failed`` row (the other
+    methods of the cell, maybe running beside it, keep theirs)."""
+    try:
+        return _score(spec, method, **kw)
+    except Exception as err:
+        msg = " ".join(f"{type(err).__name__}: {err}".split())
+        log.warning("method %s failed: %s", method.name, msg)
+        return {"method": method.name, "kind": method.kind,
+                **failed_score("failed", msg, align=str(method.align)).as_row()}
+
+
+def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = False,
+                  method_workers: int = 1) -> dict[str, Any]:
+    """Build, drive and score one cell into ``out_dir/<cell_id>/``; return its row.
+
+    The row has the sweep's build row (``status``, ``error``, timings ...) plus ``drive``
+    (route and drive summary) and ``methods``: one score row per method that runs in this cell
+    (LiDAR and wheel odometry only in the ``lidar_tau`` cell). A failed build or drive gives
+    ``status = "failed"`` and a ``failed`` row for every method. ``method_workers`` threads
+    score the methods side by side (rows in the spec's order whatever the finishing order).
+    """
+    scene = next(s for s in spec.scenes if s.name == cell.params["scene"])
+    tau, seed = float(cell.params["tau"]), int(cell.params["seed"])
+    methods = list(spec.methods_for(tau, seed))
+    # the main seeds' cells log every sensor of the spec; an extra seed's only what its
+    # methods need (e.g. none for the wheel odometry)
+    main = seed in spec.seeds
+    lidar = is_lidar_cell(spec, tau) and (main or any(m.sensor == "lidar" for m in methods))
+    camera = main or any(m.sensor == "camera" for m in methods)
+    row = run_cell(cell, out_dir, None, force=force)
+    row["methods"] = []
+    cell_dir = Path(out_dir) / cell.cell_id
+    try:
+        if row["status"] == "failed":
+            raise MarsSceneError(row["error"])
+        row["drive"] = drv = _drive(spec, scene, cell_dir, lidar, str(row.get("config_hash")),
+                                    force, camera)
+        row.update(distance_m=drv.get("path_length_m"), sim_time_s=drv.get("sim_time_s"),
+                   goal_reached=drv.get("goal_reached"), t_drive_s=drv.get("t_drive_s"),
+                   cross_track_rms_m=drv.get("cross_track_rms_m"))
+        drive_key = _read_json(cell_dir / "drive" / DRIVE_FILE) or {}
+        data = CellData(cell_dir, scene.name, tau, seed)
+        score = partial(_score_or_fail, spec, data=data, drive_key=str(drive_key.get("key")),
+                        force=force)
+        if method_workers <= 1 or len(methods) <= 1:
+            row["methods"] += [score(m) for m in methods]
+        else:
+            with ThreadPoolExecutor(min(method_workers, len(methods)),
+                                    thread_name_prefix="slam-method") as pool:
+                row["methods"] += list(pool.map(score, methods))  # in the spec's order
+    except Exception as err:  # one failing cell never stops the benchmark
+        msg = " ".join(f"{type(err).__name__}: {err}".split())
+        log.warning("cell %s failed: %s", cell.cell_id, msg)
+        row.update(status="failed", error=row.get("error") or msg)
+        done = {m["method"] for m in row["methods"]}
+        row["methods"] += [{"method": m.name, "kind": m.kind,
+                            **failed_score("failed", msg, align=str(m.align)).as_row()}
+                           for m in methods if m.name not in done]
+    return row

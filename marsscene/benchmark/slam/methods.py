@@ -1,0 +1,199 @@
+"""Method adapters of the SLAM benchmark: each turns one cell's logs into an estimate, or into
+a status saying why there is none (never an exception).
+
+=================  ==========================================================  ======  =====
+kind               estimate                                                    frame   align
+=================  ==========================================================  ======  =====
+wheel-odometry     the run's ``odom.tum`` (wheel odometry + IMU yaw)           base    SE(3)
+kiss-icp           KISS-ICP on the run's ROS 2 bag (:mod:`.kiss_icp`)          lidar   SE(3)
+open3d-rgbd        Open3D ``compute_rgbd_odometry``, frame to frame (hybrid;   camera  SE(3)
+                   ``wheel_prior``: the wheel odometry as guess and fallback,
+                   :mod:`.rgbd_odometry`)
+opencv-mono        :func:`~marsscene.benchmark.slam.mono_vo.mono_vo` on the RGB     camera  Sim(3)
+tum-file           a TUM file dropped into the cell (``file`` template)        any     any
+command            a command run per cell that writes ``{out_tum}``            any     any
+=================  ==========================================================  ======  =====
+
+``camera`` is the navcam optical frame (the TUM RGB-D export's ``groundtruth.txt``), ``lidar``
+the ``lidar_link`` frame, ``base`` the rover's ``base_link`` (``gt.tum``).
+"""
+
+from __future__ import annotations
+
+import shlex
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from marsscene.benchmark.slam.spec import MethodSpec
+from marsscene.errors import MarsSceneError, MissingDependencyError
+from marsscene.runs.runlog import RunLog, read_image
+from marsscene.runs.tum import Trajectory, read_tum
+
+__all__ = ["CellData", "Estimate", "estimate"]
+
+
+@dataclass(frozen=True)
+class CellData:
+    """Where one cell's data lies, and what it is (scene, tau, seed)."""
+
+    cell_dir: Path
+    scene: str
+    tau: float
+    seed: int
+
+    @property
+    def run_dir(self) -> Path:
+        return self.cell_dir / "drive"
+
+    @property
+    def paths(self) -> dict[str, str]:
+        """Placeholders of ``command`` / ``file`` templates (paths as strings)."""
+        return {"cell_dir": str(self.cell_dir), "run_dir": str(self.run_dir),
+                "tum_rgbd_dir": str(self.run_dir / "tum_rgbd"),
+                "euroc_dir": str(self.run_dir / "euroc"), "bag_dir": str(self.run_dir / "bag"),
+                "scene_dir": str(self.cell_dir / "scene"), "scene": self.scene,
+                "tau": f"{self.tau:g}", "seed": str(self.seed)}
+
+    def ground_truth(self, frame: str) -> Trajectory:
+        """Ground truth of ``base``, ``camera`` (navcam optical) or ``lidar`` (lidar_link)."""
+        if frame == "camera":
+            return read_tum(self.run_dir / "tum_rgbd" / "groundtruth.txt")
+        run = RunLog(self.run_dir)
+        if frame == "lidar":
+            from marsscene.benchmark.slam.kiss_icp import lidar_ground_truth
+
+            return lidar_ground_truth(run)
+        return run.gt
+
+    def frames(self, sensor: str) -> int:
+        """Sensor frames of the run: camera images, LiDAR scans, or ground-truth poses."""
+        if sensor == "camera":
+            return len(_associations(self.run_dir / "tum_rgbd"))
+        if sensor == "lidar":
+            stamps = RunLog(self.run_dir).lidar_stamps_s  # the scans may be in the bag only
+            return 0 if stamps is None else len(stamps)
+        return len(read_tum(self.run_dir / "gt.tum"))
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A method's trajectory (None if it gave none), tracked frames, status and note."""
+
+    trajectory: Trajectory | None
+    frames_tracked: int | None = None
+    status: str = "ok"
+    note: str = ""
+
+
+def _associations(folder: Path) -> list[list[str]]:
+    text = (folder / "associations.txt").read_text(encoding="utf-8")
+    return [ln.split() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
+
+
+def _intrinsics(folder: Path) -> dict[str, float]:
+    import json
+
+    return json.loads((folder / "camera" / "intrinsics.json").read_text(encoding="utf-8"))
+
+
+def _trajectory(stamps_s: NDArray[np.float64], poses: NDArray[np.float64]) -> Trajectory:
+    """Trajectory of camera-to-world 4x4 poses (N, 4, 4)."""
+    return Trajectory(stamps_s, poses[:, :3, 3], Rotation.from_matrix(poses[:, :3, :3]).as_quat())
+
+
+def _open3d_rgbd(cell: CellData, method: MethodSpec) -> Estimate:
+    from marsscene.benchmark.slam.rgbd_odometry import rgbd_odometry
+
+    opts = {k: method.options[k] for k in ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
+                                           "max_step_dev_deg", "decimate")
+            if k in method.options}
+    res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, **opts)
+    note = (f"{res.fallbacks} of {len(res.poses) - 1} steps from the wheel odometry"
+            if opts.get("wheel_prior") else "")
+    return Estimate(_trajectory(res.stamps_s, res.poses), frames_tracked=int(res.visual.sum()),
+                    note=note)
+
+
+def _opencv_mono(cell: CellData, method: MethodSpec) -> Estimate:
+    from marsscene.benchmark.slam.mono_vo import mono_vo
+
+    folder = cell.run_dir / "tum_rgbd"
+    rows = _associations(folder)
+    i = _intrinsics(cell.run_dir)
+    k = np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
+    weights = np.array([0.299, 0.587, 0.114])
+    gray = (np.clip(read_image(folder / r[1])[..., :3] @ weights, 0, 255).astype(np.uint8)
+            for r in rows)
+    opts = {k_: method.options[k_] for k_ in ("max_corners", "min_parallax_px", "min_inliers")
+            if k_ in method.options}
+    res = mono_vo(gray, k, **opts)
+    stamps = np.array([float(r[0]) for r in rows])[res.tracked]
+    traj = _trajectory(stamps, res.poses[res.tracked]) if res.tracked.sum() else None
+    return Estimate(traj, frames_tracked=int(res.tracked.sum()), note=res.note)
+
+
+def _external(cell: CellData, method: MethodSpec, out_tum: Path) -> Estimate:
+    fill = {**cell.paths, "method": method.name, "out_tum": str(out_tum)}
+    if method.kind == "tum-file":
+        path = Path(method.file.format(**fill))
+        if not path.is_file():
+            return Estimate(None, status="missing", note=f"no estimate at {path}")
+        return Estimate(read_tum(path))
+    assert method.command is not None
+    try:
+        argv = [part.format(**fill) for part in shlex.split(method.command)]
+    except (KeyError, ValueError, IndexError) as err:
+        return Estimate(None, status="failed", note=f"bad command template: {err}")
+    out_tum.parent.mkdir(parents=True, exist_ok=True)
+    out_tum.unlink(missing_ok=True)
+    try:
+        done = subprocess.run(argv, cwd=cell.cell_dir, capture_output=True, text=True,
+                              timeout=method.timeout_s, check=False)
+    except FileNotFoundError:
+        return Estimate(None, status="missing", note=f"{argv[0]!r} not found")
+    except subprocess.TimeoutExpired:
+        return Estimate(None, status="failed", note=f"timed out after {method.timeout_s:g} s")
+    if done.returncode != 0 or not out_tum.is_file():
+        tail = (done.stderr or done.stdout).strip().splitlines()[-1:] or [""]
+        why = f"exit code {done.returncode}" if done.returncode else f"no {out_tum} written"
+        return Estimate(None, status="failed", note=f"{why}: {tail[0][:200]}")
+    return Estimate(read_tum(out_tum))
+
+
+def estimate(method: MethodSpec, cell: CellData, out_tum: Path) -> Estimate:
+    """Run ``method`` on ``cell``; built-in estimates are also written to ``out_tum``.
+
+    A missing dependency gives ``missing``, any other error ``failed`` (with the reason).
+    """
+    from marsscene.runs.tum import write_tum
+
+    try:
+        if method.kind in ("tum-file", "command"):
+            return _external(cell, method, out_tum)
+        if method.kind == "wheel-odometry":
+            est = Estimate(read_tum(cell.run_dir / "odom.tum"))
+        elif method.kind == "kiss-icp":
+            from marsscene.benchmark.slam.kiss_icp import run_kiss_icp
+
+            traj = run_kiss_icp(cell.run_dir / "bag", timeout_s=method.timeout_s)
+            est = Estimate(traj, status="ok" if traj is not None else "failed",
+                           note="" if traj is not None else "KISS-ICP wrote no trajectory")
+        elif method.kind == "open3d-rgbd":
+            est = _open3d_rgbd(cell, method)
+        else:
+            est = _opencv_mono(cell, method)
+    except MissingDependencyError as err:
+        return Estimate(None, status="missing", note=str(err))
+    except (MarsSceneError, OSError, ValueError, RuntimeError,
+            subprocess.TimeoutExpired) as err:
+        return Estimate(None, status="failed", note=f"{type(err).__name__}: {err}")
+    if est.trajectory is not None and len(est.trajectory):
+        out_tum.parent.mkdir(parents=True, exist_ok=True)
+        write_tum(out_tum, est.trajectory, header=f"{method.name} ({method.kind}) on {cell.scene}"
+                  f" tau={cell.tau:g} seed={cell.seed}")
+    return est

@@ -1,0 +1,177 @@
+"""RGB-D odometry baselines with Open3D: frame to frame, plain or with the wheel odometry.
+
+Both run Open3D's ``compute_rgbd_odometry`` (Steinbrücker et al. 2011 photometric term plus
+Park et al. 2017 depth term, ``RGBDOdometryJacobianFromHybridTerm``) from each frame to the
+next on the TUM RGB-D export and chain the steps.
+
+* ``open3d-rgbd`` (plain): every pair starts from the identity; a pair Open3D reports as failed
+  keeps the previous step (constant velocity).
+* ``open3d-rgbd`` with ``options.wheel_prior = true``: the wheel odometry (``odom.tum``:
+  wheel speeds and the IMU's yaw rate, what RTAB-Map receives as ``odom_topic`` in the
+  paper's RGB-D + wheel-odometry setup) gives each pair's **initial guess**, the camera's
+  motion between the two frames, and its **fallback**: where Open3D fails, or its step departs
+  from the wheel step by more than ``max_step_dev_m`` (translation) or ``max_step_dev_deg``
+  (rotation), the wheel step is used. Tracked frames are those whose visual step was kept.
+
+``decimate = 2`` runs on images halved in each direction (colour and depth averaged over 2 x 2
+pixels, a block with a missing depth has none; intrinsics halved): a quarter of the pixels,
+about a quarter of the time.
+
+Open3D's result is not bit-reproducible run to run: the same pair gives transforms that
+differ by ~1e-14 between calls, with one OpenMP thread too (``OMP_NUM_THREADS=1``; no setting
+of the Python API removes it), and over thousands of pairs the rare pair near a convergence
+or success threshold then ends differently (1.049 vs 1.054 m ATE on one cell's data). Every
+other baseline of the benchmark is deterministic.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene.errors import RuntimeSimError, missing_dependency
+from marsscene.runs.runlog import RunLog, read_image
+
+__all__ = ["RgbdOdometry", "rgbd_odometry", "wheel_camera_steps"]
+
+
+@dataclass(frozen=True)
+class RgbdOdometry:
+    """Camera-to-world poses (N, 4, 4) at ``stamps_s`` (N,); ``visual[k]``: frame k's pose
+    came from a kept visual step (frame 0: True)."""
+
+    stamps_s: NDArray[np.float64]
+    poses: NDArray[np.float64]
+    visual: NDArray[np.bool_]
+
+    @property
+    def fallbacks(self) -> int:
+        """Pairs whose step was not Open3D's (failed, or departing from the wheel prior)."""
+        return int((~self.visual[1:]).sum())
+
+
+def _associations(folder: Path) -> list[list[str]]:
+    text = (folder / "associations.txt").read_text(encoding="utf-8")
+    return [ln.split() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
+
+
+def wheel_camera_steps(run_dir: Path, stamps_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The navcam's motion between consecutive frames from the wheel odometry: (N - 1, 4, 4),
+    the pose of frame k in the optical frame of frame k - 1 (``odom.tum`` at the frames'
+    stamps, composed with the navcam's mount)."""
+    from scipy.spatial.transform import Rotation
+
+    from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
+
+    run = RunLog(run_dir)
+    odom = run.odom
+    idx = np.searchsorted(odom.timestamps_s, stamps_s - 1e-6)
+    idx = np.clip(idx, 0, len(odom) - 1)
+    if np.abs(odom.timestamps_s[idx] - stamps_s).max(initial=0.0) > 0.011:
+        raise RuntimeSimError(f"{run_dir}: odom.tum has no pose at some camera frames")
+    base = np.tile(np.eye(4), (len(idx), 1, 1))
+    base[:, :3, :3] = Rotation.from_quat(odom.quat_xyzw[idx]).as_matrix()
+    base[:, :3, 3] = odom.xyz_m[idx]
+    name = run.camera_streams()[0].name
+    cam = base @ frame_in_base(static_transforms(run.rover, {}), camera_frame(name))
+    return np.linalg.inv(cam[:-1]) @ cam[1:]
+
+
+def _step_deviation(a: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[float, float]:
+    """Translation (m) and rotation (deg) between two rigid steps."""
+    d = np.linalg.inv(a) @ b
+    cos = np.clip((np.trace(d[:3, :3]) - 1.0) / 2.0, -1.0, 1.0)
+    return float(np.linalg.norm(a[:3, 3] - b[:3, 3])), float(np.degrees(np.arccos(cos)))
+
+
+def _halve(img: NDArray[Any], times: int) -> NDArray[Any]:
+    """``img`` averaged over blocks of ``2 ** times`` pixels a side (depth: 0 where any is)."""
+    for _ in range(times):
+        h, w = img.shape[0] // 2 * 2, img.shape[1] // 2 * 2
+        blocks = img[:h, :w].reshape(h // 2, 2, w // 2, 2, *img.shape[2:]).astype(np.float64)
+        mean = blocks.mean(axis=(1, 3))
+        if img.ndim == 2:  # depth: a block with a missing return has none
+            mean = np.where((blocks > 0).all(axis=(1, 3)), mean, 0.0)
+        img = np.rint(mean).astype(img.dtype)
+    return img
+
+
+def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
+                  wheel_prior: bool = False, max_step_dev_m: float = 0.02,
+                  max_step_dev_deg: float = 1.0, decimate: int = 1) -> RgbdOdometry:
+    """Frame-to-frame Open3D RGB-D odometry over a TUM RGB-D folder (module doc).
+
+    Parameters
+    ----------
+    folder : Path
+        The TUM RGB-D export (its depth scale from ``orbslam3_rgbd.yaml``).
+    run_dir : Path
+        The run folder (intrinsics; ``odom.tum`` for the wheel prior).
+    depth_trunc_m : float
+        Depth beyond this is ignored (m).
+    wheel_prior : bool
+        Start each pair from the wheel odometry's step and fall back to it (module doc).
+    max_step_dev_m, max_step_dev_deg : float
+        With ``wheel_prior``: largest departure of a visual step from the wheel step that is
+        kept (m, deg).
+    decimate : {1, 2, 4}
+        Image size divisor (module doc).
+    """
+    if decimate not in (1, 2, 4):
+        raise RuntimeSimError(f"open3d-rgbd decimate = {decimate!r}; expected 1, 2 or 4")
+    halvings = {1: 0, 2: 1, 4: 2}[decimate]
+    try:
+        import open3d as o3d
+    except ImportError:
+        raise missing_dependency("open3d", "bench") from None
+    from marsscene.runs.export.datasets import tum_depth_per_m
+
+    rows = _associations(folder)
+    i = json.loads((run_dir / "camera" / "intrinsics.json").read_text(encoding="utf-8"))
+    d = float(decimate)
+    pin = o3d.camera.PinholeCameraIntrinsic(int(i["width"]) // decimate,
+                                            int(i["height"]) // decimate, i["fx"] / d,
+                                            i["fy"] / d, i["cx"] / d, i["cy"] / d)
+    depth_scale = tum_depth_per_m(folder)
+    odo = o3d.pipelines.odometry
+    stamps = np.array([float(r[0]) for r in rows])
+    prior = wheel_camera_steps(run_dir, stamps) if wheel_prior else None
+
+    def frame(row: list[str]) -> Any:
+        rgb = np.ascontiguousarray(_halve(read_image(folder / row[1])[..., :3], halvings))
+        depth = np.ascontiguousarray(_halve(read_image(folder / row[3]).astype(np.uint16),
+                                            halvings))
+        image: Any = o3d.geometry.Image
+        return o3d.geometry.RGBDImage.create_from_color_and_depth(
+            image(rgb), image(depth), depth_scale=depth_scale, depth_trunc=depth_trunc_m,
+            convert_rgb_to_intensity=True)
+
+    jac, opt = odo.RGBDOdometryJacobianFromHybridTerm(), odo.OdometryOption()
+    pose: NDArray[Any] = np.eye(4)
+    step: NDArray[Any] = np.eye(4)
+    poses, visual = [pose], [True]
+    prev = frame(rows[0])
+    for k, row in enumerate(rows[1:]):  # T maps source (previous) points into the target
+        cur = frame(row)
+        init = np.eye(4) if prior is None else np.linalg.inv(prior[k])
+        success, trans, _ = odo.compute_rgbd_odometry(prev, cur, pin, init, jac, opt)
+        kept = bool(success)
+        if kept:
+            seen = np.linalg.inv(np.asarray(trans, dtype=np.float64))
+            if prior is not None:
+                dev_m, dev_deg = _step_deviation(prior[k], seen)
+                kept = dev_m <= max_step_dev_m and dev_deg <= max_step_dev_deg
+            if kept:
+                step = seen
+        if not kept and prior is not None:
+            step = prior[k]  # plain: a failed pair keeps the last motion (constant velocity)
+        pose = pose @ step
+        poses.append(pose)
+        visual.append(kept)
+        prev = cur
+    return RgbdOdometry(stamps, np.array(poses), np.array(visual))

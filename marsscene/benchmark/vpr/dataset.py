@@ -1,0 +1,261 @@
+"""Generate a place-recognition dataset: two traversals of one route, a frame per 0.1 m.
+
+Output folder (the layout of ``gmberton/VPR-methods-evaluation``, read unchanged)::
+
+    OUT/
+      database/@E@N@@@@@D0001234@@HEADING@PITCH@ROLL@Z@T@database@.jpg
+      queries/@E@N@...@queries@.jpg    E, N: the camera's east / north in scene metres
+      poses.csv            split, file, t_s, x_m, y_m, z_m, qx, qy, qz, qw (navcam optical
+                           frame in map), yaw_deg, tau, sun_elevation_deg, landmark_px (the
+                           landmark's height in the frame, px; 0: not in view)
+      dataset.json         the spec, the route, each traversal's offset and lookahead, counts
+      route.tum            the route both traversals follow (each shifted sideways)
+      scene/               the built scene (reused when its config is unchanged)
+      traversals/<split>/  each traversal's run folder (trajectories, run.json; no images)
+
+The file names carry the 14 ``@``-separated fields of that format: east, north, UTM zone and
+letter (empty: scene metres), latitude and longitude (empty), a frame id, tile (empty), the
+camera heading, pitch and roll in degrees, its height, the sim time and the split.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import io
+import json
+import logging
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene._atomic import replacing_dir, write_atomic
+from marsscene.benchmark.vpr.spec import SPLITS, TraversalSpec, VprSpec
+from marsscene.errors import RuntimeSimError
+
+__all__ = ["generate_vpr", "image_name", "offset_route"]
+
+log = logging.getLogger(__name__)
+
+
+def image_name(east_m: float, north_m: float, frame: int, yaw_deg: float, pitch_deg: float,
+               roll_deg: float, z_m: float, t_s: float, split: str) -> str:
+    """``@east@north@zone@letter@lat@lon@id@tile@heading@pitch@roll@height@time@note@.jpg``."""
+    return (f"@{east_m:.3f}@{north_m:.3f}@@@@@D{frame:07d}@@{yaw_deg:.2f}@{pitch_deg:.2f}"
+            f"@{roll_deg:.2f}@{z_m:.3f}@{t_s:.3f}@{split}@.jpg")
+
+
+def offset_route(xy_m: NDArray[np.float64], offset_m: float) -> NDArray[np.float64]:
+    """The polyline shifted sideways by ``offset_m`` (positive: to the left of travel)."""
+    d = np.gradient(np.asarray(xy_m, dtype=np.float64), axis=0)
+    n = np.column_stack([-d[:, 1], d[:, 0]]) / np.maximum(np.hypot(d[:, 0], d[:, 1]),
+                                                          1e-12)[:, None]
+    return xy_m + offset_m * n
+
+
+def _scene(spec: VprSpec, out: Path) -> Path:
+    """Build the scene into ``out/scene`` unless the same config is there already."""
+    import marsscene as ms
+
+    cfg = ms.SceneConfig.from_dict(spec.scene.base_config())
+    key = json.dumps({"config": cfg.to_dict(), "seed": spec.scene_seed}, sort_keys=True,
+                     default=str)
+    final = out / "scene"
+    stamp = final / "vpr_scene_key.json"
+    if stamp.is_file() and stamp.read_text(encoding="utf-8") == key:
+        return final
+    log.info("building scene %s (seed %d)", spec.scene.name, spec.scene_seed)
+    scene = ms.build_scene(cfg, seed=spec.scene_seed)
+    with replacing_dir(final, overwrite=True) as tmp:
+        ms.write_scene(scene, tmp, formats=("mjcf",))
+        (tmp / "vpr_scene_key.json").write_text(key, encoding="utf-8")
+    return final
+
+
+def _route(spec: VprSpec, scene_dir: Path) -> Any:
+    from marsscene.benchmark.routes import auto_route, centred_on_asset
+    from marsscene.runs.tum import read_tum
+    from marsscene.sim.route import Route, author_route
+    from marsscene.sim.world import load_world
+
+    r = spec.scene.route
+    if r.file is not None:
+        return Route.from_trajectory(read_tum(r.file))
+    world = load_world(scene_dir)
+    if r.waypoints is not None:
+        return author_route(np.asarray(r.waypoints), world.heightfield,
+                            max_slope_deg=r.max_slope_deg, obstacles=world.obstacles)
+    return auto_route(centred_on_asset(r, scene_dir), world.heightfield, world.obstacles)
+
+
+def _traverse(spec: VprSpec, split: str, lighting: TraversalSpec, scene_dir: Path, route: Any,
+              offset_m: float, lookahead_m: float, run_dir: Path,
+              progress: Callable[[Any], None] | None) -> None:
+    import marsscene as ms
+    from marsscene.sim.pursuit import PursuitConfig
+    from marsscene.sim.route import Route
+
+    ms.drive(scene_dir, route=Route(offset_route(route.xy_m, offset_m)),
+             config=ms.RunConfig(camera=spec.camera_config(lighting)),
+             options=ms.DriveOptions(pursuit=PursuitConfig(lookahead_m=lookahead_m)),
+             out_dir=run_dir, seed=spec.seed + 1000 * SPLITS.index(split), progress=progress)
+
+
+def _write_split(split: str, run_dir: Path, dest: Path, quality: int,
+                 lighting: TraversalSpec) -> list[list[Any]]:
+    """JPEGs named by pose into ``dest``; the run's PNGs are removed. Rows of poses.csv."""
+    from PIL import Image
+    from scipy.spatial.transform import Rotation
+
+    from marsscene.runs.export.datasets import camera_trajectory
+    from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
+    from marsscene.runs.runlog import RunLog
+
+    run = RunLog(run_dir)
+    cam = run.camera_streams()[0]
+    xyz, q = camera_trajectory(run, frame_in_base(static_transforms(run.rover, {}),
+                                                  camera_frame(cam.name)))
+    idx = np.clip(np.searchsorted(run.gt.timestamps_s, cam.stamps_s - 1e-7), 0, len(xyz) - 1)
+    # heading / pitch / roll of the camera's viewing axis (optical +z) in the map frame
+    fwd = Rotation.from_quat(q[idx]).apply([0.0, 0.0, 1.0])
+    yaw = np.degrees(np.arctan2(fwd[:, 1], fwd[:, 0]))
+    pitch = np.degrees(np.arcsin(np.clip(fwd[:, 2], -1.0, 1.0)))
+    roll = Rotation.from_quat(run.gt.quat_xyzw[idx]).as_euler("xyz", degrees=True)[:, 0]
+    dest.mkdir()
+    rows = []
+    for i, (t, png) in enumerate(zip(cam.stamps_s, cam.rgb_files, strict=True)):
+        p, r = xyz[idx[i]], q[idx[i]]
+        name = image_name(p[0], p[1], i, yaw[i], pitch[i], roll[i], p[2], t, split)
+        with Image.open(png) as im:
+            im.convert("RGB").save(dest / name, format="JPEG", quality=quality)
+        png.unlink()
+        rows.append([split, f"{split}/{name}", f"{t:.6f}", *(f"{v:.6f}" for v in p),
+                     *(f"{v:.9f}" for v in r), f"{yaw[i]:.3f}", lighting.tau,
+                     lighting.sun_elevation_deg])
+    return rows
+
+
+_COLUMNS = ["split", "file", "t_s", "x_m", "y_m", "z_m", "qx", "qy", "qz", "qw", "yaw_deg", "tau",
+            "sun_elevation_deg"]
+
+
+def _write_rows(path: Path, rows: list[list[Any]], *, landmark: bool = False) -> None:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(_COLUMNS + (["landmark_px"] if landmark else []))
+    w.writerows(rows)
+    write_atomic(path, buf.getvalue())
+
+
+def _landmark(name: str, scene_dir: Path, out: Path, rows: list[list[Any]]) -> dict[str, Any]:
+    """Append each frame's landmark height (px) to its row; the shares of frames in view."""
+    from marsscene.benchmark.vpr.landmark import landmark_parts, landmark_pixels
+
+    mark, hf = landmark_parts(scene_dir, name)
+    intr = json.loads((out / "traversals" / SPLITS[0] / "camera" / "intrinsics.json")
+                      .read_text(encoding="utf-8"))
+    a = np.array([[float(v) for v in r[3:10]] for r in rows]).reshape(-1, 7)
+    px = landmark_pixels(mark, a[:, :3], a[:, 3:], intr, hf)
+    for r, v in zip(rows, px, strict=True):
+        r.append(f"{v:.1f}")
+    info: dict[str, Any] = {"name": name, "box_m": np.round(mark.box, 3).tolist(),
+                            "splits": {}}
+    for split in SPLITS:
+        mine = px[[r[0] == split for r in rows]]
+        seen = mine[mine > 0]
+        info["splits"][split] = {
+            "in_view_share": round(float((mine > 0).mean()), 4) if len(mine) else 0.0,
+            "at_least_20px_share": round(float((mine >= 20).mean()), 4) if len(mine) else 0.0,
+            "median_px_in_view": round(float(np.median(seen)), 1) if len(seen) else 0.0}
+    return info
+
+
+def _make_split(spec: VprSpec, split: str, scene_dir: Path, route_xy_m: NDArray[np.float64],
+                offset_m: float, lookahead_m: float, out: Path, key: str,
+                progress: Callable[[Any], None] | None = None) -> None:
+    """Drive one traversal and write its JPEGs (module level: runs in a worker process too)."""
+    from marsscene.sim.route import Route
+
+    lighting: TraversalSpec = getattr(spec, split)
+    with replacing_dir(out / "traversals" / split, overwrite=True) as run_dir, \
+            replacing_dir(out / split, overwrite=True, create=False) as dest:
+        _traverse(spec, split, lighting, scene_dir, Route(route_xy_m), offset_m, lookahead_m,
+                  run_dir, progress)
+        rows = _write_split(split, run_dir, dest, spec.jpeg_quality, lighting)
+        _write_rows(run_dir / "poses.csv", rows)
+        (run_dir / "vpr_key.json").write_text(key, encoding="utf-8")
+
+
+def generate_vpr(spec: VprSpec, out_dir: str | Path, *, overwrite: bool = False,
+                 resume: bool = False, workers: int = 1,
+                 progress: Callable[[str, Any], None] | None = None) -> dict[str, Any]:
+    """Build the scene, drive both traversals, write the dataset; returns ``dataset.json``.
+
+    Each traversal drives the route shifted sideways by a seeded offset in
+    ``+-lateral_offset_m`` with a seeded pure-pursuit lookahead, so database and queries are
+    never pixel-identical; frames are captured every ``spacing_m`` metres driven.
+    ``progress(split, DriveProgress)`` is called once per simulated second (with
+    ``workers=1``; ``workers=2`` drives the two traversals in two processes at once, the same
+    bytes in half the time on two free cores). ``resume`` reuses traversals finished in
+    ``out_dir`` with the same spec (``overwrite`` redoes them).
+    """
+    out = Path(out_dir)
+    if (out.exists() and any(p.name in SPLITS for p in out.iterdir()) and not overwrite
+            and not resume):
+        raise RuntimeSimError(f"{out} already holds a VPR dataset; pass overwrite=True "
+                              "(--overwrite) to replace it or resume=True (--resume)")
+    out.mkdir(parents=True, exist_ok=True)
+    scene_dir = _scene(spec, out)
+    route = _route(spec, scene_dir)
+    rng = np.random.default_rng(spec.seed)
+    draws = {s: (float(rng.uniform(-1, 1)) * spec.lateral_offset_m,
+                 2.0 + float(rng.uniform(-1, 1)) * spec.lookahead_jitter_m) for s in SPLITS}
+    doc: dict[str, Any] = {"spec": {k: v for k, v in asdict(spec).items() if k != "source"},
+                           "source": spec.source, "route_length_m": round(route.length_m, 3),
+                           "traversals": {}}
+    todo = []
+    for split in SPLITS:
+        key = json.dumps({"spec": doc["spec"], "split": split,
+                          "route": np.round(route.xy_m, 6).tolist()}, sort_keys=True,
+                         default=str)
+        done = out / "traversals" / split / "vpr_key.json"
+        if resume and done.is_file() and done.read_text(encoding="utf-8") == key \
+                and (out / split).is_dir():
+            log.info("%s: reusing the finished traversal", split)
+        else:
+            todo.append((spec, split, scene_dir, route.xy_m, *draws[split], out, key))
+    if workers > 1 and len(todo) > 1:
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(min(workers, len(todo)), mp.get_context("spawn")) as pool:
+            for f in [pool.submit(_make_split, *job) for job in todo]:
+                f.result()
+    else:
+        for job in todo:
+            split = job[1]
+            _make_split(*job, progress=None if progress is None
+                        else functools.partial(progress, split))
+    rows: list[list[Any]] = []
+    for split in SPLITS:
+        with open(out / "traversals" / split / "poses.csv", encoding="utf-8") as fh:
+            split_rows = list(csv.reader(fh))[1:]
+        rows += split_rows
+        doc["traversals"][split] = {"offset_m": round(draws[split][0], 6),
+                                    "lookahead_m": round(draws[split][1], 6),
+                                    "frames": len(split_rows), **asdict(getattr(spec, split))}
+    if spec.landmark_name:
+        doc["landmark"] = _landmark(spec.landmark_name, scene_dir, out, rows)
+    _write_rows(out / "poses.csv", rows, landmark=bool(spec.landmark_name))
+    from marsscene.runs.tum import write_tum
+    from marsscene.sim.world import load_world
+
+    write_tum(out / "route.tum", route.to_trajectory(load_world(scene_dir).heightfield),
+              header="VPR route (before offsets)")
+    write_atomic(out / "dataset.json", json.dumps(doc, indent=1, sort_keys=True, default=str)
+                 + "\n")
+    return doc

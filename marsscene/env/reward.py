@@ -1,0 +1,134 @@
+"""Rewards of the navigation environment: dense terms after RLRoverLab, or sparse.
+
+Dense terms (each divided by the episode's step count ``T`` as RLRoverLab does, so an episode's
+return is O(1) whatever the control rate; ``d`` the goal distance, ``b`` the goal bearing in
+the body frame, ``a`` the normalised action):
+
+==============  ======  ===================================================================
+term            weight  value per step
+==============  ======  ===================================================================
+distance        +5.0    ``1 / (1 + 0.11 d^2) / T``
+bearing         +5.0    ``1 / (1 + d) / (1 + |b|) / T``
+goal            +5.0    ``2 (T - t) / T`` once, at the step the goal is reached (time left)
+oscillation     -0.05   ``sum_i (3 |a_i - a'_i|)^4 / T`` over ``3 |a_i - a'_i| > 0.05`` (jerks)
+reverse         -0.5    ``1 / T`` when the speed command is negative
+heading_away    -1.5    ``|b| / T`` when ``|b| > 2 rad``
+collision       -3.0    ``1 / T`` per step the chassis, or a wheel against a rock, is in contact
+stray           -2.0    ``1`` at the step the rover strays from the start-goal corridor
+==============  ======  ===================================================================
+
+Source of the terms and weights: RLRoverLab, Aalborg University's Isaac Lab suite for rover
+navigation (https://github.com/abmoRobotics/RLRoverLab, ``rover_envs/envs/navigation/mdp/
+rewards.py`` and ``rover_env_cfg.py``, read 2026-11). Differences: the goal
+needs no final heading (a point goal), oscillation counts changes of either sign, collisions do
+not end the episode (the rover may climb a rock; getting stuck ends it) and so cost ``1 / T``
+a step in contact (RLRoverLab's one-off -3 spread over a whole episode), and the goal tolerance
+is the task's (0.5 m for a 3 m rover, RLRoverLab: 0.18 m for a 1 m rover).
+
+Sparse: ``-1`` per step until the goal, ``0`` at it (Gymnasium-Robotics' convention).
+
+:func:`compute_reward` recomputes the goal terms from ``achieved_goal`` / ``desired_goal``
+(vectorised, for hindsight relabelling) and adds the goal-free terms kept in ``info``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene.errors import ConfigError
+
+__all__ = ["RewardConfig", "compute_reward", "goal_terms", "step_terms"]
+
+TERMS = ("distance", "bearing", "goal", "oscillation", "reverse", "heading_away", "collision",
+         "stray")
+
+
+@dataclass(frozen=True, kw_only=True)
+class RewardConfig:
+    """Reward kind and term weights (defaults: RLRoverLab's)."""
+
+    kind: str = "dense"
+    distance: float = 5.0
+    bearing: float = 5.0
+    goal: float = 5.0
+    oscillation: float = -0.05
+    reverse: float = -0.5
+    heading_away: float = -1.5
+    collision: float = -3.0
+    stray: float = -2.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("dense", "sparse"):
+            raise ConfigError(f"reward kind = {self.kind!r}; use dense or sparse")
+
+
+def _bearing(ag: NDArray[np.float64], dg: NDArray[np.float64],
+             yaw: NDArray[np.float64]) -> NDArray[np.float64]:
+    ang = np.arctan2(dg[..., 1] - ag[..., 1], dg[..., 0] - ag[..., 0]) - yaw
+    return (ang + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def goal_terms(ag: Any, dg: Any, *, yaw_rad: Any, steps_left: Any, steps_total: float,
+               tolerance_m: float, cfg: RewardConfig) -> dict[str, NDArray[np.float64]]:
+    """The goal-dependent terms (weighted), vectorised over leading dimensions."""
+    ag = np.asarray(ag, dtype=np.float64)
+    dg = np.asarray(dg, dtype=np.float64)
+    d = np.linalg.norm(ag - dg, axis=-1)
+    reached = d < tolerance_m
+    if cfg.kind == "sparse":
+        return {"goal": np.where(reached, 0.0, -1.0)}
+    b = np.abs(_bearing(ag, dg, np.asarray(yaw_rad, dtype=np.float64)))
+    t = float(steps_total)
+    return {
+        "distance": cfg.distance / (1.0 + 0.11 * d * d) / t,
+        "bearing": cfg.bearing / (1.0 + d) / (1.0 + b) / t,
+        "goal": np.where(reached, cfg.goal * 2.0 * np.asarray(steps_left) / t, 0.0),
+        "heading_away": np.where(b > 2.0, cfg.heading_away * b / t, 0.0),
+    }
+
+
+def step_terms(action: NDArray[np.float64], last_action: NDArray[np.float64], *,
+               collided: bool, strayed: bool, steps_total: float,
+               cfg: RewardConfig) -> dict[str, float]:
+    """The goal-free terms of one step (weighted); none for a sparse reward."""
+    if cfg.kind == "sparse":
+        return {}
+    t = float(steps_total)
+    jump = 3.0 * np.abs(np.asarray(action) - np.asarray(last_action))
+    osc = np.where(jump > 0.05, jump**2, 0.0) ** 2
+    return {
+        "oscillation": cfg.oscillation * float(osc.sum()) / t,
+        "reverse": cfg.reverse / t if action[0] < 0.0 else 0.0,
+        "collision": cfg.collision / t if collided else 0.0,
+        "stray": cfg.stray if strayed else 0.0,
+    }
+
+
+def _field(info: Any, key: str) -> NDArray[np.float64]:
+    if isinstance(info, Mapping):
+        return np.asarray(info[key], dtype=np.float64)
+    if isinstance(info, Sequence) or isinstance(info, np.ndarray):
+        return np.asarray([i[key] for i in info], dtype=np.float64)
+    raise ConfigError("info must be a dict (one step or arrays) or a sequence of dicts")
+
+
+def compute_reward(achieved_goal: Any, desired_goal: Any, info: Any, *,
+                   cfg: RewardConfig, tolerance_m: float, steps_total: float) -> Any:
+    """The reward of ``achieved_goal`` / ``desired_goal`` pairs (any leading shape).
+
+    ``info``: one step's info dict, a dict of arrays, or a sequence of info dicts; it supplies
+    ``yaw_rad``, ``steps_left`` and ``reward_other`` (the goal-free terms of the step).
+    """
+    yaw = _field(info, "yaw_rad")
+    left = _field(info, "steps_left")
+    other = _field(info, "reward_other")
+    terms = goal_terms(achieved_goal, desired_goal, yaw_rad=yaw, steps_left=left,
+                       steps_total=steps_total, tolerance_m=tolerance_m, cfg=cfg)
+    total = sum(terms.values()) + other
+    return float(total) if np.ndim(total) == 0 else total

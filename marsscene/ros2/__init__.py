@@ -1,0 +1,19 @@
+"""Live ROS 2 over DDS with no ROS installation: ``marsscene serve SCENE --ros2``.
+
+:func:`serve` runs the MuJoCo rover with its sensors and speaks ROS 2 on the wire through
+Eclipse Cyclone DDS (``pip install "marsscene[ros2]"``): the bag's topics published live (the
+same message builders and ``rosbags`` CDR bytes), ``cmd_vel`` subscribed with a time-out, reset /
+teleport / goal topics, sim time on ``/clock``, real-time pacing or as fast as it goes, and a
+localhost-only mode. Topics, QoS and how to connect ROS 2: ``docs/ros2_live.md``.
+
+``cyclonedds`` is imported only when a session starts (:mod:`.dds`).
+"""
+
+from marsscene._lazy import lazy_attributes
+from marsscene.ros2.options import Ros2Options
+
+__all__ = ["Ros2Options", "ServeResult", "serve"]
+
+__getattr__ = lazy_attributes(__name__, {
+    "ServeResult": "marsscene.ros2.live", "serve": "marsscene.ros2.live",
+})

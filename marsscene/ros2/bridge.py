@@ -1,0 +1,224 @@
+"""The live bridge: a drive's controller and listener that speaks ROS 2 over DDS.
+
+As a **listener** (:mod:`marsscene.sim.session`) it publishes every sample as it is made: the
+messages come from :class:`~marsscene.runs.export.sample_messages.SampleMessages` (the bag's
+builders) and go out as ``rosbags`` CDR through :mod:`.dds`; a topic nobody subscribes to is not
+built. As the **controller** (:mod:`marsscene.sim.control`) it is called once per control step:
+it reads the command topics (``cmd_vel``, reset, teleport, goal), stops the rover when the
+command is older than the timeout, and paces the simulation against the wall clock.
+
+Topics it subscribes to (besides ``cmd_vel``), in the spirit of OmniLRS's robot topics:
+
+* ``/marsscene/reset`` (``std_msgs/Empty``): the rover back to its start pose, at rest;
+* ``/marsscene/teleport`` (``geometry_msgs/Pose``, map frame): the rover to ``x, y`` facing the
+  pose's yaw, set on the terrain at rest (z, roll and pitch from the ground);
+* ``/marsscene/goal`` (``geometry_msgs/PoseStamped``, map frame): the goal whose reaching (ground
+  truth within ``goal_tolerance_m``) is announced on ``/marsscene/goal_reached``
+  (``std_msgs/Bool``, latched) and, with ``stop_at_goal``, ends the session.
+
+Sim time never jumps: a reset or teleport moves the rover, the clock runs on; wheel odometry
+keeps integrating (``odom -> base_link`` is continuous) and ``map -> odom`` absorbs the jump.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from typing import Any
+
+from marsscene.errors import RuntimeSimError
+from marsscene.ros2.dds import Participant, RawWriter
+from marsscene.ros2.options import Ros2Options
+from marsscene.runs.export.sample_messages import SampleMessages
+
+__all__ = ["Bridge", "SessionStats"]
+
+log = logging.getLogger("marsscene")
+
+#: QoS profile (:data:`marsscene.ros2.dds.QOS`) of each published topic kind.
+_STATE_QOS = {"/clock": "clock", "/tf": "tf", "/tf_static": "latched",
+              "/rover/robot_description": "latched", "/rover/odom": "default",
+              "/rover/GT_Trajectory": "default", "/rover/joint_states": "default",
+              "/rover/cmd_vel": "default"}
+_CONTROL_TOPICS = {"/marsscene/reset": "std_msgs/msg/Empty",
+                   "/marsscene/teleport": "geometry_msgs/msg/Pose",
+                   "/marsscene/goal": "geometry_msgs/msg/PoseStamped"}
+
+
+class SessionStats:
+    """Counts of a live session: messages, bytes and write seconds per topic, message-building
+    seconds per sample stream (image codecs included), commands, resets, the goal."""
+
+    def __init__(self) -> None:
+        self.messages: dict[str, int] = {}
+        self.bytes: dict[str, int] = {}
+        self.write_s: dict[str, float] = {}  # per topic: CDR + DDS write
+        self.build_s: dict[str, float] = {}  # per sample stream: building the messages
+        self.commands = 0
+        self.timeouts = 0
+        self.resets = 0
+        self.teleports = 0
+        self.goal_reached_t_s: float | None = None
+        self.sleep_s = 0.0
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"messages": dict(self.messages), "bytes": dict(self.bytes),
+                "write_s": {k: round(v, 6) for k, v in self.write_s.items()},
+                "build_s": {k: round(v, 6) for k, v in self.build_s.items()},
+                "commands": self.commands, "command_timeouts": self.timeouts,
+                "resets": self.resets, "teleports": self.teleports,
+                "goal_reached_t_s": self.goal_reached_t_s, "pacing_sleep_s": round(self.sleep_s, 3)}
+
+
+class Bridge:
+    """Controller and listener of one live drive (:func:`marsscene.ros2.serve` makes it).
+
+    Parameters
+    ----------
+    sim : RoverSim
+        The simulator being driven (for reset and teleport).
+    messages : SampleMessages
+    opts : Ros2Options
+    part : Participant
+    """
+
+    done = False
+
+    def __init__(self, sim: Any, messages: SampleMessages, opts: Ros2Options,
+                 part: Participant) -> None:
+        self.sim, self.msgs, self.opts, self.part = sim, messages, opts, part
+        self.store = messages.b.store
+        self.stats = SessionStats()
+        sensor = "sensor" if opts.sensor_qos == "best-effort" else "sensor-reliable"
+        self.writers: dict[str, RawWriter] = {
+            topic: part.writer(self.store, topic, mt, _STATE_QOS.get(topic, sensor))
+            for topic, mt in messages.topics() if topic != "/rover/cmd_vel"}
+        messages.wanted = self.wanted
+        cmd_type = ("geometry_msgs/msg/TwistStamped" if opts.cmd_vel_stamped
+                    else "geometry_msgs/msg/Twist")
+        self.cmd_type = cmd_type
+        self.cmd_reader = part.reader(self.store, opts.cmd_vel_topic, cmd_type, "default")
+        self.control_readers = {t: part.reader(self.store, t, mt, "default")
+                                for t, mt in _CONTROL_TOPICS.items()}
+        self.goal_writer = part.writer(self.store, "/marsscene/goal_reached",
+                                       "std_msgs/msg/Bool", "latched")
+        self.start_pose = (sim.pose()[0][:2].copy(), sim.yaw_rad())
+        self.cmd: tuple[float, float] = (0.0, 0.0)
+        self.cmd_t_s: float | None = None
+        self.goal_xy: tuple[float, float] | None = None
+        self.wall0: float | None = None
+        self.wall_start: float | None = None  # perf_counter() at the first control step
+
+    # ---- publishing (listener) -------------------------------------------------------------
+    def wanted(self, topic: str) -> bool:
+        w = self.writers.get(topic)
+        return w is not None and w.subscribers > 0
+
+    def publish(self, pairs: list[tuple[str, Any]]) -> None:
+        for topic, msg in pairs:
+            t0 = time.perf_counter()
+            data = self.msgs.b.serialize(msg)
+            self.writers[topic].write(data)
+            st = self.stats
+            st.write_s[topic] = st.write_s.get(topic, 0.0) + time.perf_counter() - t0
+            st.messages[topic] = st.messages.get(topic, 0) + 1
+            st.bytes[topic] = st.bytes.get(topic, 0) + len(data)
+
+    def publish_static(self) -> None:
+        """``/tf_static``, the URDF and ``/marsscene/goal_reached`` (false), latched."""
+        self.publish(self.msgs.static(0.0))
+        self._goal_reached(False)
+
+    def _sample(self, stream: str, make: Any, args: tuple[Any, ...]) -> None:
+        t0 = time.perf_counter()
+        pairs = make(*args)
+        st = self.stats
+        st.build_s[stream] = st.build_s.get(stream, 0.0) + time.perf_counter() - t0
+        self.publish(pairs)
+
+    def control(self, *args: Any) -> None:
+        self._sample("control", self.msgs.control, args)
+
+    def imu(self, *args: Any) -> None:
+        self._sample("imu", self.msgs.imu, args)
+
+    def lidar(self, *args: Any) -> None:
+        self._sample("lidar", self.msgs.lidar, args)
+
+    def camera(self, *args: Any) -> None:
+        self._sample("camera", self.msgs.camera, args)
+
+    def stereo(self, *args: Any) -> None:
+        self._sample("stereo", self.msgs.stereo, args)
+
+    # ---- the control step (controller) -----------------------------------------------------
+    def __call__(self, obs: Any) -> tuple[float, float]:
+        self._pace(obs.t_s)
+        self._read_commands(obs.t_s)
+        self._read_control()
+        if self.goal_xy is not None and self.stats.goal_reached_t_s is None:
+            d = math.hypot(obs.gt_xyz_m[0] - self.goal_xy[0], obs.gt_xyz_m[1] - self.goal_xy[1])
+            if d <= self.opts.goal_tolerance_m:
+                self.stats.goal_reached_t_s = float(obs.t_s)
+                self._goal_reached(True)
+                log.info("goal reached at %.2f sim s", obs.t_s)
+                self.done = self.opts.stop_at_goal
+        if self.cmd_t_s is None:
+            return 0.0, 0.0
+        if self.opts.cmd_timeout_s > 0 and obs.t_s - self.cmd_t_s > self.opts.cmd_timeout_s:
+            self.stats.timeouts += 1
+            self.cmd_t_s = None  # stopped until the next command
+            return 0.0, 0.0
+        return self.cmd
+
+    def _pace(self, t_s: float) -> None:
+        if self.wall0 is None:
+            self.wall_start = time.perf_counter()
+            self.wall0 = self.wall_start - t_s / self.opts.realtime_factor
+            return
+        if self.opts.pace != "realtime":
+            return
+        ahead = self.wall0 + t_s / self.opts.realtime_factor - time.perf_counter()
+        if ahead > 0:
+            time.sleep(ahead)
+            self.stats.sleep_s += ahead
+
+    def _read_commands(self, t_s: float) -> None:
+        for raw in self.cmd_reader.take():
+            msg: Any = self.store.deserialize_cdr(raw, self.cmd_type)
+            tw = msg.twist if self.opts.cmd_vel_stamped else msg
+            v, w = float(tw.linear.x), float(tw.angular.z)
+            if math.isfinite(v) and math.isfinite(w):
+                self.cmd, self.cmd_t_s = (v, w), t_s
+                self.stats.commands += 1
+
+    def _read_control(self) -> None:
+        readers = self.control_readers
+        if readers["/marsscene/reset"].take() and self._place(*self.start_pose):
+            self.stats.resets += 1
+        for raw in readers["/marsscene/teleport"].take()[-1:]:
+            pose: Any = self.store.deserialize_cdr(raw, "geometry_msgs/msg/Pose")
+            q = pose.orientation
+            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            if self._place((pose.position.x, pose.position.y), yaw):
+                self.stats.teleports += 1
+        for raw in readers["/marsscene/goal"].take()[-1:]:
+            goal: Any = self.store.deserialize_cdr(raw, "geometry_msgs/msg/PoseStamped")
+            self.goal_xy = (float(goal.pose.position.x), float(goal.pose.position.y))
+            self.stats.goal_reached_t_s = None
+            self._goal_reached(False)
+            log.info("goal set at (%.2f, %.2f) m", *self.goal_xy)
+
+    def _place(self, xy: Any, yaw: float) -> bool:
+        try:
+            self.sim.place(xy_m=(float(xy[0]), float(xy[1])), yaw_rad=float(yaw))
+        except RuntimeSimError as err:  # a pose off the terrain: say so, keep serving
+            log.warning("teleport refused: %s", err)
+            return False
+        self.cmd, self.cmd_t_s = (0.0, 0.0), None
+        return True
+
+    def _goal_reached(self, reached: bool) -> None:
+        b = self.msgs.b
+        self.goal_writer.write(b.serialize(b.T["std_msgs/msg/Bool"](data=reached)))

@@ -1,0 +1,288 @@
+"""``drive``: one call from a scene to a finished run folder, bag and dataset exports.
+
+The command line (``marsscene drive``), sweep cells, SLAM benchmark cells and VPR traversals
+all drive through :func:`drive`; it wires the steps every drive takes: load the scene and set
+the rover at its start (:func:`~marsscene.sim.mission.prepare_drive`), write ``route.tum``,
+drive with the sensors on (:func:`~marsscene.sim.driver.drive_sim`, the noise from the
+``"sensors"`` stream of ``seed``), then write the bag and the dataset folders
+(:mod:`marsscene.runs.export`), JPEG-encoding the bag's colour frames while driving.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from numpy.typing import ArrayLike
+
+from marsscene.errors import ExportError, RuntimeSimError
+from marsscene.rover.config import RunConfig
+from marsscene.runs.export.options import ExportOptions
+from marsscene.runs.tum import Trajectory, read_tum, write_tum
+from marsscene.seeding import stage_rng
+from marsscene.sim.control import Controller
+from marsscene.sim.driver import DriveProgress, DriveResult, drive_sim
+from marsscene.sim.mission import DriveOptions, prepare_drive
+from marsscene.sim.route import Route
+
+if TYPE_CHECKING:
+    from marsscene.runs.export.bag import BagSummary
+    from marsscene.scene import Scene
+
+__all__ = ["DriveRun", "ExportProgress", "drive"]
+
+log = logging.getLogger("marsscene")
+#: Header of ``route.tum`` unless ``DriveOptions.route_note`` says otherwise.
+ROUTE_NOTE = "authored route (x, y on the terrain; stamps at 0.5 m/s)"
+
+
+@dataclass(frozen=True)
+class ExportProgress:
+    """Where an export stands, passed to ``drive(progress=...)``: ``stage`` is ``"bag"`` (done
+    / total messages) or a dataset format (done / total images)."""
+
+    stage: str
+    done: int
+    total: int
+
+
+@dataclass(frozen=True)
+class DriveRun:
+    """A finished drive: its run folder, the trajectories and summary, and the exports.
+
+    Attributes
+    ----------
+    out_dir : Path or None
+        The run folder (None for a drive kept in memory).
+    result : DriveResult
+        Ground truth, odometry, commands, summary (and sensor data with ``keep_sensors``).
+    route : Route or None
+        The route driven (authored from waypoints, or as given).
+    bag : BagSummary or None
+    datasets : dict
+        Dataset format -> folder written.
+    wall_s : float
+        Wall-clock seconds of the drive itself.
+    export_s : float
+        Wall-clock seconds of the exports (bag and datasets).
+    rocks_kept : (int, int)
+        MJCF rocks simulated near the route, of those in the scene.
+    """
+
+    out_dir: Path | None
+    result: DriveResult
+    route: Route | None = None
+    bag: BagSummary | None = None
+    datasets: dict[str, Path] = field(default_factory=dict)
+    wall_s: float = float("nan")
+    export_s: float = 0.0
+    rocks_kept: tuple[int, int] = (0, 0)
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        return self.result.summary
+
+    @property
+    def gt(self) -> Trajectory:
+        return self.result.gt
+
+    @property
+    def odom(self) -> Trajectory:
+        return self.result.odom
+
+
+def _check_exports(export: ExportOptions, config: RunConfig, out: Path | None) -> None:
+    """Refuse, before driving, exports that cannot be written."""
+    if out is None and (export.bag is not None or export.datasets):
+        raise RuntimeSimError("exports (a bag, datasets) need a run folder: give out_dir")
+    if export.datasets and config.camera is None:
+        raise RuntimeSimError(f"datasets {', '.join(export.datasets)} need the camera: "
+                              "drive with RunConfig(camera=CameraConfig(...)) (--camera)")
+    if out is not None and not export.overwrite:
+        for name in export.folders:
+            if (out / name).exists():
+                raise ExportError(f"{out / name} exists; pass overwrite=True (--overwrite) "
+                                  "to replace it")
+    if export.bag is not None:
+        from marsscene.runs.export.bag_writer import require_backends
+
+        require_backends(export.bag.compression)
+
+
+@contextmanager
+def _scene_dir(scene: str | os.PathLike[str] | Scene, out: Path | None) -> Iterator[Path]:
+    """A scene folder: the one given, or a built :class:`~marsscene.Scene` written as MJCF into
+    ``out/scene`` (into a temporary folder without ``out``)."""
+    if isinstance(scene, str | os.PathLike):
+        yield Path(scene)
+        return
+    from marsscene.export import write_scene
+
+    if out is not None:
+        write_scene(scene, out / "scene", formats=("mjcf",), overwrite=True)
+        yield out / "scene"
+        return
+    with tempfile.TemporaryDirectory(prefix="marsscene-scene-") as tmp:
+        write_scene(scene, Path(tmp) / "scene", formats=("mjcf",))
+        yield Path(tmp) / "scene"
+
+
+def _route(route: Route | str | os.PathLike[str] | None) -> Route | None:
+    if route is None or isinstance(route, Route):
+        return route
+    return Route.from_trajectory(read_tum(route))
+
+
+def drive(
+    scene: str | os.PathLike[str] | Scene,
+    *,
+    route: Route | str | os.PathLike[str] | None = None,
+    waypoints: ArrayLike | None = None,
+    controller: Controller | Callable[[Any], tuple[float, float]] | None = None,
+    command: tuple[float, float] | Callable[[float], tuple[float, float]] | None = None,
+    seconds: float | None = None,
+    config: RunConfig | None = None,
+    options: DriveOptions | None = None,
+    export: ExportOptions | None = None,
+    out_dir: str | os.PathLike[str] | None = None,
+    seed: int = 0,
+    progress: Callable[[DriveProgress | ExportProgress], None] | None = None,
+    keep_sensors: bool = False,
+    listeners: Sequence[Any] = (),
+) -> DriveRun:
+    """Drive the rover on a scene with its sensors, then export the run.
+
+    Parameters
+    ----------
+    scene : path or Scene
+        A built scene folder (``marsscene build``), or a :class:`~marsscene.Scene` (written as
+        MJCF into ``out_dir/scene`` first).
+    route : Route or path, optional
+        A route to follow (a :class:`~marsscene.sim.route.Route` or a TUM file, x and y used).
+    waypoints : array_like of shape (N, 2), optional
+        Instead of a route: waypoints in m through which a smooth route avoiding steep slopes
+        and rocks is authored (``options.max_slope_deg``).
+    controller : callable, optional
+        ``controller(Observation) -> (v, omega)`` once per control period
+        (:mod:`marsscene.sim.control`); with a route it steers instead of pure pursuit (the
+        route then sets the start, the rock corridor and the cross-track summary). Its
+        optional ``done`` attribute ends the drive.
+    command : (v, omega) or callable t -> (v, omega), optional
+        An open-loop command instead.
+    seconds : float, optional
+        Sim-time limit; required without a route (default with one: until the goal).
+    config : RunConfig, optional
+        Sensors (camera, LiDAR), their rates and the noise profile (default: no camera, no
+        LiDAR, noise-free).
+    options : DriveOptions, optional
+        Slope limit, rock corridor, settling, the follower, the start pose without a route.
+    export : ExportOptions, optional
+        A ROS 2 bag and dataset folders to write into the run folder.
+    out_dir : path, optional
+        The run folder (layout: ``docs/runtime.md``); without it the drive is kept in memory.
+    seed : int
+        Seed of the sensor-noise stream (``stage_rng(seed, "sensors")``).
+    progress : callable, optional
+        Called with a :class:`~marsscene.sim.driver.DriveProgress` once per simulated second
+        and an :class:`ExportProgress` per exported message or image.
+    keep_sensors : bool
+        Keep LiDAR scans, images and IMU samples in memory in ``result``.
+    listeners : sequence, optional
+        Objects receiving every sample as it is made (:mod:`marsscene.sim.session`).
+
+    Returns
+    -------
+    DriveRun
+
+    Raises
+    ------
+    DriveInterrupted
+        On Ctrl-C during the drive; the run folder is complete up to there (no exports).
+    MarsSceneError
+        A missing scene, a route off the terrain, exports that cannot be written: before
+        anything is driven.
+
+    Examples
+    --------
+    >>> import marsscene as ms
+    >>> cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural",
+    ...                                             "size_m": [30, 30]}})
+    >>> run = ms.drive(ms.build_scene(cfg, seed=1), waypoints=[[-8, 0], [8, 0]],
+    ...                config=ms.RunConfig(noise=ms.NoiseConfig(profile="ln200s")))
+    ... # doctest: +SKIP
+    >>> round(run.summary["path_length_m"])  # doctest: +SKIP
+    16
+    """
+    config = config if config is not None else RunConfig()
+    options = options if options is not None else DriveOptions()
+    export = export if export is not None else ExportOptions()
+    out = Path(out_dir) if out_dir is not None else None
+    _check_exports(export, config, out)
+    with _scene_dir(scene, out) as scene_path:
+        sim, path = prepare_drive(scene_path, config, route=_route(route),
+                                  waypoints_xy_m=waypoints, options=options)
+        if path is not None and sim.rocks_kept[1]:
+            log.info("rocks: %d of %d MJCF rocks lie near the route and are simulated",
+                     *sim.rocks_kept)
+        if out is not None:
+            out.mkdir(parents=True, exist_ok=True)
+            if path is not None:
+                write_tum(out / "route.tum", path.to_trajectory(sim.heightfield),
+                          header=(options.route_note or ROUTE_NOTE).format(
+                              length_m=path.length_m))
+        cache = None
+        if out is not None and export.bag is not None and config.camera is not None \
+                and export.bag.wants_jpeg:
+            from marsscene.runs.export.bag_images import JpegCache  # no rosbags import
+
+            cache = JpegCache.fresh(out, export.bag.jpeg_quality)
+        try:
+            t0 = time.perf_counter()
+            res = drive_sim(sim, route=path, controller=controller, command=command,
+                            seconds=seconds, out_dir=out, rng=stage_rng(seed, "sensors"),
+                            pursuit=options.pursuit, keep_sensors=keep_sensors,
+                            progress=progress, jpeg_cache=cache, listeners=listeners)
+            t1 = time.perf_counter()
+            bag, datasets = _export(out, export, cache, progress)
+        finally:
+            if cache is not None:
+                cache.remove()
+    return DriveRun(out, res, path, bag, datasets, wall_s=t1 - t0,
+                    export_s=time.perf_counter() - t1, rocks_kept=sim.rocks_kept)
+
+
+def _export(out: Path | None, export: ExportOptions, cache: Any,
+            progress: Callable[[Any], None] | None) -> tuple[Any, dict[str, Path]]:
+    """Write the bag and the dataset folders of the finished run folder ``out``."""
+    def tell(stage: str) -> Callable[[int, int], None] | None:
+        if progress is None:
+            return None
+        return lambda done, total: progress(ExportProgress(stage, done, total))
+
+    bag = None
+    if out is not None and export.bag is not None:
+        from marsscene.runs.export.bag import write_bag
+
+        bag = write_bag(out, options=export.bag, overwrite=export.overwrite, jpeg_cache=cache,
+                        progress=tell("bag"))
+        if export.lidar_into_bag() and not export.keep_lidar_files:
+            from marsscene.runs.runlog import move_lidar_into_bag
+
+            move_lidar_into_bag(out)
+    datasets: dict[str, Path] = {}
+    if out is not None:
+        from marsscene.runs.export.datasets import export_dataset
+
+        for fmt in export.datasets:
+            datasets[fmt] = export_dataset(out, fmt, overwrite=export.overwrite,
+                                           progress=tell(fmt), images=export.dataset_images)
+    return bag, datasets
+
+

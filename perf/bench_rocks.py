@@ -1,0 +1,118 @@
+"""Rock benchmark: 1 km x 1 km, k = 0.05, D in [0.1, 3] m (~1e6 rocks) on a 0.25 m terrain.
+
+Steps timed: prototypes, sample + place (``place_rocks``), author the USD PointInstancer and
+serialise it as ``.usdc``, the catalogue as ``rocks.csv`` and as ``rocks.parquet`` (each
+formatted and written to a file, median of 3; the Parquet one when pyarrow is installed).
+Target: < 10 s total, < 2 GB peak RSS.
+Run: ``python perf/run.py rocks``.
+"""
+
+from __future__ import annotations
+
+import time
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+SIZE_M = 1000.0
+POST_M = 0.25
+
+
+def _terrain() -> Any:
+    from marsscene.terrain.heightfield import Heightfield
+
+    n = int(SIZE_M / POST_M) + 1
+    x = np.linspace(0.0, SIZE_M, n, dtype=np.float32)
+    rng = np.random.default_rng(0)
+    z = (3.0 * np.sin(x / 57.0)[None, :] * np.cos(x / 83.0)[:, None]
+         + 0.02 * rng.standard_normal((n, n), dtype=np.float32))
+    return Heightfield.centered(z.astype(np.float32), POST_M)
+
+
+def _run() -> dict[str, float]:
+    from pxr import Sdf
+
+    from marsscene.craters.table import CraterTable
+    from marsscene.export.usd.rocks import author_instancer
+    from marsscene.export.usd.stage import crate_bytes, create_asset_stage
+    from marsscene.rocks import RockConfig, make_prototypes, place_rocks
+    from marsscene.seeding import stage_rng
+
+    hf = _terrain()
+    cfg = RockConfig(k=0.05, d_min_m=0.1, d_max_m=3.0, placement="uniform")
+    out: dict[str, float] = {}
+    t0 = time.perf_counter()
+    protos = make_prototypes(cfg, rng=stage_rng(7, "rock_shapes"))
+    t1 = time.perf_counter()
+    rocks = place_rocks(hf, CraterTable.empty(), cfg, rng=stage_rng(7, "rocks"))
+    t2 = time.perf_counter()
+    stage = create_asset_stage("Rocks")
+    author_instancer(stage, Sdf.Path("/Rocks"), rocks, protos)
+    blob = crate_bytes(stage)
+    t3 = time.perf_counter()
+    scene = SimpleNamespace(rocks=rocks, config=SimpleNamespace(rocks=cfg))
+    out.update(rocks=len(rocks), prototypes_s=t1 - t0, place_s=t2 - t1, usd_s=t3 - t2,
+               usdc_mb=len(blob) / 2**20)
+    out.update(_catalogues(scene))
+    return out
+
+
+def _catalogues(scene: Any) -> dict[str, float]:
+    """Median write time (s) and size (MB) of rocks.csv and rocks.parquet."""
+    import statistics
+    import tempfile
+    from pathlib import Path
+
+    from marsscene.export.catalog_rocks import write_rock_catalog
+
+    out: dict[str, float] = {}
+    kinds = ["csv"]
+    try:
+        import pyarrow  # noqa: F401
+
+        kinds.append("parquet")
+    except ImportError:
+        pass
+    with tempfile.TemporaryDirectory() as tmp:
+        for kind in kinds:
+            scene.config.export = SimpleNamespace(rock_catalogue=kind)
+            secs = []
+            for _ in range(3):
+                t0 = time.perf_counter()
+                (path,) = write_rock_catalog(scene, Path(tmp))
+                secs.append(time.perf_counter() - t0)
+            out[f"{kind}_s"] = statistics.median(secs)
+            out[f"{kind}_mb"] = path.stat().st_size / 2**20
+    return out
+
+
+def main() -> None:
+    from _measure import measure
+
+    wall, peak_mb, r = measure(_run)
+    n = r["rocks"]
+    print(f"terrain 1 km x 1 km at {POST_M} m ({int(SIZE_M / POST_M) + 1}^2 posts); k = 0.05, "
+          f"D in [0.1, 3] m")
+    print(f"rocks placed          : {n:,.0f}")
+    for step in ("prototypes", "place", "usd", "csv", "parquet"):
+        if f"{step}_s" not in r:
+            continue
+        secs = r[f"{step}_s"]
+        rate = f"{n / secs:,.0f} rocks/s" if step != "prototypes" else ""
+        print(f"{step:<22}: {secs:6.2f} s  {rate}")
+    rock_s = r["prototypes_s"] + r["place_s"] + r["usd_s"]
+    print(f"sample+place+USD      : {rock_s:6.2f} s (target < 10 s)")
+    sizes = f"rocks.csv {r['csv_mb']:.1f} MB"
+    if "parquet_mb" in r:
+        sizes += f"; rocks.parquet {r['parquet_mb']:.1f} MB"
+    print(f"rocks.usdc            : {r['usdc_mb']:.1f} MB; {sizes}")
+    print(f"wall incl. terrain    : {wall:6.2f} s; peak RSS {peak_mb:,.0f} MB (target < 2048)")
+
+
+if __name__ == "__main__":
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    main()

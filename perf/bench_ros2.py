@@ -1,0 +1,215 @@
+"""Live ROS 2 (``marsscene serve``): publish rates, real-time factor, ``/cmd_vel`` latency, and the
+write time of one image and one cloud.
+
+One command: ``python perf/bench_ros2.py`` (``BENCH_ROS2_SECONDS`` of sim time per session,
+default 10). On a 60 m procedural scene, every DDS packet on 127.0.0.1, with an independent
+subscriber process (``marsscene/testing/dds_peer.py``: plain cyclonedds + rosbags) taking every
+topic:
+
+1. **write time per message** of a 640 x 480 rgb8 ``sensor_msgs/Image`` (921,600 B of pixels)
+   and an os1-128 ``PointCloud2`` (~71,600 points x 22 B) to a matched subscriber: the live
+   rover's path (``rosbags`` CDR + Cyclone's C writer) against ``cyclonedds-python``'s own
+   (an ``IdlStruct`` sample serialised in Python, ``DataWriter.write``);
+2. **sessions** with the camera (640 x 480 RGB-D, 10 Hz) and the LiDAR (os1-128, 10 Hz):
+   as fast as it goes and paced to real time, and the LiDAR alone: real-time factor, messages
+   published and received per topic against the sensor rates, write seconds per topic;
+3. **latency** from a ``/cmd_vel`` message to motion on ``/rover/odom`` (``|v| >= v_cmd / 2``),
+   wall clock, with every sensor on and real-time pacing.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import numpy as np
+
+PEER = str(Path(__file__).resolve().parents[1] / "marsscene" / "testing" / "dds_peer.py")
+SECONDS = float(os.environ.get("BENCH_ROS2_SECONDS", "10"))
+ALL = {
+    "/clock": ["rosgraph_msgs/msg/Clock", False, False, 100],
+    "/tf": ["tf2_msgs/msg/TFMessage", True, False, 50],
+    "/rover/odom": ["nav_msgs/msg/Odometry", True, False, 50],
+    "/rover/GT_Trajectory": ["nav_msgs/msg/Odometry", True, False, 50],
+    "/rover/joint_states": ["sensor_msgs/msg/JointState", True, False, 50],
+    "/rover/imu": ["sensor_msgs/msg/Imu", False, False, 100],
+    "/rover/imu_noisy": ["sensor_msgs/msg/Imu", False, False, 100],
+    "/rover/rgb/image_raw": ["sensor_msgs/msg/Image", False, False, 10],
+    "/rover/rgb/image_raw/compressed": ["sensor_msgs/msg/CompressedImage", False, False, 10],
+    "/rover/rgb/camera_info": ["sensor_msgs/msg/CameraInfo", False, False, 10],
+    "/rover/depth/image_raw": ["sensor_msgs/msg/Image", False, False, 10],
+    "/rover/depth/image_raw/compressedDepth": ["sensor_msgs/msg/CompressedImage", False, False,
+                                               10],
+    "/rover/lidar/points": ["sensor_msgs/msg/PointCloud2", False, False, 10],
+    "/rover/scan": ["sensor_msgs/msg/LaserScan", False, False, 10],
+}
+
+
+def _listen(domain: int, topics: dict[str, list[Any]]) -> subprocess.Popen[str]:
+    spec = {t: v[:3] for t, v in topics.items()}
+    return subprocess.Popen([sys.executable, PEER, "listen", str(domain), "--until-idle", "4",
+                             "600", json.dumps(spec)], stdout=subprocess.PIPE, text=True)
+
+
+def write_times() -> None:
+    """ms per message: rosbags CDR + Cyclone's C writer, against cyclonedds-python's path."""
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.topic import Topic
+
+    from marsscene.ros2 import dds
+    from marsscene.runs.export.bag_messages import MessageBuilder
+    from marsscene.runs.logs import scan_record
+
+    b = MessageBuilder()
+    rng = np.random.default_rng(0)
+    n = 71_600
+    rec = scan_record(rng.normal(size=(n, 3)).astype(np.float32),
+                      rng.uniform(size=n).astype(np.float32),
+                      rng.integers(0, 128, n).astype(np.uint16), np.linspace(0, 0.1, n))
+    msgs = {"image 640x480 rgb8": b.image(1.0, "navcam_optical_frame", rng.integers(
+        0, 255, (480, 640, 3), dtype=np.uint8), "rgb8"),
+            "cloud os1-128 (71,600 points)": b.cloud(1.0, "lidar_link", rec, (1, n))}
+    topics = {"/bench/image": ["sensor_msgs/msg/Image", True, False],
+              "/bench/cloud": ["sensor_msgs/msg/PointCloud2", True, False],
+              "/bench/image_py": ["sensor_msgs/msg/Image", True, False],
+              "/bench/cloud_py": ["sensor_msgs/msg/PointCloud2", True, False]}
+    listener = _listen(90, topics)
+    part = dds.Participant(90, localhost=True)
+    try:
+        for (name, msg), topic in zip(msgs.items(), ("/bench/image", "/bench/cloud"),
+                                      strict=True):
+            mt = msg.__msgtype__
+            w = part.writer(b.store, topic, mt, "default")
+            cls = dds.dds_type(b.store, mt)
+            py_w = DataWriter(part.dp, Topic(part.dp, dds.dds_topic(topic + "_py"), cls),
+                              dds.QOS["default"])
+            t0 = time.monotonic()
+            while not w.subscribers and time.monotonic() - t0 < 20:
+                time.sleep(0.05)
+            ours, ser, theirs, build = [], [], [], []
+            for _ in range(30):
+                t0 = time.perf_counter()
+                data = b.serialize(msg)
+                t1 = time.perf_counter()
+                w.write(data)
+                t2 = time.perf_counter()
+                ours.append(t2 - t0)
+                ser.append(t1 - t0)
+                time.sleep(0.02)
+            for _ in range(10):
+                t0 = time.perf_counter()
+                sample = cls.deserialize(bytes(data))  # the IdlStruct a Python user would build
+                t1 = time.perf_counter()
+                py_w.write(sample)
+                t2 = time.perf_counter()
+                theirs.append(t2 - t1)
+                build.append(t1 - t0)
+                time.sleep(0.02)
+            print(f"{name}: {len(bytes(data)) / 1e6:.2f} MB CDR | live path (rosbags CDR "
+                  f"{1e3 * statistics.median(ser):.2f} ms + C writer) "
+                  f"{1e3 * statistics.median(ours):.2f} ms | cyclonedds-python "
+                  f"DataWriter.write (Python CDR) {1e3 * statistics.median(theirs):.1f} ms "
+                  f"(+ {1e3 * statistics.median(build):.1f} ms to build the IdlStruct sample)")
+    finally:
+        part.close()
+        listener.kill()
+
+
+def session(label: str, scene: Path, domain: int, config: Any, pace: str,
+            topics: dict[str, list[Any]]) -> None:
+    from marsscene.ros2 import Ros2Options, serve
+
+    listener = _listen(domain, topics) if topics else None
+
+    def ready(bridge: Any) -> None:
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 30 and not all(
+                bridge.writers[t].subscribers for t in topics if t in bridge.writers):
+            time.sleep(0.05)
+
+    res = serve(scene, ros=Ros2Options(domain_id=domain, localhost=True, pace=pace),
+                config=config, seconds=SECONDS, ready=ready)
+    st = res.stats
+    if listener is None:
+        print(f"\n{label} (pace {pace}): {res.sim_s:.1f} sim s in {res.wall_s:.1f} s = "
+              f"{res.realtime_factor:.2f}x real time (nothing built or sent)")
+        return
+    got = json.loads(listener.communicate(timeout=120)[0])
+    print(f"\n{label} (pace {pace}): {res.sim_s:.1f} sim s in {res.wall_s:.1f} s = "
+          f"{res.realtime_factor:.2f}x real time; building the messages took "
+          f"{sum(st['build_s'].values()):.2f} s of it ("
+          + ", ".join(f"{k} {v:.2f}" for k, v in st["build_s"].items())
+          + f"), CDR + DDS writes {sum(st['write_s'].values()):.2f} s")
+    print(f"  {'topic':42s} {'rate Hz':>7s} {'expected':>8s} {'published':>9s} "
+          f"{'received':>8s} {'pub Hz (wall)':>13s} {'ms/msg':>7s} {'kB/msg':>7s}")
+    for t, spec in topics.items():
+        exp = int(spec[3] * SECONDS) + 1
+        pub, rec = st["messages"].get(t, 0), got[t]["n"]
+        ms_msg = 1e3 * st["write_s"].get(t, 0.0) / max(pub, 1)
+        kb = st["bytes"].get(t, 0) / max(pub, 1) / 1e3
+        print(f"  {t:42s} {spec[3]:7d} {exp:8d} {pub:9d} {rec:8d} "
+              f"{pub / max(res.wall_s, 1e-9):13.1f} {ms_msg:7.2f} {kb:7.1f}")
+
+
+def latency(label: str, scene: Path, config: Any, domain: int) -> None:
+    from marsscene.ros2 import Ros2Options, serve
+
+    peer = subprocess.Popen([sys.executable, PEER, "latency", str(domain), "0.4", "--repeats",
+                             "8"], stdout=subprocess.PIPE, text=True)
+    ros = Ros2Options(domain_id=domain, localhost=True)
+    done: dict[str, Any] = {}
+
+    class Stop:  # end the session once the peer has its figures
+        def __call__(self, p: Any) -> None:
+            if peer.poll() is not None and not done:
+                done["out"] = peer.stdout.read() if peer.stdout else ""
+                raise KeyboardInterrupt
+
+    serve(scene, ros=ros, config=config, seconds=300.0, progress=Stop())
+    out = done.get("out") or peer.communicate(timeout=60)[0]
+    lat = [x for x in json.loads(out)["latency_s"] if x is not None]
+    print(f"\n/cmd_vel -> motion on /rover/odom (|v| >= 0.2 m/s after a 0.4 m/s step), "
+          f"{len(lat)} steps, real-time pacing, {label}: median "
+          f"{1e3 * statistics.median(lat):.0f} ms, min {1e3 * min(lat):.0f} ms, max "
+          f"{1e3 * max(lat):.0f} ms (in sim time the command is applied at the next 50 Hz "
+          "control step and the wheel odometry reads >= 0.2 m/s one step later)")
+
+
+def main() -> None:
+    import marsscene as ms
+
+    with tempfile.TemporaryDirectory(prefix="marsscene-bench-ros2-") as tmp:
+        scene = Path(tmp) / "scene"
+        cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [60, 60],
+                                                    "post_m": 0.25, "rms_height_m": 0.05},
+                                        "craters": {"enabled": False},
+                                        "rocks": {"enabled": False}})
+        ms.write_scene(ms.build_scene(cfg, seed=3), scene, formats=("mjcf",))
+        write_times()
+        full = ms.RunConfig(camera=ms.CameraConfig(), lidar=ms.LidarConfig())
+        session("camera 640x480 + LiDAR os1-128, every topic subscribed", scene, 91, full,
+                "max", ALL)
+        session("camera 640x480 + LiDAR os1-128, every topic subscribed", scene, 92, full,
+                "realtime", ALL)
+        session("camera 640x480 + LiDAR os1-128, no subscriber", scene, 95, full, "max", {})
+        lidar = ms.RunConfig(lidar=ms.LidarConfig())
+        lidar_topics = {t: v for t, v in ALL.items() if "rgb" not in t and "depth" not in t}
+        session("LiDAR os1-128 only, every topic subscribed", scene, 94, lidar, "max",
+                lidar_topics)
+        session("LiDAR os1-128 only, every topic subscribed", scene, 96, lidar, "realtime",
+                lidar_topics)
+        latency("camera 640x480 + LiDAR os1-128", scene, full, 93)
+        latency("LiDAR os1-128 only", scene, lidar, 97)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,49 @@
+"""An off-the-shelf LiDAR odometry tracks the default LiDAR: KISS-ICP (pip ``kiss-icp``, its
+default configuration, run as ``kiss_icp_pipeline --topic /rover/lidar/points RUN/bag``) on an
+8 m drive over a rocky plain, scored against the lidar_link ground truth."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("kiss_icp")
+pytest.importorskip("rosbags")
+
+import marsscene as ms
+from marsscene.benchmark.slam.kiss_icp import (
+    lidar_ground_truth,
+    run_kiss_icp,
+    score_lidar_odometry,
+)
+from marsscene.rover.config import RunConfig
+from marsscene.rover.lidar import LidarConfig
+from marsscene.runs.export.bag import write_bag
+from marsscene.runs.runlog import RunLog
+from marsscene.seeding import stage_rng
+from marsscene.sim.driver import drive_sim
+from marsscene.sim.rover_sim import RoverSim
+
+
+def test_kiss_icp_tracks_an_8_m_drive_within_1_percent(tmp_path):
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "procedural", "size_m": [80, 80], "post_m": 0.25,
+                    "rms_height_m": 0.02},
+        "craters": {"enabled": False}, "rocks": {"k": 0.15, "d_min_m": 0.15}})
+    ms.write_scene(ms.build_scene(cfg, seed=4), tmp_path / "s", formats=("mjcf",))
+    sim = RoverSim(tmp_path / "s", run=RunConfig(lidar=LidarConfig()), start_xy_m=(-5.0, 0.0),
+                   contact_corridor_xy_m=np.array([[-5.0, 0.0], [5.0, 0.0]]),
+                   contact_corridor_m=40.0)
+    drive_sim(sim, command=(0.5, 0.0), seconds=16.0, out_dir=tmp_path / "r",
+          rng=stage_rng(1, "sensors"))
+    write_bag(tmp_path / "r", tmp_path / "r" / "bag")
+    run = RunLog(tmp_path / "r")
+    estimate = run_kiss_icp(tmp_path / "r" / "bag")
+    score = score_lidar_odometry(estimate, run)
+    assert score.status == "ok" and score.poses == len(run.lidar[0])
+    assert score.path_m > 7.0
+    assert score.ate_percent < 1.0, score
+    assert abs(score.estimated_path_m / score.path_m - 1.0) < 0.3, score
+    # the ground truth it is scored against is the lidar_link pose: the mast top
+    gt = lidar_ground_truth(run)
+    assert np.all(gt.xyz_m[:, 2] - run.gt.xyz_m[:, 2] > 1.0)

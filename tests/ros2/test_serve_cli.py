@@ -1,0 +1,25 @@
+"""``marsscene serve``: user mistakes are one-line errors (exit 1 or 2), nothing simulated."""
+
+from __future__ import annotations
+
+from marsscene.cli import main
+
+
+def test_record_needs_a_run_folder(runner, tmp_path):
+    (tmp_path / "scene").mkdir()
+    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--ros2", "--record",
+                               "--localhost"])
+    assert res.exit_code == 1
+    assert res.output.strip().splitlines()[-1] == (
+        "Error: recording a bag needs a run folder: give out_dir (--out)")
+
+
+def test_bad_topic_and_missing_scene_are_one_line_errors(runner, tmp_path):
+    (tmp_path / "scene").mkdir()
+    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--cmd-vel-topic", "cmd_vel"])
+    assert res.exit_code == 1 and "Traceback" not in res.output
+    assert "must be an absolute topic name" in res.output
+    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--localhost"])
+    assert res.exit_code == 1 and "is not a built scene" in res.output
+    res = runner.invoke(main, ["serve", str(tmp_path / "nowhere")])
+    assert res.exit_code == 2
