@@ -15,8 +15,8 @@ parser's time and collider count, and the Omniverse Asset Validator's issues
 (``omni_asset_validate``'s engine, default rules; skipped when not installed or with
 ``--no-validator``). Run::
 
-    python benchmarks/bench_rock_colliders.py                  # the default scene (seed 7)
-    python benchmarks/bench_rock_colliders.py main-crater      # the 3.6 km preset
+    python perf/bench_rock_colliders.py                  # the default scene (seed 7)
+    python perf/bench_rock_colliders.py main-crater      # the 3.6 km preset
 
 Each measurement runs in a fresh process (``_measure.measure``). Timings vary with the load
 of the shared 2-core machine: run it on a quiet machine.
@@ -31,9 +31,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from benchmarks._measure import measure
+from _measure import measure
 
 _STATE: dict[str, Any] = {}
 

@@ -22,7 +22,7 @@ from the prototype through the reference, so a rock costs one prim spec and one 
 halves the authoring, export and stage-open times for 1.6x the bytes. USD has no bulk prim
 API, so the prims are authored one by one with the ``Sdf`` API inside one change block.
 Merged static meshes per terrain tile were the alternative: measured in ``docs/usd.md``
-(``benchmarks/bench_rock_colliders.py``).
+(``perf/bench_rock_colliders.py``).
 """
 
 from __future__ import annotations
