@@ -9,12 +9,12 @@ horizon elevation there; the visible fraction of the sun's disc (0.35 deg wide: 
 segment above that horizon) gives the expected ratio ``(sky + v E cos) / (sky + E cos)``.
 
 Printed per elevation (2, 5, 13 deg): among **fully lit** pixels (horizon more than
-``MARGIN_DEG`` below the sun's lower limb) the share rendered at ratio < 0.8 (the issue's figure: 7.5 % at
-2 deg before issue 36) and < 0.95; among **fully shadowed** ones (horizon more than ``MARGIN_DEG``
-above the upper limb) the share rendered lit (ratio above halfway); the mean absolute ratio
-error in the penumbra; and where the lit ones rendered dark sit (their horizon below the
-sun's centre, deg). ``MARSSCENE_BENCH_FIGURE=DIR`` writes one frame per elevation with the
-spurious pixels in red.
+``MARGIN_DEG`` below the sun's lower limb) the share rendered at ratio < 0.8 (the issue's
+figure: 7.5 % at 2 deg before issue 36) and < 0.95; among **fully shadowed** ones (horizon more
+than ``MARGIN_DEG`` above the upper limb) the share rendered lit (ratio above halfway); the mean
+absolute ratio error in the penumbra; and where the lit ones rendered dark sit (their horizon
+below the sun's centre, deg). ``MARSSCENE_BENCH_FIGURE=DIR`` writes one frame per elevation with
+the spurious pixels in red.
 
 Run: ``python perf/bench_shadow_accuracy.py [ELEVATIONS]`` (default ``2,5,13``).
 """

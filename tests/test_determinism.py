@@ -15,7 +15,8 @@ from marsscene.seeding import STAGE_IDS, stage_rng
 
 pytest.importorskip("pxr")
 
-FILES = ("scene.usda", "assets/terrain.usdc", "mjcf/scene.xml", "mjcf/assets/terrain.bin")
+FILES = ("scene.usda", "assets/terrain.usdc", "assets/rock_colliders.usdc", "assets/rover.usda",
+         "mjcf/scene.xml", "mjcf/assets/terrain.bin")
 
 
 def _build(tmp: Path, seed: int, name: str, cfg: ms.SceneConfig) -> Path:
@@ -32,8 +33,10 @@ def _manifest_without_timings(path: Path) -> dict:
 
 @pytest.fixture(scope="module")
 def config() -> ms.SceneConfig:
-    # The embedded default DEM, cropped by post spacing to keep the test quick.
-    return ms.SceneConfig.from_dict({"terrain": {"post_m": 0.5}})
+    # The embedded default DEM, cropped by post spacing and with rocks from 0.2 m (28 000, not
+    # 120 000: the rock collider layer costs ~30 us a rock to write) to keep the test quick.
+    return ms.SceneConfig.from_dict({"terrain": {"post_m": 0.5}, "rocks": {"d_min_m": 0.2},
+                                     "export": {"rover": True}})
 
 
 def test_same_seed_gives_identical_bytes(tmp_path: Path, config: ms.SceneConfig) -> None:

@@ -10,7 +10,7 @@ def test_import_pulls_no_heavy_dependencies() -> None:
     code = (
         "import sys, marsscene\n"
         "heavy = ('pxr', 'mujoco', 'coacd', 'click', 'rasterio', 'rosbags', 'mcap', 'pyarrow',"
-        " 'trimesh')\n"
+        " 'trimesh', 'newton', 'warp')\n"
         "heavy = [m for m in heavy if m in sys.modules]\n"
         "print(','.join(heavy))\n"
     )

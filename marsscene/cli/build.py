@@ -18,7 +18,9 @@ _FORMATS = ("usda", "usdc", "usdz", "mjcf")
 
 
 def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[str, ...],
-                rock_catalogue: str | None = None) -> Any:
+                rock_catalogue: str | None = None, rover: bool | None = None,
+                rover_xy: tuple[float, float] | None = None,
+                rover_yaw_deg: float | None = None) -> Any:
     terrain = cfg.terrain
     if dem is not None and procedural:
         raise click.UsageError("--dem and --procedural are mutually exclusive")
@@ -37,6 +39,16 @@ def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[
         )
     if rock_catalogue is not None:
         export = dataclasses.replace(export, rock_catalogue=rock_catalogue)
+    if rover_xy is not None or rover_yaw_deg is not None:
+        if rover is False:
+            raise click.UsageError("--rover-xy / --rover-yaw-deg place the rover: drop --no-rover")
+        rover = True
+    changes: dict[str, Any] = {"rover": rover} if rover is not None else {}
+    if rover_xy is not None:
+        changes["rover_xy_m"] = rover_xy
+    if rover_yaw_deg is not None:
+        changes["rover_yaw_deg"] = rover_yaw_deg
+    export = dataclasses.replace(export, **changes)
     return cfg.replace(terrain=terrain, export=export)
 
 
@@ -55,6 +67,15 @@ def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[
 @click.option("--rock-catalogue", type=click.Choice(["csv", "parquet", "both"]), default=None,
               help="Rock catalogue file(s): rocks.csv, rocks.parquet (needs pyarrow) or both. "
                    "Default: config's [export] rock_catalogue, else csv.")
+@click.option("--rover/--no-rover", default=None,
+              help="Place the USD rover (assets/rover.usda, written with every USD output) in "
+                   "scene.usda as /World/Rover at the MuJoCo runtime's spawn pose, for Isaac "
+                   "Sim / Newton. Default: config's [export] rover, else off.")
+@click.option("--rover-xy", type=(float, float), default=None, metavar="X Y",
+              help="Where to place the rover (m, world frame; implies --rover). Default: the "
+                   "terrain centre, as `marsscene drive`.")
+@click.option("--rover-yaw-deg", type=click.FloatRange(-360.0, 360.0), default=None,
+              help="The rover's heading (deg, counter-clockwise from east; implies --rover).")
 @options_assets.options
 @options_dem.options
 @options_lighting.options
@@ -66,6 +87,9 @@ def build(
     formats: tuple[str, ...],
     procedural: bool,
     rock_catalogue: str | None,
+    rover: bool | None,
+    rover_xy: tuple[float, float] | None,
+    rover_yaw_deg: float | None,
     **stage_options: Any,
 ) -> None:
     """Build a scene and write OUT/scene.usda, OUT/mjcf/scene.xml and OUT/manifest.json.
@@ -78,6 +102,7 @@ def build(
       marsscene build --procedural --rock-catalogue parquet
       marsscene build --preset main-crater --seed 7 --out scenes/crater
       marsscene build --preset mars-base --asset habitat.glb --asset-xy 120 -40
+      marsscene build --seed 7 --rover --rover-xy 10 -5 --rover-yaw-deg 90
     """
     from marsscene import SceneConfig, build_scene, write_scene
     from marsscene.export import check_export_dependencies, check_output_dir
@@ -88,7 +113,8 @@ def build(
         cfg = (SceneConfig.from_toml(config_path, preset=preset) if config_path
                else SceneConfig.from_dict({"preset": preset}))
         cfg = _apply_core(cfg, dem=dem, procedural=procedural, formats=formats,
-                          rock_catalogue=rock_catalogue)
+                          rock_catalogue=rock_catalogue, rover=rover, rover_xy=rover_xy,
+                          rover_yaw_deg=rover_yaw_deg)
         cfg = options_dem.apply(cfg, stage_options)
         cfg = options_lighting.apply(cfg, stage_options)
         cfg = options_assets.apply(cfg, stage_options)

@@ -27,6 +27,13 @@ class ExportConfig:
     rock_catalogue: str = "csv"
     """Rock catalogue file(s): "csv" (``rocks.csv``), "parquet" (``rocks.parquet``, needs
     pyarrow: extra ``parquet``) or "both"."""
+    rover: bool = False
+    """Place the USD rover (``assets/rover.usda``, always written with USD) in the scene as
+    ``/World/Rover``, at the MuJoCo runtime's spawn pose."""
+    rover_xy_m: tuple[float, float] | None = None
+    """Where to place it (m, world frame); default: the terrain centre, as the runtime."""
+    rover_yaw_deg: float = 0.0
+    """Its heading (deg, counter-clockwise from east)."""
 
     def __post_init__(self) -> None:
         if isinstance(self.formats, str) or not self.formats:
@@ -36,3 +43,13 @@ class ExportConfig:
         check_choice("export.usd_format", self.usd_format, USD_FORMATS)
         check_choice("export.rock_catalogue", self.rock_catalogue, ROCK_CATALOGUES)
         check_range("export.max_tile_posts", self.max_tile_posts, 2, 4097)
+        if not isinstance(self.rover, bool):
+            raise ConfigError(f"export.rover must be true or false; got {self.rover!r}")
+        if self.rover_xy_m is not None:
+            xy = tuple(self.rover_xy_m)
+            if len(xy) != 2:
+                raise ConfigError(f"export.rover_xy_m = {self.rover_xy_m!r} must be [x, y] (m)")
+            for i, v in enumerate(xy):
+                check_range(f"export.rover_xy_m[{i}]", v, -1e7, 1e7)
+            object.__setattr__(self, "rover_xy_m", (float(xy[0]), float(xy[1])))
+        check_range("export.rover_yaw_deg", self.rover_yaw_deg, -360.0, 360.0)

@@ -1,5 +1,6 @@
-"""The Perseverance-class rover as MJCF text (the geometry lives in
-:mod:`marsscene.rover.geometry`). Numbers and sources: ``docs/runtime.md``.
+"""The Perseverance-class rover as MJCF text, written from the link table of
+:mod:`marsscene.rover.links` (the USD rover reads the same table). Numbers and sources:
+``docs/runtime.md``.
 """
 
 from __future__ import annotations
@@ -7,85 +8,49 @@ from __future__ import annotations
 from marsscene._format import fmt
 from marsscene.rover.config import RoverConfig
 from marsscene.rover.geometry import (
-    BOGIE_ABOVE_GROUND_M,
-    BOGIE_HALF_M,
     DRIVE_JOINTS,
     LIDAR_ABOVE_CAMERA_M,
     LIDAR_X_M,
-    PIVOT_ABOVE_GROUND_M,
-    ROCKER_Y_FRAC,
     STEER_JOINTS,
     navcam_mount,
 )
+from marsscene.rover.links import STEER_ACT_KV_NM_S, Joint, Link, Shape, rover_links
 
 __all__ = ["rover_mjcf"]
 
-# Masses (kg): chassis body incl. mast, arm, RTG; rockers; bogies; corner steering units; wheels.
-_M_ROCKER, _M_BOGIE, _M_STEER, _M_WHEEL = 30.0, 20.0, 4.0, 20.0
+_Y_AXIS_QUAT = "0.707107 0.707107 0 0"  # a cylinder's z turned onto y
+_AXES = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}
 
 
-def _body(name: str, pos: tuple[float, float, float], inner: str) -> str:
-    return f'<body name="{name}" pos="{fmt(pos)}">{inner}</body>'
+def _joint(j: Joint) -> str:
+    lim = f' range="{fmt(j.range_rad)}"' if j.range_rad is not None else ""
+    arm = f' armature="{fmt(j.armature_kg_m2)}"' if j.armature_kg_m2 > 0 else ""
+    return (f'<joint name="{j.name}" type="hinge" axis="{_AXES[j.axis]}"{lim}{arm} '
+            f'damping="{fmt(j.damping_nm_s)}"/>')
 
 
-def _wheel(cfg: RoverConfig, tag: str, pos: tuple[float, float, float], steered: bool) -> str:
-    r, hw = cfg.wheel_radius_m, cfg.wheel_width_m / 2.0
-    if cfg.wheel_collision == "cylinder":
-        geom = (
-            f'<geom name="wheel_{tag}" class="wheel" type="cylinder" size="{fmt((r, hw))}" '
-            f'quat="0.707107 0.707107 0 0" mass="{fmt(_M_WHEEL)}"/>'
-        )
-    else:  # collision sphere + visual cylinder
-        geom = (
-            f'<geom name="wheel_{tag}" class="wheel" type="sphere" size="{fmt(r)}" '
-            f'rgba="0 0 0 0" mass="{fmt(_M_WHEEL)}"/>'
-            f'<geom class="visual" type="cylinder" size="{fmt((r, hw))}" '
-            f'quat="0.707107 0.707107 0 0" rgba="0.6 0.6 0.6 1" mass="0"/>'
-        )
-    wheel = _body(
-        f"wheel_{tag}",
-        (0.0, 0.0, 0.0),
-        f'<joint name="drive_{tag}" type="hinge" axis="0 1 0" armature="0.5" damping="0.5"/>'
-        + geom,
-    )
-    if not steered:
-        return _body(f"hub_{tag}", pos, wheel)
-    lim = cfg.steer_limit_rad
-    steer = (
-        f'<joint name="steer_{tag}" type="hinge" axis="0 0 1" range="{fmt((-lim, lim))}" '
-        f'armature="1" damping="50"/>'
-        f'<geom class="visual" type="cylinder" size="0.05 0.15" pos="0 0 0.2" '
-        f'mass="{fmt(_M_STEER)}"/>'
-    )
-    return _body(f"steer_{tag}", pos, steer + wheel)
+def _geom(s: Shape) -> str:
+    cls = ("wheel" if s.name.startswith("wheel") else "body") if s.collides else "visual"
+    out = f'<geom name="{s.name}" ' if s.name else "<geom "
+    out += f'class="{cls}" type="{s.kind}" '
+    if s.kind == "capsule":
+        out += f'fromto="{fmt(s.fromto_m)}" size="{fmt(s.size_m)}"'
+    else:
+        out += f'size="{fmt(s.size_m)}"'
+        if s.kind in ("box", "cylinder") and s.axis == "z":
+            out += f' pos="{fmt(s.pos_m)}"'
+        elif s.axis == "y":
+            out += f' quat="{_Y_AXIS_QUAT}"'
+    if s.rgba is not None:
+        out += f' rgba="{fmt(s.rgba)}"'
+    return out + f' mass="{fmt(s.mass_kg)}"/>'
 
 
-def _side(cfg: RoverConfig, side: str, sign: float) -> str:
-    r, ride = cfg.wheel_radius_m, cfg.ride_height_m
-    y_rocker = sign * ROCKER_Y_FRAC * cfg.track_m
-    dy = sign * cfg.track_m / 2.0 - y_rocker
-    s = side[0]
-    pz = PIVOT_ABOVE_GROUND_M
-    bz = BOGIE_ABOVE_GROUND_M - pz
-    xb = -cfg.wheelbase_rear_m + BOGIE_HALF_M  # bogie pivot x
-    xf = cfg.wheelbase_front_m
-    front = _wheel(cfg, f"f{s}", (xf, dy, r - pz), True)
-    mid = _wheel(cfg, f"m{s}", (BOGIE_HALF_M, dy, r - BOGIE_ABOVE_GROUND_M), False)
-    rear = _wheel(cfg, f"r{s}", (-BOGIE_HALF_M, dy, r - BOGIE_ABOVE_GROUND_M), True)
-    bogie = _body(
-        f"bogie_{side}",
-        (xb, 0.0, bz),
-        f'<joint name="bogie_{side}" type="hinge" axis="0 1 0" range="-0.6 0.6" damping="20"/>'
-        f'<geom class="visual" type="capsule" '
-        f'fromto="{fmt((-BOGIE_HALF_M, 0, 0, BOGIE_HALF_M, 0, 0))}" '
-        f'size="0.05" mass="{fmt(_M_BOGIE)}"/>' + mid + rear,
-    )
-    rocker = (
-        f'<joint name="rocker_{side}" type="hinge" axis="0 1 0" range="-0.5 0.5" damping="20"/>'
-        f'<geom class="visual" type="capsule" fromto="{fmt((xb, 0, bz, xf, 0, r - pz + 0.2))}" '
-        f'size="0.06" mass="{fmt(_M_ROCKER)}"/>' + front + bogie
-    )
-    return _body(f"rocker_{side}", (0.0, y_rocker, pz - ride), rocker)
+def _body(link: Link, children: dict[str, list[Link]], extra: str = "") -> str:
+    inner = (_joint(link.joint) if link.joint is not None else "") + "".join(
+        _geom(s) for s in link.shapes) + extra
+    inner += "".join(_body(c, children) for c in children.get(link.name, []))
+    return f'<body name="{link.name}" pos="{fmt(link.pos_m)}">{inner}</body>'
 
 
 def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0) -> str:
@@ -95,30 +60,33 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0)
     so rover parts never collide with each other); links are visual only (group 2).
     """
     cfg = cfg if cfg is not None else RoverConfig()
-    chassis_kg = cfg.mass_kg - 2 * (_M_ROCKER + _M_BOGIE) - 4 * _M_STEER - 6 * _M_WHEEL
-    ride, mast = cfg.ride_height_m, cfg.mast_height_m - cfg.ride_height_m
+    links = rover_links(cfg)
+    children: dict[str, list[Link]] = {}
+    for link in links[1:]:
+        assert link.parent is not None
+        children.setdefault(link.parent, []).append(link)
+    mast = cfg.mast_height_m - cfg.ride_height_m
     cam_pos, cam_xyaxes = navcam_mount(cfg)
-    cam_axes = fmt(cam_xyaxes)
     mu = fmt((cfg.friction, 0.02, 0.002))
-    base = (
-        '<freejoint name="root"/>'
-        f'<geom name="chassis" class="body" type="box" size="0.9 0.55 0.2" pos="0 0 0.05" '
-        f'mass="{fmt(chassis_kg)}"/>'
-        f'<geom class="visual" type="cylinder" size="0.06 {fmt(mast / 2)}" '
-        f'pos="{fmt((0.7, 0.0, 0.25 + mast / 2 - 0.125))}" mass="0"/>'
+    sensors = (
         '<site name="imu" pos="0 0 0" size="0.02"/>'
         f'<site name="lidar" pos="{fmt((LIDAR_X_M, 0.0, mast + LIDAR_ABOVE_CAMERA_M))}" '
         'size="0.03"/>'
-        f'<camera name="navcam" pos="{fmt(cam_pos)}" xyaxes="{cam_axes}" '
-        f'fovy="{fmt(camera_fovy_deg)}"/>' + _side(cfg, "left", 1.0) + _side(cfg, "right", -1.0)
+        f'<camera name="navcam" pos="{fmt(cam_pos)}" xyaxes="{fmt(cam_xyaxes)}" '
+        f'fovy="{fmt(camera_fovy_deg)}"/>'
     )
+    base = links[0]
+    body = _body(base, children, sensors).replace(
+        f'<body name="base_link" pos="{fmt(base.pos_m)}">',
+        f'<body name="base_link" pos="{fmt(base.pos_m)}"><freejoint name="root"/>', 1)
     lim, tq = cfg.wheel_speed_limit_rad_s, cfg.drive_torque_limit_nm
     acts = "".join(
         f'<velocity name="{j}" joint="{j}" kv="{fmt(cfg.drive_kv_nm_s)}" '
         f'ctrlrange="{fmt((-lim, lim))}" forcerange="{fmt((-tq, tq))}"/>'
         for j in DRIVE_JOINTS
     ) + "".join(
-        f'<position name="{j}" joint="{j}" kp="{fmt(cfg.steer_kp_nm)}" kv="200" '
+        f'<position name="{j}" joint="{j}" kp="{fmt(cfg.steer_kp_nm)}" '
+        f'kv="{fmt(STEER_ACT_KV_NM_S)}" '
         f'ctrlrange="{fmt((-cfg.steer_limit_rad, cfg.steer_limit_rad))}" '
         f'forcerange="{fmt((-cfg.steer_torque_limit_nm, cfg.steer_torque_limit_nm))}"/>'
         for j in STEER_JOINTS
@@ -134,7 +102,7 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0)
         '    <default class="visual"><geom contype="0" conaffinity="0" group="2" '
         'rgba="0.4 0.4 0.4 1"/></default>\n'
         "  </default>\n"
-        f'  <worldbody><body name="base_link" pos="0 0 {fmt(ride)}">{base}</body></worldbody>\n'
+        f"  <worldbody>{body}</worldbody>\n"
         '  <equality><joint name="differential" joint1="rocker_left" joint2="rocker_right" '
         'polycoef="0 -1 0 0 0"/></equality>\n'
         f"  <actuator>{acts}</actuator>\n"

@@ -25,11 +25,11 @@ from marsscene._atomic import write_atomic
 from marsscene.errors import RuntimeSimError
 from marsscene.rover.config import RoverConfig, RunConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
+from marsscene.rover.spawn import spawn_pose
 from marsscene.sim.corridor import cull_scene_xml
 from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.terrain import scene_heightfield
 from marsscene.terrain.heightfield import Heightfield
-from marsscene.transforms import quat_from_yaw_normal
 
 __all__ = ["PREFIX", "RoverSim", "load_scene_spec"]
 
@@ -188,27 +188,7 @@ class RoverSim:
         self._gyr_adr = int(m.sensor_adr[gyr])
 
     def _spawn_pose(self, xy: tuple[float, float], yaw: float) -> NDArray[np.float64]:
-        hf = self.heightfield
-        x, y = float(xy[0]), float(xy[1])
-        half = max(self.rover.wheelbase_front_m, self.rover.wheelbase_rear_m) + 0.6
-        if not bool(hf.contains(x - half, y - half) & hf.contains(x + half, y + half)):
-            x0, y0, x1, y1 = hf.bounds_xy_m
-            raise RuntimeSimError(
-                f"spawn point ({x:.2f}, {y:.2f}) m is outside the terrain or closer than "
-                f"{half:.2f} m to its edge; terrain spans x [{x0:.2f}, {x1:.2f}], "
-                f"y [{y0:.2f}, {y1:.2f}] m"
-            )
-        # Plane fitted to the terrain under the rover footprint gives roll and pitch.
-        g = np.linspace(-half, half, 9)
-        gx, gy = np.meshgrid(x + g, y + g)
-        gz = hf.sample(gx, gy)
-        a = np.column_stack([gx.ravel() - x, gy.ravel() - y, np.ones(gz.size)])
-        (sx, sy, z0), *_ = np.linalg.lstsq(a, gz.ravel(), rcond=None)
-        normal = np.array([-sx, -sy, 1.0]) / math.sqrt(sx * sx + sy * sy + 1.0)
-        clearance = float(np.max(gz.ravel() - a @ np.array([sx, sy, z0])))  # bumps above plane
-        quat = quat_from_yaw_normal(yaw, normal)
-        pos = np.array([x, y, z0]) + normal * (self.rover.ride_height_m + max(clearance, 0) + 0.01)
-        return np.concatenate([pos, quat])
+        return spawn_pose(self.heightfield, xy, yaw, self.rover)
 
     def reset(
         self,

@@ -239,6 +239,7 @@ def test_streamed_asset_layers_equal_the_in_memory_ones(tmp_path: Path) -> None:
     """write_usd exports each asset layer (terrain tiles, rock payloads) as soon as it is
     authored; the files equal those of the in-memory stage exported afterwards."""
     from marsscene.export.usd import to_stage
+    from marsscene.export.usd.stage import root_layer
 
     cfg = ms.SceneConfig.from_dict({**_GENTLE, "rocks": {"d_min_m": 0.3},
                                     "terrain": {**_GENTLE["terrain"], "tile_m": 12.0}})
@@ -246,6 +247,7 @@ def test_streamed_asset_layers_equal_the_in_memory_ones(tmp_path: Path) -> None:
     _, kept = to_stage(scene)
     _, streamed = to_stage(scene, stream_to=tmp_path / "streamed")
     assert sorted(kept) == sorted(streamed) and any(r.startswith("assets/rocks/") for r in kept)
+    assert any(r.startswith("assets/rock_colliders/") for r in kept)
     for rel, blob in kept.items():
         path = streamed[rel]
         assert path == tmp_path / "streamed" / rel and path.is_file()
@@ -254,5 +256,5 @@ def test_streamed_asset_layers_equal_the_in_memory_ones(tmp_path: Path) -> None:
         else:
             ref = tmp_path / "kept" / rel
             ref.parent.mkdir(parents=True, exist_ok=True)
-            assert blob.GetRootLayer().Export(str(ref))
+            assert root_layer(blob).Export(str(ref))
             assert ref.read_bytes() == path.read_bytes()

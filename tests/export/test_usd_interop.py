@@ -17,9 +17,9 @@ from pxr import Kind, Usd, UsdGeom, UsdPhysics, UsdShade  # noqa: E402
 
 CFG = {
     "terrain": {"source": "procedural", "size_m": [100.0, 100.0], "post_m": 1.0},
-    "rocks": {"k": 0.05, "d_min_m": 0.35},
+    "rocks": {"k": 0.05, "d_min_m": 0.5},  # 123 rocks: each is a collider prim to validate
     "craters": {"d_min_m": 1.0},
-    "export": {"max_tile_posts": 33},
+    "export": {"max_tile_posts": 33, "rover": True},
 }
 
 
@@ -66,8 +66,11 @@ def _physics_material(prim: Usd.Prim) -> UsdPhysics.MaterialAPI:
 def test_physics_materials_match_the_mjcf_contact(written: Path) -> None:
     stage = Usd.Stage.Open(str(written / "scene.usda"))
     tiles = [p for p in stage.GetPrimAtPath("/World/Terrain").GetChildren() if p.IsA(UsdGeom.Mesh)]
-    colliders = [p for p in Usd.PrimRange(stage.GetPrimAtPath("/World/Rocks"))
+    colliders = [p for p in Usd.PrimRange(stage.GetPrimAtPath("/World/RockColliders"),
+                                          Usd.TraverseInstanceProxies())
                  if p.HasAPI(UsdPhysics.CollisionAPI)]
+    assert not [p for p in Usd.PrimRange(stage.GetPrimAtPath("/World/Rocks"))
+                if p.HasAPI(UsdPhysics.CollisionAPI)]  # the render instancer carries none
     assert tiles and colliders
     for prims, material in ((tiles, "regolith"), (colliders, "rock")):
         mu = _mjcf_friction(written, material)
@@ -87,12 +90,16 @@ def test_physics_materials_match_the_mjcf_contact(written: Path) -> None:
 def test_kind_hierarchy_and_extents(written: Path) -> None:
     stage = Usd.Stage.Open(str(written / "scene.usda"))
     kinds = {p: Usd.ModelAPI(stage.GetPrimAtPath(p)).GetKind() for p in
-             ("/World", "/World/Terrain", "/World/Rocks", "/World/Lights", "/World/Cameras")}
+             ("/World", "/World/Terrain", "/World/Rocks", "/World/RockColliders",
+              "/World/Lights", "/World/Cameras", "/World/Rover")}
     assert kinds == {"/World": Kind.Tokens.assembly, "/World/Terrain": Kind.Tokens.component,
-                     "/World/Rocks": Kind.Tokens.component, "/World/Lights": Kind.Tokens.group,
-                     "/World/Cameras": Kind.Tokens.group}
+                     "/World/Rocks": Kind.Tokens.component,
+                     "/World/RockColliders": Kind.Tokens.component,
+                     "/World/Lights": Kind.Tokens.group, "/World/Cameras": Kind.Tokens.group,
+                     "/World/Rover": Kind.Tokens.component}
     components = [p.GetPath() for p in stage.Traverse() if Usd.ModelAPI(p).IsKind("component")]
-    assert sorted(map(str, components)) == ["/World/Rocks", "/World/Terrain"]
+    assert sorted(map(str, components)) == ["/World/RockColliders", "/World/Rocks",
+                                            "/World/Rover", "/World/Terrain"]
     for prim in stage.Traverse():  # every boundable prim carries its authored extent
         if prim.IsA(UsdGeom.Boundable):
             ext = np.asarray(UsdGeom.Boundable(prim).GetExtentAttr().Get())
@@ -111,6 +118,7 @@ def test_every_usd_file_is_byte_reproducible(scene: ms.Scene, tmp_path: Path) ->
     files = sorted(p.relative_to(tmp_path / "a") for p in (tmp_path / "a").rglob("*")
                    if p.is_file() and p.name != "manifest.json")
     assert {f.as_posix() for f in files} >= {"scene.usdc", "assets/terrain.usdc",
-                                             "assets/rocks.usdc", "assets/craters.usdc"}
+                                             "assets/rocks.usdc", "assets/craters.usdc",
+                                             "assets/rock_colliders.usdc", "assets/rover.usda"}
     for f in files:
         assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f

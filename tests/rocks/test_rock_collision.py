@@ -83,6 +83,6 @@ def test_multi_part_prototype_exports(tmp_path: Path, monkeypatch: pytest.Monkey
     from pxr import Usd, UsdPhysics
 
     stage = Usd.Stage.Open(str(tmp_path / "out" / "scene.usda"))
-    coll = stage.GetPrimAtPath("/World/Rocks/Instancer/Prototypes/rock_00/Collision")
-    parts = coll.GetChildren()
+    rock = stage.GetPrimAtPath("/World/RockColliders/rock_0")  # every rock: prototype rock_00
+    parts = rock.GetPrototype().GetChildren()
     assert len(parts) == n_parts and all(p.HasAPI(UsdPhysics.CollisionAPI) for p in parts)

@@ -56,16 +56,21 @@ def test_usd_round_trip(written: tuple[ms.Scene, Path]) -> None:
                                rtol=1e-6)
     quat = np.array([[q.GetReal(), *q.GetImaginary()] for q in inst.GetOrientationsAttr().Get()])
     np.testing.assert_allclose(quat, rocks.orientation_wxyz, atol=2e-3)
-    # each prototype: a visual mesh + convex-hull collision parts
+    # each instancer prototype: a visual mesh (render only: no collision under the instancer)
     for path in targets:
-        parts = stage.GetPrimAtPath(f"{path}/Collision").GetChildren()
-        assert parts
+        assert UsdGeom.Mesh(stage.GetPrimAtPath(f"{path}/Visual"))
+        assert not [p for p in Usd.PrimRange(stage.GetPrimAtPath(path))
+                    if p.HasAPI(UsdPhysics.CollisionAPI)]
+    # the colliders: one instance per rock of a class prototype with convex-hull parts
+    for i in (0, len(rocks) - 1):
+        prim = stage.GetPrimAtPath(f"/World/RockColliders/rock_{i}")
+        parts = prim.GetPrototype().GetChildren()
+        assert prim.IsInstance() and parts
         for part in parts:
             assert part.HasAPI(UsdPhysics.CollisionAPI)
             approx = UsdPhysics.MeshCollisionAPI(part).GetApproximationAttr().Get()
             assert approx == UsdPhysics.Tokens.convexHull
             assert UsdGeom.Imageable(part).GetPurposeAttr().Get() == UsdGeom.Tokens.guide
-        assert UsdGeom.Mesh(stage.GetPrimAtPath(f"{path}/Visual"))
     # world-space instance transforms: prototype base (0,0,0) lands on the rock position
     xforms = inst.ComputeInstanceTransformsAtTime(Usd.TimeCode.Default(), Usd.TimeCode.Default())
     base = np.array([np.asarray(m)[3, :3] for m in xforms[:50]])

@@ -12,9 +12,13 @@
       /TerrainLod1              level-of-detail scenes only (group; terrain_lod.py):
         /tile_i_j               component; payload assets/terrain_lod1/tile_i_j.usdc
       /Craters                  payload assets/craters.usdc (guide Points)
-      /Rocks                    component; payload assets/rocks.usdc (PointInstancer)
+      /Rocks                    component; payload assets/rocks.usdc (PointInstancer, render)
+      /RockColliders            component; payload assets/rock_colliders.usdc (one native
+                                instance per rock: the colliders every physics loader sees)
       /Lights                   group: Sun (DistantLight), Sky (textured DomeLight)
       /Cameras                  group: Navcam (runtime mast camera), Overview
+      /Rover                    with [export] rover = true: payload assets/rover.usda (always
+                                written; a UsdPhysics articulation) at the runtime's spawn pose
       /Assets                   placed assets (habitat, user files), when [assets] is set
 
 Every default-rule check of NVIDIA's Omniverse Asset Validator passes on ``.usda``, ``.usdc``
@@ -53,8 +57,11 @@ class _StreamedAssets(dict[str, Any]):
         p.parent.mkdir(parents=True, exist_ok=True)
         if isinstance(blob, bytes):
             p.write_bytes(blob)
-        elif not blob.GetRootLayer().Export(str(p)):
-            raise OSError(f"could not write {p}")
+        else:
+            from marsscene.export.usd.stage import root_layer
+
+            if not root_layer(blob).Export(str(p)):
+                raise OSError(f"could not write {p}")
         super().__setitem__(rel, p)
 
 
@@ -72,7 +79,9 @@ def _import_authors() -> None:
     import marsscene.export.usd.craters
     import marsscene.export.usd.display
     import marsscene.export.usd.lighting
+    import marsscene.export.usd.rock_colliders
     import marsscene.export.usd.rocks
+    import marsscene.export.usd.rover
     import marsscene.export.usd.stage
     import marsscene.export.usd.terrain
     import marsscene.export.usd.terrain_lod
@@ -105,17 +114,21 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None,
     Returns
     -------
     stage : pxr.Usd.Stage
-    assets : dict of str to bytes or pxr.Usd.Stage
+    assets : dict of str to bytes, pxr.Usd.Stage or pxr.Sdf.Layer
         Files the stage references, by path relative to the stage file: file contents, or
-        in-memory asset stages (terrain, rocks, craters) whose root layers :func:`write_usd`
-        exports directly to their ``.usdc`` files (no serialise-read-write round trip).
+        in-memory asset stages (terrain, rocks, craters) and layers (rock colliders, authored
+        without a stage) that :func:`write_usd` exports directly to their ``.usdc`` files (no
+        serialise-read-write round trip); :func:`marsscene.export.usd.stage.root_layer` gives
+        the layer of either.
     """
     _import_authors()
     from marsscene.export.usd.assets import author_assets
     from marsscene.export.usd.cameras import author_cameras
     from marsscene.export.usd.craters import author_craters
     from marsscene.export.usd.lighting import author_lighting
+    from marsscene.export.usd.rock_colliders import author_rock_colliders
     from marsscene.export.usd.rocks import author_rocks
+    from marsscene.export.usd.rover import author_rover
     from marsscene.export.usd.stage import create_stage
     from marsscene.export.usd.terrain import author_terrain
     from marsscene.export.usd.terrain_lod import author_outer_terrain
@@ -123,8 +136,8 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None,
     stage = create_stage(scene)
     assets: dict[str, Any] = _StreamedAssets(Path(stream_to)) if stream_to is not None else {}
     author_terrain(stage, scene, assets, textures=textures)
-    for author in (author_outer_terrain, author_craters, author_rocks, author_lighting,
-                   author_cameras, author_assets):
+    for author in (author_outer_terrain, author_craters, author_rocks, author_rock_colliders,
+                   author_lighting, author_cameras, author_assets, author_rover):
         author(stage, scene, assets)
     return stage, assets
 

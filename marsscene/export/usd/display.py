@@ -7,7 +7,9 @@ DistantLight's intensity as its sun strength and ignores camera exposure, so a p
 renders pure white. The sibling root layer sublayers ``scene.<ext>`` and overrides only what
 differs: every light's intensity times ``pi / E`` and the cameras' exposure time set to a
 neutral scale (1). A grey card of albedo 0.18 lying on the ground then renders at linear
-0.18 in any client, with no script and no exposure setting.
+0.18 in any client, with no script and no exposure setting. The rock colliders
+(``/World/RockColliders``, one prim per rock, physics only) are deactivated there: a renderer
+has no use for them and Blender would import each as an object.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from typing import Any
 from pxr import Sdf, UsdGeom, UsdLux
 
 from marsscene.export.usd.cameras import CAMERAS_PATH, F_STOP, ISO
+from marsscene.export.usd.rock_colliders import COLLIDERS_PATH
 from marsscene.export.usd.stage import WORLD
 
 __all__ = ["BLENDER_LAYER", "BLENDER_SUN_IMPORT_FACTOR", "DISPLAY_LAYER", "write_display_layers"]
@@ -70,6 +73,11 @@ def _write_layer(stage: Any, scene: Any, target: Path, root_name: str,
             _over_attr(layer, prim.GetPath(), "inputs:intensity", value)
         elif prim.IsA(UsdGeom.Camera) and str(prim.GetPath()).startswith(CAMERAS_PATH):
             _over_attr(layer, prim.GetPath(), "exposure:time", F_STOP**2 / (ISO / 100.0))
+    if stage.GetPrimAtPath(COLLIDERS_PATH):
+        spec = Sdf.CreatePrimInLayer(layer, COLLIDERS_PATH)
+        for p in [spec, *_ancestors(spec)]:
+            p.specifier = Sdf.SpecifierOver
+        spec.active = False
     if not layer.Export(str(target)):
         raise OSError(f"could not write {target}")
     return target

@@ -9,11 +9,11 @@ Layout (the instancer lives in the binary crate layer ``assets/rocks.usdc``, pay
                                           protoIndices (one row per rock of Scene.rocks)
         Prototypes/rock_NN                Xform (unit frame: x, y in [-0.5, 0.5], z in [0, 1])
           Visual                          Mesh (render), flat face-varying normals, material
-          Collision/part_M                Mesh, purpose guide, CollisionAPI,
-                                          MeshCollisionAPI approximation "convexHull",
-                                          physics material Looks/RockPhysics
 
-``/World/Rocks`` is a ``component`` model (``kind``).
+``/World/Rocks`` is a ``component`` model (``kind``). It is for rendering only: the rocks'
+colliders are native instances under ``/World/RockColliders``
+(:mod:`marsscene.export.usd.rock_colliders`), which OpenUSD's physics parser (Newton) loads as
+well as PhysX; a ``PointInstancer`` is skipped by the former.
 
 Level-of-detail scenes (:attr:`Scene.outer <marsscene.Scene.outer>`) split the rocks by where
 they matter: ``/World/Rocks`` is a ``group`` of one payload per focus tile
@@ -31,16 +31,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from pxr import Gf, Sdf, UsdGeom, UsdPhysics, UsdShade, Vt
+from pxr import Gf, Sdf, UsdGeom, UsdShade, Vt
 
-from marsscene.export.usd.physics import (
-    ROCK_PHYSICS,
-    author_physics_material,
-    bind_physics_material,
-)
 from marsscene.export.usd.stage import WORLD, author_tri_mesh, create_asset_stage, set_kind
 
-__all__ = ["ROCKS_ASSET", "ROCK_ALBEDO_RGB", "author_rocks"]
+__all__ = ["ROCKS_ASSET", "ROCK_ALBEDO_RGB", "author_rocks", "rock_tile_parts"]
 
 ROCKS_ASSET = "assets/rocks.usdc"
 #: Basaltic rock colour (linear sRGB), darker and less red than dusty soil (rock albedo ~0.1-0.2;
@@ -62,7 +57,7 @@ def _material(stage: Any, root: Sdf.Path) -> UsdShade.Material:
 
 
 def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
-                material: UsdShade.Material, physics: UsdShade.Material) -> list[Sdf.Path]:
+                material: UsdShade.Material) -> list[Sdf.Path]:
     scope = instancer.AppendChild("Prototypes")
     UsdGeom.Scope.Define(stage, scope)
     paths = []
@@ -71,16 +66,6 @@ def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
         UsdGeom.Xform.Define(stage, path)
         visual = author_tri_mesh(stage, path.AppendChild("Visual"), proto.visual, faceted=True)
         UsdShade.MaterialBindingAPI.Apply(visual.GetPrim()).Bind(material)
-        coll = path.AppendChild("Collision")
-        UsdGeom.Scope.Define(stage, coll)
-        for i, part in enumerate(proto.collision):
-            geom = author_tri_mesh(stage, coll.AppendChild(f"part_{i}"), part, faceted=True)
-            geom.CreatePurposeAttr(UsdGeom.Tokens.guide)
-            UsdPhysics.CollisionAPI.Apply(geom.GetPrim())
-            UsdPhysics.MeshCollisionAPI.Apply(geom.GetPrim()).CreateApproximationAttr(
-                UsdPhysics.Tokens.convexHull
-            )
-            bind_physics_material(geom.GetPrim(), physics)
         paths.append(path)
     return paths
 
@@ -88,10 +73,9 @@ def _prototypes(stage: Any, instancer: Sdf.Path, prototypes: tuple[Any, ...],
 def author_instancer(stage: Any, root: Sdf.Path, rocks: Any, prototypes: tuple[Any, ...]) -> None:
     """Author the material, prototypes and the PointInstancer of ``rocks`` under ``root``."""
     material = _material(stage, root)
-    physics = author_physics_material(stage, root.AppendChild("Looks"), ROCK_PHYSICS)
     inst = UsdGeom.PointInstancer.Define(stage, root.AppendChild("Instancer"))
     inst.CreatePrototypesRel().SetTargets(_prototypes(stage, inst.GetPath(), prototypes,
-                                                      material, physics))
+                                                      material))
     pos = np.asarray(rocks.position_xyz_m, dtype=np.float32)
     q = np.asarray(rocks.orientation_wxyz, dtype=np.float64)
     scale = np.asarray(rocks.scale_xyz_m, dtype=np.float32)
@@ -121,19 +105,24 @@ def _tile_of_rocks(scene: Any) -> tuple[Any, int]:
     return np.where(inside, row * n + col, -1), n
 
 
+def rock_tile_parts(scene: Any) -> list[tuple[str, Any, int]]:
+    """Level-of-detail scenes: ``(name, rows of the rock table, lod level)`` of each rock
+    payload (one per focus tile, ``tile_i_j``, then ``outer``); empty parts are left out."""
+    tile, n = _tile_of_rocks(scene)
+    parts = [(f"tile_{i // n}_{i % n}", i, 0) for i in range(n * n)] + [("outer", -1, 1)]
+    rows = [(name, np.flatnonzero(tile == index), level) for name, index, level in parts]
+    return [(name, idx, level) for name, idx, level in rows if len(idx)]
+
+
 def _rock_payloads(stage: Any, scene: Any, assets: dict[str, Any]) -> None:
     """Level-of-detail scenes: one rock payload per focus tile, and one for the outer rocks."""
     from marsscene.export.usd.terrain_lod import LOD_ATTR
 
     group = UsdGeom.Xform.Define(stage, Sdf.Path(f"{WORLD}/Rocks")).GetPrim()
     set_kind(group, "group")
-    tile, n = _tile_of_rocks(scene)
     protos = tuple(scene.rock_prototypes or ())
-    parts = [(f"tile_{i // n}_{i % n}", i, 0) for i in range(n * n)] + [("outer", -1, 1)]
-    for name, index, level in parts:  # a few tiles, each one vectorised instancer
-        rocks = scene.rocks.take(np.flatnonzero(tile == index))
-        if len(rocks) == 0:
-            continue
+    for name, idx, level in rock_tile_parts(scene):  # a few tiles, each one vectorised instancer
+        rocks = scene.rocks.take(idx)
         rel = f"assets/rocks/{name}.usdc"
         asset = create_asset_stage("Rocks")
         author_instancer(asset, Sdf.Path("/Rocks"), rocks, protos)

@@ -19,6 +19,7 @@ __all__ = [
     "create_asset_stage",
     "create_stage",
     "provenance_layer_data",
+    "root_layer",
     "set_kind",
 ]
 
@@ -87,6 +88,11 @@ def create_asset_stage(default_prim: str, kind: str | None = "component") -> Usd
     stage.SetDefaultPrim(root.GetPrim())
     stage.GetRootLayer().customLayerData = {"creator": f"marsscene {__version__}"}
     return stage
+
+
+def root_layer(asset: Usd.Stage | Sdf.Layer) -> Sdf.Layer:
+    """The layer to export for an in-memory asset: a stage's root layer, or the layer itself."""
+    return asset if isinstance(asset, Sdf.Layer) else asset.GetRootLayer()
 
 
 def crate_bytes(stage: Usd.Stage) -> bytes:

@@ -1,0 +1,122 @@
+"""The USD rover in Newton on CPU (issue 34): checks and figures. Needs the extra ``newton``.
+
+Real client: Newton 1.8 (``pip install "marsscene[newton]"``), CPU through Warp, solver
+``SolverSteel`` through :class:`marsscene.sim.newton_rover.NewtonRover`. Each part prints its
+figures; ``tests/usd_clients/test_newton_rover.py`` asserts the same checks when newton is
+installed::
+
+    python perf/bench_newton.py            # every part (about 20 min on 2 cores)
+    python perf/bench_newton.py compile    # Warp's CPU kernel compile, cold cache
+    python perf/bench_newton.py load       # default scene + rover: load, finalize, rate
+    python perf/bench_newton.py drive      # 10 m straight + 90 deg turn, vs MuJoCo
+    python perf/bench_newton.py gentle     # 4 m + 45 deg on a 40 m scene, vs MuJoCo
+    python perf/bench_newton.py slope rock sphere
+
+* ``slope``: a 15 deg plane; the rover parked across it and driven up it.
+* ``rock``: a 0.35 m rock under the left wheels (climbed), a 1.2 m rock across the path
+  (stops the rover or is climbed, never passed through).
+* ``sphere``: a 0.3 m sphere dropped on a 1.2 m rock comes to rest on its top.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from marsscene.testing.newton_checks import (
+    V_M_S,
+    check_rock,
+    check_slope,
+    check_sphere,
+    compare_drive,
+    flat,
+    gentle_scene,
+    write_world,
+)
+
+
+def load_figures(scene: Path, rocks_within_m: float | None) -> dict[str, Any]:
+    """Newton on the default scene + rover: add_usd, finalize, and the simulation rate."""
+    from pxr import Usd
+
+    from marsscene.sim.newton_rover import NewtonRover, _newton
+
+    newton, _ = _newton()
+    t0 = time.perf_counter()
+    sim = NewtonRover(scene / "scene.usda", rocks_within_m=rocks_within_m)
+    total = time.perf_counter() - t0
+    b = newton.ModelBuilder(up_axis=newton.Axis.Z)  # the parts, timed apart
+    stage = Usd.Stage.Open(str(scene / "scene.usda"))
+    t0 = time.perf_counter()
+    b.add_usd(stage, ignore_paths=["/World/RockColliders"])
+    add_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    b.finalize(device="cpu")
+    fin_s = time.perf_counter() - t0
+    sim.advance(10 if rocks_within_m is None else 500)
+    n = 5 if rocks_within_m is None else 250  # every rock: the CPU broad phase is slow
+    t0 = time.perf_counter()
+    for _ in range(n):
+        sim.step(V_M_S, 0.0)
+    rate = n / 50 / (time.perf_counter() - t0)
+    return {"rocks_within_m": rocks_within_m, "rocks_loaded": sim.load_info["rocks_loaded"],
+            "NewtonRover_init_s": round(total, 1), "add_usd_terrain_rover_s": round(add_s, 2),
+            "finalize_terrain_rover_s": round(fin_s, 2),
+            "sim_s_per_wall_s": round(rate, 3), "dt_s": sim.dt_s}
+
+
+def compile_cold() -> dict[str, Any]:
+    """Warp's CPU kernel compile time for a first NewtonRover run (empty kernel cache)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = write_world(Path(tmp) / "w", flat(41), rover_xy_m=(0.0, 0.0))
+        code = ("import time, warp as wp; wp.config.kernel_cache_dir = {c!r}; t = time.time();"
+                "from marsscene.sim.newton_rover import NewtonRover;"
+                "s = NewtonRover({p!r}); s.step(0.3, 0.0); print(time.time() - t)")
+        out = {}
+        for label in ("cold", "warm"):
+            res = subprocess.run([sys.executable, "-c", code.format(
+                c=str(Path(tmp) / "kernels"), p=str(scene / "scene.usda"))],
+                capture_output=True, text=True, check=True, env={**os.environ})
+            out[f"{label}_first_step_s"] = round(float(res.stdout.split()[-1]), 1)
+    return out
+
+
+def default_scene(tmp: Path) -> Path:
+    import marsscene as ms
+
+    scene = ms.build_scene(ms.SceneConfig.from_dict({"export": {"rover": True}}), seed=7)
+    ms.write_scene(scene, tmp / "default")
+    return tmp / "default"
+
+
+def main(argv: list[str] | None = None) -> None:
+    parts = list(argv or []) or ["compile", "load", "drive", "gentle", "slope", "rock", "sphere"]
+    with tempfile.TemporaryDirectory() as name:
+        tmp = Path(name)
+        if "compile" in parts:
+            print("compile:", json.dumps(compile_cold()), flush=True)
+        if {"load", "drive"} & set(parts):
+            scene = default_scene(tmp)
+            if "load" in parts:
+                for within in (30.0, None):
+                    print("load:", json.dumps(load_figures(scene, within)), flush=True)
+            if "drive" in parts:
+                for same in (True, False):
+                    res = compare_drive(scene, same_rocks=same)
+                    print(f"drive (same_rocks={same}):", json.dumps(res), flush=True)
+        if "gentle" in parts:
+            res = compare_drive(gentle_scene(tmp), straight_m=4.0, turn_deg=45.0)
+            print("gentle drive:", json.dumps(res), flush=True)
+        for name_, fn in (("slope", check_slope), ("rock", check_rock), ("sphere", check_sphere)):
+            if name_ in parts:
+                print(f"{name_}:", json.dumps(fn(tmp)), flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
