@@ -34,6 +34,10 @@ class ExportConfig:
     """Where to place it (m, world frame); default: the terrain centre, as the runtime."""
     rover_yaw_deg: float = 0.0
     """Its heading (deg, counter-clockwise from east)."""
+    rock_collider_min_diameter_m: float = 0.0
+    """Rocks at least this wide get a collider prim under ``/World/RockColliders`` (m); the
+    smaller ones are rendered only. 0: every rock (the default scene's 120 000 colliders cost
+    about 10 s of writing and 8 s of a full stage open; 0.15 m keeps about 45 % of them)."""
 
     def __post_init__(self) -> None:
         if isinstance(self.formats, str) or not self.formats:
@@ -53,3 +57,5 @@ class ExportConfig:
                 check_range(f"export.rover_xy_m[{i}]", v, -1e7, 1e7)
             object.__setattr__(self, "rover_xy_m", (float(xy[0]), float(xy[1])))
         check_range("export.rover_yaw_deg", self.rover_yaw_deg, -360.0, 360.0)
+        check_range("export.rock_collider_min_diameter_m", self.rock_collider_min_diameter_m,
+                    0.0, 1e4)

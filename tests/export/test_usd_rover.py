@@ -224,3 +224,20 @@ def test_build_cli_places_the_rover(tmp_path: Path) -> None:
     res = CliRunner().invoke(main, [*args[:-3], "--rover-xy", "900", "0",
                                     "--out", str(tmp_path / "c")])
     assert res.exit_code != 0 and "outside the terrain" in res.output
+
+
+def test_rock_collider_min_diameter_keeps_the_wide_rocks_only(
+        scene: ms.Scene, tmp_path: Path) -> None:
+    """``export.rock_collider_min_diameter_m``: the parser reports a collider for exactly the
+    rocks at least that wide, each under its rock-table row."""
+    d_min = float(np.median(scene.rocks.diameter_m))
+    cfg = dict(CFG, export={**CFG["export"], "rock_collider_min_diameter_m": d_min})
+    small = ms.build_scene(ms.SceneConfig.from_dict(cfg), seed=5)
+    ms.write_scene(small, tmp_path / "s")
+    stage = Usd.Stage.Open(str(tmp_path / "s" / "scene.usda"))
+    rocks = [p for p in _parse(stage)["MeshShape"][0] if p.startswith("/World/RockColliders/")]
+    wide = np.flatnonzero(small.rocks.diameter_m >= d_min)
+    assert 0 < len(wide) < len(small.rocks)
+    assert {p.split("/")[3] for p in rocks} == {f"rock_{i}" for i in wide}
+    count = stage.GetPrimAtPath("/World/RockColliders").GetAttribute("marsscene:rockCount")
+    assert count.Get() == len(wide)

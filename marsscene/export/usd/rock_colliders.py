@@ -143,18 +143,25 @@ def author_rock_colliders(stage: Any, scene: Any, assets: dict[str, Any]) -> Non
     if scene.rocks is None or len(scene.rocks) == 0 or not scene.rock_prototypes:
         return
     protos = tuple(scene.rock_prototypes)
+    min_d = scene.config.export.rock_collider_min_diameter_m
+    wide = np.asarray(scene.rocks.diameter_m) >= min_d
+    if not wide.any():
+        return
     if scene.outer is None:
-        assets[COLLIDERS_ASSET] = author_collider_layer(
-            scene.rocks, np.arange(len(scene.rocks)), protos)
-        _payload(stage, Sdf.Path(COLLIDERS_PATH), COLLIDERS_ASSET, len(scene.rocks))
+        keep = np.flatnonzero(wide)
+        assets[COLLIDERS_ASSET] = author_collider_layer(scene.rocks.take(keep), keep, protos)
+        _payload(stage, Sdf.Path(COLLIDERS_PATH), COLLIDERS_ASSET, len(keep))
         return
     from marsscene.export.usd.rocks import rock_tile_parts
     from marsscene.export.usd.terrain_lod import LOD_ATTR
 
     group = UsdGeom.Xform.Define(stage, Sdf.Path(COLLIDERS_PATH)).GetPrim()
     set_kind(group, "group")
-    group.CreateAttribute("marsscene:rockCount", Sdf.ValueTypeNames.Int).Set(len(scene.rocks))
+    group.CreateAttribute("marsscene:rockCount", Sdf.ValueTypeNames.Int).Set(int(wide.sum()))
     for name, idx, level in rock_tile_parts(scene):  # a few tiles
+        idx = idx[wide[idx]]
+        if len(idx) == 0:
+            continue
         rel = f"assets/rock_colliders/{name}.usdc"
         assets[rel] = author_collider_layer(scene.rocks.take(idx), idx, protos)
         prim = _payload(stage, group.GetPath().AppendChild(name), rel, len(idx))
