@@ -34,7 +34,8 @@ from marsscene.terrain.albedo_field import AlbedoField
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.horizon import SunShadow
 
-__all__ = ["FAR_BLOCK", "NEAR_DROP_M", "GroundWindow", "bake_ground"]
+__all__ = ["FAR_BLOCK", "NEAR_DROP_M", "GroundWindow", "bake_ground", "far_window_bounds",
+           "window_posts"]
 
 FAR_BLOCK = 8
 NEAR_DROP_M = 0.25
@@ -114,6 +115,42 @@ def _block_mean(tile_u8: NDArray[np.uint8], block: int) -> NDArray[np.uint8]:
     return np.rint(m.mean(axis=(1, 3))).astype(np.uint8)
 
 
+def window_posts(hf: Heightfield, window_m: float) -> tuple[int, int, int, int]:
+    """The far window's size: ``(n, rows, cols, step)`` in posts (``n`` asked for, ``rows`` x
+    ``cols`` drawn; the window is re-placed once the camera moved ``step`` posts)."""
+    rows, cols = hf.shape
+    n = int(window_m / hf.cell_size_m) // 2 * 2 + 1
+    return n, min(n, rows), min(n, cols), max(n // 4, 1)
+
+
+def _window_origin(hf: Heightfield, nr: int, nc: int, xy_m: tuple[float, float]
+                   ) -> tuple[int, int]:
+    rows, cols = hf.shape
+    r, c = hf.rowcol_of(float(xy_m[0]), float(xy_m[1]))
+    r0 = int(np.clip(round(float(r)) - nr // 2, 0, rows - nr))
+    c0 = int(np.clip(round(float(c)) - nc // 2, 0, cols - nc))
+    return r0, c0
+
+
+def far_window_bounds(hf: Heightfield, window_m: float, xy_m: NDArray[np.float64]
+                      ) -> NDArray[np.float64]:
+    """``(x0, y0, x1, y1)`` of the far window for each of a camera's frames rendered at the
+    positions ``xy_m`` (N, 2) in turn: :meth:`GroundWindow.place`'s rule (placed at the first,
+    re-placed once the camera moved ``step`` posts), so a caller can tell which of the scene's
+    meshes the camera drew (those centred inside; the others it hides). A sequential rule:
+    one small step per frame."""
+    _, nr, nc, step = window_posts(hf, window_m)
+    out = np.zeros((len(xy_m), 4), dtype=np.float64)
+    origin: tuple[int, int] | None = None
+    for i, xy in enumerate(np.asarray(xy_m, dtype=np.float64)):
+        o = _window_origin(hf, nr, nc, (xy[0], xy[1]))
+        if origin is None or max(abs(o[0] - origin[0]), abs(o[1] - origin[1])) >= step:
+            origin = o
+        (x0, y0), (x1, y1) = hf.xy_of(*origin), hf.xy_of(origin[0] + nr - 1, origin[1] + nc - 1)
+        out[i] = (min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1))
+    return out
+
+
 class GroundWindow:
     """Near and far terrain meshes and their baked textures (see the module doc)."""
 
@@ -125,15 +162,12 @@ class GroundWindow:
         self.sun_shadow = sun_shadow  # the terrain's shadows (the sun layer); None: none
         #: rocks whose shadows are baked into the sun layer (catalogue rows); None: the map's
         self.shadow_rocks = shadow_rocks
-        rows, cols = hf.shape
         cell = hf.cell_size_m
-        n = int(window_m / cell) // 2 * 2 + 1
-        self.nr, self.nc = min(n, rows), min(n, cols)
+        _, self.nr, self.nc, self.step = window_posts(hf, window_m)
         s = int(far_stride)
         self.s = s if s > 1 and (self.nr - 1) % s == 0 and (self.nc - 1) % s == 0 else 1
         nn = max(int(near_m / cell) // self.s * self.s, self.s) + 1
         self.nn_r, self.nn_c = min(nn, self.nr), min(nn, self.nc)
-        self.step = max(n // 4, 1)
         self.near_step = max((nn - 1) // 4, 1)
         self.field = field
         self.tile = tile_u8
@@ -160,11 +194,7 @@ class GroundWindow:
 
     # ---- placement --------------------------------------------------------------------------
     def window_origin(self, xy_m: tuple[float, float]) -> tuple[int, int]:
-        rows, cols = self.hf.shape
-        r, c = self.hf.rowcol_of(float(xy_m[0]), float(xy_m[1]))
-        r0 = int(np.clip(round(float(r)) - self.nr // 2, 0, rows - self.nr))
-        c0 = int(np.clip(round(float(c)) - self.nc // 2, 0, cols - self.nc))
-        return r0, c0
+        return _window_origin(self.hf, self.nr, self.nc, xy_m)
 
     def near_origin_for(self, centre_xy_m: tuple[float, float], origin: tuple[int, int]
                         ) -> tuple[int, int]:

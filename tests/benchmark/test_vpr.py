@@ -71,6 +71,11 @@ def test_landmark_pixels_in_view_behind_and_hidden() -> None:
     ridge[:, 50:52] = 10.0  # a 10 m wall at x = 10 m, between the camera and the box
     assert landmark_pixels(mark, cams[:1], quats[:1], intr,
                            Heightfield.centered(ridge, 1.0))[0] == 0.0
+    # the camera draws meshes centred inside its terrain window only
+    windows = np.array([[-30.0, -30.0, 30.0, 30.0], [-15.0, -15.0, 15.0, 15.0]])
+    drawn = landmark_pixels(mark, cams[[0, 0]], quats[[0, 0]], intr, flat,
+                            windows)
+    assert drawn[0] == pytest.approx(px[0]) and drawn[1] == 0.0
 
 
 @pytest.mark.parametrize(("patch", "match"), [

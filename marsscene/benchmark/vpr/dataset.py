@@ -152,15 +152,23 @@ def _write_rows(path: Path, rows: list[list[Any]], *, landmark: bool = False) ->
     write_atomic(path, buf.getvalue())
 
 
-def _landmark(name: str, scene_dir: Path, out: Path, rows: list[list[Any]]) -> dict[str, Any]:
-    """Append each frame's landmark height (px) to its row; the shares of frames in view."""
+def _landmark(name: str, scene_dir: Path, out: Path, rows: list[list[Any]],
+              window_m: float) -> dict[str, Any]:
+    """Append each frame's landmark size (px) to its row; the shares of frames in view. The
+    camera's terrain window (``window_m``, replayed per traversal from the camera positions)
+    bounds what it drew."""
     from marsscene.benchmark.vpr.landmark import landmark_parts, landmark_pixels
+    from marsscene.sensors.camera_ground import far_window_bounds
 
     mark, hf = landmark_parts(scene_dir, name)
     intr = json.loads((out / "traversals" / SPLITS[0] / "camera" / "intrinsics.json")
                       .read_text(encoding="utf-8"))
     a = np.array([[float(v) for v in r[3:10]] for r in rows]).reshape(-1, 7)
-    px = landmark_pixels(mark, a[:, :3], a[:, 3:], intr, hf)
+    of_split = np.array([r[0] for r in rows])
+    drawn = np.zeros((len(rows), 4))
+    for s in SPLITS:
+        drawn[of_split == s] = far_window_bounds(hf, window_m, a[of_split == s, :2])
+    px = landmark_pixels(mark, a[:, :3], a[:, 3:], intr, hf, drawn)
     for r, v in zip(rows, px, strict=True):
         r.append(f"{v:.1f}")
     info: dict[str, Any] = {"name": name, "box_m": np.round(mark.box, 3).tolist(),
@@ -250,7 +258,8 @@ def generate_vpr(spec: VprSpec, out_dir: str | Path, *, overwrite: bool = False,
                                     "lookahead_m": round(draws[split][1], 6),
                                     "frames": len(split_rows), **asdict(getattr(spec, split))}
     if spec.landmark_name:
-        doc["landmark"] = _landmark(spec.landmark_name, scene_dir, out, rows)
+        doc["landmark"] = _landmark(spec.landmark_name, scene_dir, out, rows,
+                                    spec.camera_config(spec.database).terrain_window_m)
     _write_rows(out / "poses.csv", rows, landmark=bool(spec.landmark_name))
     from marsscene.runs.tum import write_tum
     from marsscene.sim.world import load_world

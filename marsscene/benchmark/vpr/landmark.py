@@ -7,7 +7,9 @@ the landmark is in view when a part is and the line of sight from the camera to 
 of the landmark's box clears the terrain (48 samples along it against the heightfield). The
 measure is the smaller side (px) of the box around the parts in view, clipped to the image: a
 sliver at the image's edge counts for its width, a distant habitat for its height; 0 when none
-is in view.
+is in view. The camera draws the scene's meshes only inside its terrain window (it hides
+those centred outside, which would float in the sky): with the frames' window bounds given,
+a part outside them is not in view.
 """
 
 from __future__ import annotations
@@ -30,8 +32,12 @@ _SIGHT_SAMPLES = 48
 class Landmark:
     """An asset's parts in the world: vertices (m) of each convex part, and their box."""
 
-    def __init__(self, parts: list[NDArray[np.float64]]) -> None:
+    def __init__(self, parts: list[NDArray[np.float64]],
+                 centres: NDArray[np.float64] | None = None) -> None:
         self.parts = parts
+        #: each part's geom centre (m), where the camera decides whether to draw it
+        self.centres = (np.asarray(centres, dtype=np.float64) if centres is not None
+                        else np.array([p.mean(axis=0) for p in parts]))
         every = np.concatenate(parts)
         self.box = np.stack([every.min(axis=0), every.max(axis=0)])
 
@@ -47,7 +53,7 @@ def landmark_parts(scene_dir: str | Path, name: str) -> tuple[Landmark, Heightfi
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
-    parts = []
+    parts, centres = [], []
     for g in range(model.ngeom):
         if not (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or "").startswith(
                 f"asset_{name}_"):
@@ -62,15 +68,17 @@ def landmark_parts(scene_dir: str | Path, name: str) -> tuple[Landmark, Heightfi
                                       for k in (-1, 1)], dtype=np.float64)
         rot = data.geom_xmat[g].reshape(3, 3)
         parts.append(local @ rot.T + data.geom_xpos[g])
+        centres.append(np.array(data.geom_xpos[g], dtype=np.float64))
     if not parts:
         raise RuntimeSimError(f"{xml}: no geoms of an asset {name!r} (asset_{name}_*); the VPR "
                               "landmark must be a placed asset of the scene")
-    return Landmark(parts), scene_heightfield(model)
+    return Landmark(parts, np.array(centres)), scene_heightfield(model)
 
 
 def landmark_pixels(landmark: Landmark, cam_xyz_m: NDArray[np.float64],
                     cam_quat_xyzw: NDArray[np.float64], intrinsics: dict[str, Any],
-                    heightfield: Heightfield) -> NDArray[np.float64]:
+                    heightfield: Heightfield,
+                    drawn_xy_m: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
     """Size (px) of the landmark in each frame: the smaller side of the box around its parts
     in view, clipped to the image (0: not in view).
 
@@ -83,6 +91,10 @@ def landmark_pixels(landmark: Landmark, cam_xyz_m: NDArray[np.float64],
         ``width``, ``height``, ``fx``, ``fy``, ``cx``, ``cy`` (px).
     heightfield : Heightfield
         Terrain that may hide the landmark.
+    drawn_xy_m : ndarray of shape (N, 4), optional
+        Each frame's terrain window ``(x0, y0, x1, y1)``
+        (:func:`marsscene.sensors.camera_ground.far_window_bounds`): parts centred outside it
+        are not drawn. Default: every part is drawn.
     """
     from scipy.spatial.transform import Rotation
 
@@ -90,7 +102,12 @@ def landmark_pixels(landmark: Landmark, cam_xyz_m: NDArray[np.float64],
     w, h = float(intrinsics["width"]), float(intrinsics["height"])
     n = len(cam_xyz_m)
     lo, hi = np.full((n, 2), np.inf), np.full((n, 2), -np.inf)
-    for verts in landmark.parts:
+    for k, verts in enumerate(landmark.parts):
+        drawn = np.ones(n, dtype=bool)
+        if drawn_xy_m is not None:
+            c = landmark.centres[k]
+            b = np.asarray(drawn_xy_m, dtype=np.float64)
+            drawn = (b[:, 0] <= c[0]) & (c[0] <= b[:, 2]) & (b[:, 1] <= c[1]) & (c[1] <= b[:, 3])
         rel = verts[None, :, :] - cam_xyz_m[:, None, :]
         pc = np.einsum("nji,nkj->nki", rot, rel)  # vertices in the camera frame (N, V, 3)
         front = (pc[..., 2] > _NEAR_M).all(axis=1)
@@ -99,7 +116,7 @@ def landmark_pixels(landmark: Landmark, cam_xyz_m: NDArray[np.float64],
         v = intrinsics["fy"] * pc[..., 1] / z + intrinsics["cy"]
         u0, u1 = np.clip(u.min(axis=1), 0, w), np.clip(u.max(axis=1), 0, w)
         v0, v1 = np.clip(v.min(axis=1), 0, h), np.clip(v.max(axis=1), 0, h)
-        inside = (front & (u1 > u0) & (v1 > v0))[:, None]
+        inside = (drawn & front & (u1 > u0) & (v1 > v0))[:, None]
         lo = np.where(inside, np.minimum(lo, np.stack([u0, v0], 1)), lo)
         hi = np.where(inside, np.maximum(hi, np.stack([u1, v1], 1)), hi)
     box = landmark.box
