@@ -1,8 +1,8 @@
 """Which LiDAR for the paper's SLAM spec: KISS-ICP with ``os1-64`` and ``os1-128`` on short
 routes of the three paper scenes (issue 36).
 
-Run: ``python perf/bench_slam_lidar_models.py [LENGTH_M] [OUT] [MODELS]`` (default 150 m,
-a temporary folder, ``os1-64,os1-128``). For each model the shipped
+Run: ``python perf/bench_slam_lidar_models.py [LENGTH_M] [OUT] [MODELS] [SCENES]`` (default
+150 m, a temporary folder, ``os1-64,os1-128``, every scene of the spec). For each model the shipped
 ``docs/examples/benchmark_slam_paper.toml`` runs with its routes shortened to ``LENGTH_M``
 (same shapes: the loop around the habitat, the crater loop, the canyon out-and-back), the LiDAR
 cell only (tau 0.5, no camera), methods wheel odometry and KISS-ICP, 2 workers; a resumed
@@ -24,11 +24,11 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _spec(model: str, length_m: float):  # type: ignore[no-untyped-def]
+def _spec(model: str, length_m: float, scenes: tuple[str, ...] | None = None):  # type: ignore[no-untyped-def]
     from marsscene.benchmark.slam.spec import SlamSpec
 
     spec = SlamSpec.from_toml(ROOT / "docs" / "examples" / "benchmark_slam_paper.toml")
-    spec = spec.shortened(length_m=length_m)
+    spec = spec.shortened(length_m=length_m, scenes=scenes)
     sensors = {"lidar": {"model": model}, "bag": False}
     methods = tuple(dataclasses.replace(m, seeds=None) for m in spec.methods
                     if m.kind in ("wheel-odometry", "kiss-icp"))  # one scene seed: the LiDAR's
@@ -46,9 +46,10 @@ def main(argv: list[str]) -> None:
     length = float(argv[0]) if argv else 150.0
     out = Path(argv[1]) if len(argv) > 1 else Path(tempfile.gettempdir()) / "bench_lidar_models"
     models = argv[2].split(",") if len(argv) > 2 else ["os1-64", "os1-128"]
+    scenes = tuple(argv[3].split(",")) if len(argv) > 3 else None
     for model in models:
         t0 = time.perf_counter()
-        res = run_slam_benchmark(_spec(model, length), out / model, workers=2, resume=True,
+        res = run_slam_benchmark(_spec(model, length, scenes), out / model, workers=2, resume=True,
                                  report=False)
         wall = time.perf_counter() - t0
         for cell in res.cells:
