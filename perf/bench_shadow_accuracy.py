@@ -32,6 +32,8 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
 
+from marsscene.testing.shadow_truth import disc_visible, horizon_excess_deg
+
 _SCENE = Path(tempfile.gettempdir()) / "marsscene_bench_rockfree_scene"
 #: (x, y) m, heading (rad): across, toward and away from the sun (azimuth 30 deg)
 VIEWS = [((x, y), math.radians(h)) for (x, y) in ((20.0, 20.0), (-40.0, 10.0), (0.0, -45.0))
@@ -57,31 +59,6 @@ def world_points(cam, depth_m: np.ndarray) -> np.ndarray:  # type: ignore[no-unt
     u, v = np.meshgrid(np.arange(w) + 0.5 - w / 2, np.arange(h) + 0.5 - h / 2)
     ray = np.stack([u / f, -v / f, -np.ones_like(u)], axis=-1) * depth_m[..., None]
     return d.cam_xpos[cid] + ray @ d.cam_xmat[cid].reshape(3, 3).T
-
-
-def horizon_excess_deg(hf, p: np.ndarray, sun: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
-    """Terrain horizon elevation toward the sun's azimuth seen from points ``p`` (N, 3),
-    minus the sun's elevation (deg): a ray march in steps of 2 cm growing by 0.5 % of the
-    distance, to 150 m."""
-    flat = sun[:2] / np.hypot(sun[0], sun[1])
-    elevation = math.degrees(math.atan2(sun[2], math.hypot(sun[0], sun[1])))
-    best = np.full(len(p), -90.0)
-    z0 = hf.sample(p[:, 0], p[:, 1])  # on the heightfield's surface (the mesh's is < 1 cm off)
-    t = 0.02
-    while t < 150.0:
-        x, y = p[:, 0] + t * flat[0], p[:, 1] + t * flat[1]
-        inside = hf.contains(x, y)
-        angle = np.degrees(np.arctan2(hf.sample(x, y) - z0, t))
-        best = np.where(inside, np.maximum(best, angle), best)
-        t += max(0.02, 0.005 * t)
-    return best - elevation
-
-
-def disc_visible(excess_deg: np.ndarray, radius_deg: float) -> np.ndarray:
-    """Visible fraction of a uniform disc above a straight horizon ``excess`` above its
-    centre."""
-    t = np.clip(excess_deg / radius_deg, -1.0, 1.0)
-    return (np.arccos(t) - t * np.sqrt(1.0 - t * t)) / math.pi
 
 
 def measure(elevation_deg: float, figure: Path | None = None) -> dict[str, float]:
@@ -123,7 +100,7 @@ def measure(elevation_deg: float, figure: Path | None = None) -> dict[str, float
         plain_sum = plain[on_ground].sum(axis=-1)
         ratio = shadowed[on_ground].sum(axis=-1) / np.maximum(plain_sum, 1e-6)
         usable = (sky / (sky + direct) < 0.6) & (plain_sum > 8 / 255)
-        excess = horizon_excess_deg(hf, p, sun)
+        excess = horizon_excess_deg(hf, p, sun, step_m=0.02, growth=0.005, reach_m=150.0)
         want = (sky + disc_visible(excess, radius_deg) * direct) / (sky + direct)
         lit = usable & (excess < -radius_deg - MARGIN_DEG)
         shade = usable & (excess > radius_deg + MARGIN_DEG)

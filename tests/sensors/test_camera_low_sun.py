@@ -27,6 +27,7 @@ from marsscene.scene import Provenance, Scene
 from marsscene.sim.rover_sim import RoverSim
 from marsscene.terrain.from_dem import GeoFrame
 from marsscene.terrain.heightfield import Heightfield
+from marsscene.testing.shadow_truth import horizon_excess_deg
 
 #: Beyond the sun's disc (radius 0.175 deg) a pixel counts as fully lit or fully shadowed
 _MARGIN_DEG = 0.05
@@ -87,23 +88,6 @@ def _world_points(cam, depth_m: np.ndarray) -> np.ndarray:
     return d.cam_xpos[cid] + ray @ d.cam_xmat[cid].reshape(3, 3).T
 
 
-def _horizon_excess_deg(hf: Heightfield, p: np.ndarray, sun: np.ndarray) -> np.ndarray:
-    """Largest elevation of the terrain seen from ``p`` toward the sun's azimuth, minus the
-    sun's elevation (deg): a ray march, steps of 5 cm growing by 1 % of the distance."""
-    flat = sun[:2] / np.hypot(sun[0], sun[1])
-    elevation = math.degrees(math.atan2(sun[2], math.hypot(sun[0], sun[1])))
-    z0 = hf.sample(p[:, 0], p[:, 1])
-    best = np.full(len(p), -90.0)
-    t = 0.05
-    while t < 100.0:
-        x, y = p[:, 0] + t * flat[0], p[:, 1] + t * flat[1]
-        inside = hf.contains(x, y)
-        angle = np.degrees(np.arctan2(hf.sample(x, y) - z0, t))
-        best = np.where(inside, np.maximum(best, angle), best)
-        t += max(0.05, 0.01 * t)
-    return best - elevation
-
-
 def _shadow_errors(scene: Path, elevation_deg: float) -> tuple[int, int, int, int]:
     """(fully lit, of those rendered darker than 0.8 of the unshadowed frame, fully shadowed,
     of those rendered lit), with the sun's disc: fully lit = the terrain's horizon more than
@@ -138,7 +122,7 @@ def _shadow_errors(scene: Path, elevation_deg: float) -> tuple[int, int, int, in
         ratio = shadowed[ground].sum(axis=-1) / np.maximum(lit_sum, 1e-6)
         usable = (predicted < 0.6) & (lit_sum > 8 / 255)
         excess = np.zeros(len(p))
-        excess[usable] = _horizon_excess_deg(hf, p[usable], sun)
+        excess[usable] = horizon_excess_deg(hf, p[usable], sun)
         masks = []
         for truth in (usable & (excess < -radius_deg), usable & (excess > radius_deg)):
             image = np.zeros(ground.shape, dtype=bool)
