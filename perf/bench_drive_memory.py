@@ -3,7 +3,7 @@
 Run: ``python perf/bench_drive_memory.py [SCENE] [SECONDS] [LENGTH_M]`` (default
 ``grand-canyon``, 12 sim s on a 60 m route of its shape). Builds the paper spec's scene (seed
 1, MJCF only) into a temporary folder unless it is there, then drives with the paper spec's
-sensors (640 x 480 RGB-D at 10 Hz, ``os1-64`` LiDAR, ``ln200s`` noise) the way a benchmark
+sensors (640 x 480 RGB-D at 10 Hz, the spec's LiDAR, ``ln200s`` noise) the way a benchmark
 cell does, printing the resident memory (RSS) and its peak after each stage: loading the
 world for the route, the route, the simulator, the camera's renderer (world, textures,
 terrain shadows, the GL context), the LiDAR's caster, every 4 sim s of the drive, and the
