@@ -23,6 +23,7 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any
 
+import marsscene._gl  # noqa: F401  (first: MUJOCO_GL before anything imports mujoco)
 from marsscene._show_versions import show_versions as show_versions
 from marsscene._version import __version__ as __version__
 from marsscene.config import SceneConfig as SceneConfig

@@ -8,14 +8,10 @@ control period (default 50 Hz = 10 physics steps of 2 ms).
 from __future__ import annotations
 
 import math
-import os
 import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
-
-if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
-    os.environ["MUJOCO_GL"] = "egl"  # headless offscreen rendering; set MUJOCO_GL to override
 
 import mujoco
 import numpy as np
