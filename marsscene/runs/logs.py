@@ -91,6 +91,10 @@ class TumLog:
         self._fh.close()
 
 
+#: note in a run's ``lidar/`` when its scans went to listeners only (``lidar_files = false``)
+LIDAR_NOT_STORED = "scans_not_stored.txt"
+
+
 def write_file(path: Path, data: bytes) -> None:
     """Write ``path`` whole or not at all, so a killed drive never leaves a truncated image or
     scan behind (:func:`~marsscene._atomic.write_atomic`)."""

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from marsscene._atomic import write_atomic
 from marsscene.errors import MarsSceneWarning, RuntimeSimError
 from marsscene.rover.config import RoverConfig
+from marsscene.runs.logs import LIDAR_NOT_STORED
 from marsscene.runs.tum import Trajectory, read_tum
 
 __all__ = ["LIDAR_IN_BAG", "CameraStream", "IncompleteRunWarning", "RunLog",
@@ -216,6 +217,9 @@ class RunLog:
             raise RuntimeSimError(f"{stamps.parent}: the scans were moved into the run's bag "
                                   f"({self.path / 'bag'}, topic /rover/lidar/points); drive with "
                                   "keep_lidar_files (--keep-lidar-files) to keep the PLYs too")
+        if (stamps.parent / LIDAR_NOT_STORED).is_file():
+            raise RuntimeSimError(f"{stamps.parent}: the scans were not stored (the drive ran "
+                                  "with lidar_files = false)")
         _, rows = _read_csv(stamps, self.incomplete)
         if self.incomplete:
             rows = _written_prefix(rows, stamps.parent, 2)

@@ -184,7 +184,8 @@ def drive(
     options : DriveOptions, optional
         Slope limit, rock corridor, settling, the follower, the start pose without a route.
     export : ExportOptions, optional
-        A ROS 2 bag and dataset folders to write into the run folder.
+        A ROS 2 bag and dataset folders to write into the run folder (and whether the LiDAR
+        scans are stored at all: ``lidar_files``).
     out_dir : path, optional
         The run folder (layout: ``docs/runtime.md``); without it the drive is kept in memory.
     seed : int
@@ -248,7 +249,8 @@ def drive(
             res = drive_sim(sim, route=path, controller=controller, command=command,
                             seconds=seconds, out_dir=out, rng=stage_rng(seed, "sensors"),
                             pursuit=options.pursuit, keep_sensors=keep_sensors,
-                            progress=progress, jpeg_cache=cache, listeners=listeners)
+                            progress=progress, jpeg_cache=cache, listeners=listeners,
+                            lidar_files=export.lidar_files)
             t1 = time.perf_counter()
             bag, datasets = _export(out, export, cache, progress)
         finally:

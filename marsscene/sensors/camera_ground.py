@@ -35,7 +35,7 @@ from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.horizon import SunShadow
 
 __all__ = ["FAR_BLOCK", "NEAR_DROP_M", "GroundWindow", "bake_ground", "far_window_bounds",
-           "window_posts"]
+           "next_window_origin", "window_posts"]
 
 FAR_BLOCK = 8
 NEAR_DROP_M = 0.25
@@ -123,13 +123,34 @@ def window_posts(hf: Heightfield, window_m: float) -> tuple[int, int, int, int]:
     return n, min(n, rows), min(n, cols), max(n // 4, 1)
 
 
-def _window_origin(hf: Heightfield, nr: int, nc: int, xy_m: tuple[float, float]
-                   ) -> tuple[int, int]:
+def _window_origin(hf: Heightfield, nr: int, nc: int, xy_m: tuple[float, float],
+                   *, clamp: bool = True) -> tuple[int, int]:
     rows, cols = hf.shape
     r, c = hf.rowcol_of(float(xy_m[0]), float(xy_m[1]))
-    r0 = int(np.clip(round(float(r)) - nr // 2, 0, rows - nr))
-    c0 = int(np.clip(round(float(c)) - nc // 2, 0, cols - nc))
-    return r0, c0
+    r0, c0 = round(float(r)) - nr // 2, round(float(c)) - nc // 2
+    if not clamp:
+        return r0, c0
+    return int(np.clip(r0, 0, rows - nr)), int(np.clip(c0, 0, cols - nc))
+
+
+def next_window_origin(hf: Heightfield, nr: int, nc: int, step: int,
+                       current: tuple[int, int] | None, xy_m: tuple[float, float]
+                       ) -> tuple[int, int] | None:
+    """The far window's new origin for a camera at ``xy_m``, or ``None`` to keep ``current``.
+
+    The window is re-placed once the camera is ``step`` posts or more from the window centred
+    on it, measured before clamping to the heightfield: near the heightfield's edge the clamped
+    origin moves less than the camera, and a rule on the clamped origin alone would leave the
+    camera to drive out of its window. An unchanged clamped origin is never re-placed."""
+    target = _window_origin(hf, nr, nc, xy_m)
+    if current is None:
+        return target
+    if target == current:
+        return None
+    free = _window_origin(hf, nr, nc, xy_m, clamp=False)
+    if max(abs(free[0] - current[0]), abs(free[1] - current[1])) >= step:
+        return target
+    return None
 
 
 def far_window_bounds(hf: Heightfield, window_m: float, xy_m: NDArray[np.float64]
@@ -143,9 +164,8 @@ def far_window_bounds(hf: Heightfield, window_m: float, xy_m: NDArray[np.float64
     out = np.zeros((len(xy_m), 4), dtype=np.float64)
     origin: tuple[int, int] | None = None
     for i, xy in enumerate(np.asarray(xy_m, dtype=np.float64)):
-        o = _window_origin(hf, nr, nc, (xy[0], xy[1]))
-        if origin is None or max(abs(o[0] - origin[0]), abs(o[1] - origin[1])) >= step:
-            origin = o
+        origin = next_window_origin(hf, nr, nc, step, origin, (xy[0], xy[1])) or origin
+        assert origin is not None
         (x0, y0), (x1, y1) = hf.xy_of(*origin), hf.xy_of(origin[0] + nr - 1, origin[1] + nc - 1)
         out[i] = (min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1))
     return out
@@ -193,9 +213,6 @@ class GroundWindow:
         return ((self.nn_r - 1) * self.q_near, (self.nn_c - 1) * self.q_near)
 
     # ---- placement --------------------------------------------------------------------------
-    def window_origin(self, xy_m: tuple[float, float]) -> tuple[int, int]:
-        return _window_origin(self.hf, self.nr, self.nc, xy_m)
-
     def near_origin_for(self, centre_xy_m: tuple[float, float], origin: tuple[int, int]
                         ) -> tuple[int, int]:
         """Near square origin (on the far grid) centred as close as possible to the point."""
@@ -315,10 +332,11 @@ class GroundWindow:
         the near square moved (near mesh and texture; the far mesh's lowered posts too).
         """
         far = False
-        origin = self.window_origin(xy_m)
-        if force or self.origin is None or max(
-                abs(origin[0] - self.origin[0]), abs(origin[1] - self.origin[1])) >= self.step:
+        origin = next_window_origin(self.hf, self.nr, self.nc, self.step,
+                                    None if force else self.origin, xy_m)
+        if origin is not None:
             self.origin, far = origin, True
+        assert self.origin is not None
         f = np.asarray(forward_xy, dtype=np.float64)
         f = f / max(float(np.hypot(*f)), 1e-9)
         ahead = 0.5 * (self.nn_c - 1) * self.hf.cell_size_m - 2.0  # 2 m behind the camera

@@ -218,6 +218,7 @@ def drive_sim(
     progress: Callable[[DriveProgress], None] | None = None,
     jpeg_cache: JpegCache | None = None,
     listeners: Sequence[Any] = (),
+    lidar_files: bool = True,
 ) -> DriveResult:
     """Drive a prepared simulator and log every sensor.
 
@@ -249,6 +250,8 @@ def drive_sim(
         Also JPEG-encode every colour frame into this cache (for a bag written right after).
     listeners : sequence, optional
         Objects that receive every sample as it is made (:mod:`marsscene.sim.session`).
+    lidar_files : bool
+        Write the LiDAR scans into the run folder (False: to the listeners only).
 
     Raises
     ------
@@ -261,7 +264,7 @@ def drive_sim(
     rows = _Rows() if out_dir is None else None
     session = DriveSession(sim, rng=rng, out_dir=out_dir, keep_sensors=keep_sensors,
                            jpeg_cache=jpeg_cache, listeners=(*listeners, *([rows] if rows else [])),
-                           meta=meta)
+                           meta=meta, lidar_files=lidar_files)
     follower = ctrl if isinstance(ctrl, PurePursuit) else None
 
     def report(t: float) -> None:

@@ -16,6 +16,7 @@ from typing import Any
 
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.runs.logs import (
+    LIDAR_NOT_STORED,
     CsvLog,
     ImageWriter,
     TumLog,
@@ -41,8 +42,10 @@ class RunWriter:
     """Writes one drive's run folder ``out``; every method is a no-op without a folder."""
 
     def __init__(self, out: Path | None, sim: Any, *, lidar: bool, camera: bool, stereo: bool,
-                 meta: dict[str, Any] | None = None, jpeg_cache: Any = None):
+                 meta: dict[str, Any] | None = None, jpeg_cache: Any = None,
+                 lidar_files: bool = True):
         self.out = out
+        self.lidar_files = lidar_files
         #: a :class:`~marsscene.runs.export.bag_images.JpegCache` to fill beside the PNGs
         self.jpeg_cache = jpeg_cache
         self.logs: dict[str, CsvLog] = {}
@@ -65,6 +68,11 @@ class RunWriter:
         self.logs["imu_bias"] = CsvLog(out / "imu_bias.csv", _BIAS_COLUMNS)
         if lidar:
             self.logs["lidar"] = CsvLog(out / "lidar" / "stamps.csv", ["t", "file", "points"])
+            if not lidar_files:
+                (out / "lidar").mkdir(parents=True, exist_ok=True)
+                write_file(out / "lidar" / LIDAR_NOT_STORED, (
+                    b"The LiDAR scans of this run were not stored (lidar_files = false): they "
+                    b"went to the drive's listeners only; stamps.csv lists them.\n"))
         if camera:
             self.logs["camera"] = CsvLog(out / "camera" / "stamps.csv", ["t", "rgb", "depth"])
             write_json(out / "camera" / "intrinsics.json", sim.camera_intrinsics())
@@ -96,9 +104,10 @@ class RunWriter:
     def lidar(self, t: float, index: int, scan: dict[str, Any]) -> None:
         if self.out is None:
             return
-        name = f"{index:06d}.ply"
-        write_file(self.out / "lidar" / name,
-                   ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"]))
+        name = f"{index:06d}.ply" if self.lidar_files else ""
+        if name:
+            write_file(self.out / "lidar" / name,
+                       ply_bytes(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"]))
         self.logs["lidar"].row(t, (name, len(scan["range_m"])))
 
     def camera(self, t: float, index: int, rgb: Any, depth: Any) -> None:

@@ -61,6 +61,8 @@ class DriveSession:
         Keep LiDAR scans, images and IMU samples in memory (:attr:`scans` ...).
     jpeg_cache : JpegCache, optional
         Also JPEG-encode every colour frame into this cache (for a bag written right after).
+    lidar_files : bool
+        Write each LiDAR scan to the run folder (False: to the listeners only, stamps kept).
     listeners : sequence
         Objects that receive every sample as the run writer does.
     meta : dict, optional
@@ -74,7 +76,7 @@ class DriveSession:
     def __init__(self, sim: Any, *, rng: np.random.Generator, out_dir: str | Path | None = None,
                  keep_sensors: bool = False, jpeg_cache: Any = None,
                  listeners: Sequence[Any] = (), meta: dict[str, Any] | None = None,
-                 renderer: Any = None, lidar: Lidar | None = None):
+                 renderer: Any = None, lidar: Lidar | None = None, lidar_files: bool = True):
         run = sim.run
         self.sim, self.rng, self.keep = sim, rng, keep_sensors
         self.periods = {"control": _period(sim, run.control_hz), "imu": _period(sim, run.imu_hz)}
@@ -101,7 +103,8 @@ class DriveSession:
         out = Path(out_dir) if out_dir is not None else None
         self.writer = RunWriter(out, sim, lidar=self.lidar is not None,
                                 camera=self.renderer is not None, stereo=self.stereo,
-                                meta=meta or {}, jpeg_cache=jpeg_cache)
+                                meta=meta or {}, jpeg_cache=jpeg_cache,
+                                lidar_files=lidar_files)
         self.sinks: dict[str, list[Any]] = {
             s: [x for x in (self.writer, *listeners) if hasattr(x, s)] for s in _STREAMS}
         pos0, _ = sim.pose()

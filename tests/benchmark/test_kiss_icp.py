@@ -12,6 +12,7 @@ pytest.importorskip("rosbags")
 
 import marsscene as ms
 from marsscene.benchmark.slam.kiss_icp import (
+    LiveKissIcp,
     lidar_ground_truth,
     run_kiss_icp,
     score_lidar_odometry,
@@ -34,8 +35,9 @@ def test_kiss_icp_tracks_an_8_m_drive_within_1_percent(tmp_path):
     sim = RoverSim(tmp_path / "s", run=RunConfig(lidar=LidarConfig()), start_xy_m=(-5.0, 0.0),
                    contact_corridor_xy_m=np.array([[-5.0, 0.0], [5.0, 0.0]]),
                    contact_corridor_m=40.0)
+    live = LiveKissIcp()  # the same odometry fed during the drive
     drive_sim(sim, command=(0.5, 0.0), seconds=16.0, out_dir=tmp_path / "r",
-          rng=stage_rng(1, "sensors"))
+              rng=stage_rng(1, "sensors"), listeners=[live])
     write_bag(tmp_path / "r", tmp_path / "r" / "bag")
     run = RunLog(tmp_path / "r")
     estimate = run_kiss_icp(tmp_path / "r" / "bag")
@@ -47,3 +49,10 @@ def test_kiss_icp_tracks_an_8_m_drive_within_1_percent(tmp_path):
     # the ground truth it is scored against is the lidar_link pose: the mast top
     gt = lidar_ground_truth(run)
     assert np.all(gt.xyz_m[:, 2] - run.gt.xyz_m[:, 2] > 1.0)
+    # fed live, KISS-ICP gives the pipeline's estimate on the bag (which writes 4 decimals)
+    traj = live.trajectory()
+    assert traj is not None and len(traj) == len(estimate)
+    np.testing.assert_allclose(traj.timestamps_s, estimate.timestamps_s, atol=6e-5)
+    np.testing.assert_allclose(traj.xyz_m, estimate.xyz_m, atol=6e-5)
+    dots = np.abs(np.sum(traj.quat_xyzw * estimate.quat_xyzw, axis=1))
+    assert np.all(dots > 1.0 - 1e-6)

@@ -5,7 +5,14 @@ A cell folder ``DIR/cells/<cell_id>/`` holds::
     config.toml, scene/, result.json   the build, by :func:`marsscene.sweep.run_cell`
     drive/                             the run folder (gt.tum, odom.tum, camera/, lidar/ ...),
                                        route.tum, tum_rgbd/ and euroc/ exports, bag/ (if needed)
+    drive/live/<method>.tum            KISS-ICP's estimate, made during the drive
     estimates/<method>.tum             each method's raw estimate
+
+KISS-ICP registers each scan as the drive makes it (:class:`.kiss_icp.LiveKissIcp`, the
+estimate ``kiss_icp_pipeline`` gives on the bag), so the LiDAR stream is stored only when asked
+(``[sensors] lidar_files = true``, or a bag with ``[sensors] bag = true``). With
+``[sensors] keep_images = false`` the camera images are deleted once the cell's methods are
+scored (a resumed benchmark that must run a camera method again drives the cell again).
     methods/<method>.json              each method's score row (written last: marks it done)
 
 Every stage is atomic and keyed by a hash of its inputs, so a resumed benchmark redoes only
@@ -37,6 +44,7 @@ __all__ = ["DRIVE_FILE", "run_slam_cell"]
 
 log = logging.getLogger("marsscene")
 DRIVE_FILE = "benchmark_drive.json"
+IMAGES_REMOVED = "images_removed.txt"  # in drive/: the camera images were deleted after scoring
 
 
 def _digest(doc: Any) -> str:
@@ -78,8 +86,10 @@ def _route(scene: SceneSpec, scene_dir: Path) -> dict[str, Any]:
 
 
 def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_hash: str,
-           force: bool, camera: bool = True) -> dict[str, Any]:
-    """Drive the cell's route with its sensors into ``cell_dir/drive`` (unless done)."""
+           force: bool, camera: bool = True, live: tuple[MethodSpec, ...] = ()
+           ) -> dict[str, Any]:
+    """Drive the cell's route with its sensors into ``cell_dir/drive`` (unless done); the
+    ``live`` methods (KISS-ICP) run on the LiDAR during the drive."""
     final = cell_dir / "drive"
     route_doc: dict[str, Any] = dataclasses.asdict(scene.route)
     if scene.route.file is not None:
@@ -87,41 +97,89 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     run = spec.run_config(lidar=lidar, camera=camera)
     bag = (lidar and spec.needs_bag()) or (bool(spec.sensors.get("bag", False))
                                            and (run.camera is not None or run.lidar is not None))
+    live = live if lidar else ()
     key = _digest({"scene": scene_hash, "route": route_doc, "seconds": scene.seconds,
                    "sensors": {k: v for k, v in spec.sensors.items()
                                if (lidar or k != "lidar") and (camera or k != "camera")},
                    "noise": dataclasses.asdict(run.noise),  # the profile's values, defaults too
-                   "lidar": lidar, "bag": bag})
+                   "lidar": lidar, "bag": bag,
+                   "live": [dataclasses.asdict(m) for m in live]})
     done = None if force else _read_json(final / DRIVE_FILE)
     if done is not None and done.get("key") == key:
         return dict(done["summary"])
     import marsscene as ms
+    from marsscene.benchmark.slam.kiss_icp import LiveKissIcp
+    from marsscene.runs.tum import write_tum
 
-    # the LiDAR alone for KISS-ICP; every sensor when [sensors] bag = true
-    bag_options = ms.BagOptions(sensors=None if spec.sensors.get("bag") else ("lidar",))
+    # every sensor with [sensors] bag = true, else the LiDAR alone (a command reading {bag_dir})
+    bag_options = ms.BagOptions(sensors=None if spec.sensors.get("bag") else ("lidar",)) \
+        if bag else None
+    odometry = {m.name: LiveKissIcp() for m in live}
     with replacing_dir(final) as tmp:
         t0 = time.perf_counter()
         drv = ms.drive(
             cell_dir / "scene", **_route(scene, cell_dir / "scene"), seconds=scene.seconds,
-            config=run, out_dir=tmp, seed=spec.noise_seed,
+            config=run, out_dir=tmp, seed=spec.noise_seed, listeners=list(odometry.values()),
             options=ms.DriveOptions(max_slope_deg=scene.route.max_slope_deg,
                                     route_note=f"route of scene {scene.name}: {{length_m:.1f}} m"),
-            export=ms.ExportOptions(bag=bag_options if bag else None,
-                                    datasets=("tum-rgbd", "euroc") if run.camera else ()))
+            export=ms.ExportOptions(bag=bag_options,
+                                    datasets=("tum-rgbd", "euroc") if run.camera else (),
+                                    lidar_files=bag or bool(spec.sensors.get("lidar_files"))))
+        for name, odo in odometry.items():
+            traj = odo.trajectory()
+            if traj is not None:
+                write_tum(tmp / "live" / f"{name}.tum", traj,
+                          header=f"{name}: KISS-ICP fed each scan during the drive")
         summary = {"route_m": round(drv.route.length_m, 3) if drv.route else None,
                    "t_drive_s": time.perf_counter() - t0 - drv.export_s,
+                   "t_live_s": {n: round(o.seconds, 3) for n, o in odometry.items()},
                    **{k: drv.summary.get(k) for k in ("path_length_m", "sim_time_s",
                                                       "goal_reached", "cross_track_rms_m")}}
         _write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
     return summary
 
 
+def _remove_images(run_dir: Path) -> int:
+    """Delete the camera images of a scored cell (the run's PNGs and the datasets' links to
+    them); stamps, trajectories and estimates stay. Returns the files removed."""
+    files = [p for sub in ("camera", "tum_rgbd", "euroc") for p in (run_dir / sub).rglob("*")
+             if p.suffix in (".png", ".jpg") and p.is_file()]
+    write_atomic(run_dir / IMAGES_REMOVED,
+                 f"{len(files)} camera images were deleted once the benchmark's methods were "
+                 "scored ([sensors] keep_images = false).\n")
+    for p in files:
+        p.unlink()
+    return len(files)
+
+
+def _method_file(spec: SlamSpec, method: MethodSpec, cell_dir: Path, drive_key: str
+                 ) -> tuple[Path, str]:
+    """Where a method's row lies, and the key of its inputs."""
+    key = _digest({"method": dataclasses.asdict(method), "drive": drive_key,
+                   "min_tracked": spec.min_tracked_fraction, "rpe_m": spec.rpe_distance_m})
+    return cell_dir / "methods" / f"{method.name}.json", key
+
+
+def _needs_images(spec: SlamSpec, methods: list[MethodSpec], cell_dir: Path) -> bool:
+    """A camera method of the cell must run, but its images were deleted after scoring."""
+    run_dir = cell_dir / "drive"
+    if not (run_dir / IMAGES_REMOVED).is_file():
+        return False
+    drive_key = str((_read_json(run_dir / DRIVE_FILE) or {}).get("key"))
+    for m in methods:
+        if m.sensor != "camera" and m.kind not in ("tum-file", "command"):
+            continue
+        path, key = _method_file(spec, m, cell_dir, drive_key)
+        done = _read_json(path)
+        if m.kind == "tum-file" or done is None or done.get("key") != key:
+            return True
+    return False
+
+
 def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_key: str,
            force: bool) -> dict[str, Any]:
     """The method's row, from ``methods/<name>.json`` when its inputs did not change."""
-    path = data.cell_dir / "methods" / f"{method.name}.json"
-    key = _digest({"method": dataclasses.asdict(method), "drive": drive_key,
-                   "min_tracked": spec.min_tracked_fraction, "rpe_m": spec.rpe_distance_m})
+    path, key = _method_file(spec, method, data.cell_dir, drive_key)
     done = None if force or method.kind == "tum-file" else _read_json(path)
     if done is not None and done.get("key") == key:
         return dict(done["row"])
@@ -185,8 +243,10 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
     try:
         if row["status"] == "failed":
             raise MarsSceneError(row["error"])
+        redrive = force or _needs_images(spec, methods, cell_dir)
         row["drive"] = drv = _drive(spec, scene, cell_dir, lidar, str(row.get("config_hash")),
-                                    force, camera)
+                                    redrive, camera,
+                                    tuple(m for m in methods if m.kind == "kiss-icp"))
         row.update(distance_m=drv.get("path_length_m"), sim_time_s=drv.get("sim_time_s"),
                    goal_reached=drv.get("goal_reached"), t_drive_s=drv.get("t_drive_s"),
                    cross_track_rms_m=drv.get("cross_track_rms_m"))
@@ -200,6 +260,9 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
             with ThreadPoolExecutor(min(method_workers, len(methods)),
                                     thread_name_prefix="slam-method") as pool:
                 row["methods"] += list(pool.map(score, methods))  # in the spec's order
+        if camera and not spec.sensors.get("keep_images", True) \
+                and not (cell_dir / "drive" / IMAGES_REMOVED).is_file():
+            _remove_images(cell_dir / "drive")
     except Exception as err:  # one failing cell never stops the benchmark
         msg = " ".join(f"{type(err).__name__}: {err}".split())
         log.warning("cell %s failed: %s", cell.cell_id, msg)

@@ -107,7 +107,9 @@ class SceneSpec:
             check_range(f"scene {self.name!r} seconds", self.seconds, 0.0, 1e6, lo_open=True)
 
     def base_config(self) -> dict[str, Any]:
-        """The scene-config mapping of this scene (preset or file, overrides on top)."""
+        """The scene-config mapping of this scene (preset or file, overrides on top); the
+        scene is written as MJCF only unless ``export.formats`` is given (the cells drive in
+        MuJoCo; a USD copy of grand-canyon is 0.8 GB per cell)."""
         from marsscene.config import read_config_toml
 
         base: dict[str, Any] = {}  # neither: the default scene of ``marsscene build``
@@ -115,7 +117,10 @@ class SceneSpec:
             base = {"preset": self.preset}
         elif self.config is not None:
             base = read_config_toml(str(self.config), what=f"scene {self.name!r} config")
-        return _merged(base, self.overrides)
+        out = _merged(base, self.overrides)
+        if "formats" not in out.get("export", {}):  # cells drive in MuJoCo: no USD unless asked
+            out = _merged(out, {"export": {"formats": ["mjcf"]}})
+        return out
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -2,7 +2,9 @@
 
 :func:`run_kiss_icp` runs the ``kiss_icp_pipeline`` command on a run's ROS 2 bag exactly as a
 user would (``kiss_icp_pipeline --topic /rover/lidar/points RUN/bag``, default configuration
-unless ``config`` is given) and reads the TUM trajectory it writes; :func:`lidar_ground_truth`
+unless ``config`` is given) and reads the TUM trajectory it writes; :class:`LiveKissIcp` is the
+same odometry (KISS-ICP's own ``KissICP`` class, the pipeline's configuration) fed each scan as a
+drive makes it, so a benchmark needs no copy of the LiDAR stream on disk; :func:`lidar_ground_truth`
 is the run's ground truth moved to the ``lidar_link`` frame, the frame KISS-ICP estimates;
 :func:`score_lidar_odometry` aligns one to the other (Umeyama, SE(3)) and reports ATE and the
 estimated path length. A run that fails (no output, too few poses) is a result, not a crash.
@@ -15,8 +17,10 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +30,8 @@ from marsscene.runs.evaluation import ate
 from marsscene.runs.runlog import RunLog
 from marsscene.runs.tum import Trajectory, read_tum
 
-__all__ = ["LidarOdometryScore", "lidar_ground_truth", "run_kiss_icp", "score_lidar_odometry"]
+__all__ = ["LidarOdometryScore", "LiveKissIcp", "lidar_ground_truth", "run_kiss_icp",
+           "score_lidar_odometry"]
 
 KISS_ICP_CITATION = ("Vizzo, Guadagnino, Mersch, Wiesmann, Behley, Stachniss 2023, KISS-ICP, "
                      "IEEE RA-L 8(2), doi:10.1109/LRA.2023.3236571")
@@ -72,6 +77,50 @@ def run_kiss_icp(bag: str | Path, *, topic: str = TOPIC, config: str | Path | No
         if done.returncode != 0 or not found:
             return None
         return read_tum(found[0])
+
+
+class LiveKissIcp:
+    """KISS-ICP as a drive listener (:mod:`marsscene.sim.session`): each scan is registered as
+    the drive makes it, with the points and per-point times the run's bag would carry (float32
+    x y z, ``t`` in whole nanoseconds, :func:`~marsscene.runs.logs.scan_record`) and the
+    configuration ``kiss_icp_pipeline`` uses (``config``, else KISS-ICP's defaults).
+
+    :meth:`trajectory` is the estimate (lidar frame, first pose the identity), what
+    :func:`run_kiss_icp` gives on the bag of the same drive.
+    """
+
+    def __init__(self, config: str | Path | None = None) -> None:
+        try:
+            from kiss_icp.config import load_config
+            from kiss_icp.kiss_icp import KissICP
+        except ImportError as err:
+            raise MissingDependencyError("KISS-ICP is not installed: pip install "
+                                         "'marsscene[bench]' (kiss-icp)") from err
+        self.odometry = KissICP(config=load_config(None if config is None else Path(config)))
+        self.stamps_s: list[float] = []
+        self.poses: list[np.ndarray] = []
+        self.seconds = 0.0  #: wall time spent registering scans
+
+    def lidar(self, t: float, index: int, scan: dict[str, Any]) -> None:
+        from marsscene.runs.logs import scan_record
+
+        t0 = time.perf_counter()
+        rec = scan_record(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"])
+        xyz = np.column_stack([rec["x"], rec["y"], rec["z"]]).astype(np.float64)
+        self.odometry.register_frame(xyz, rec["t"].astype(np.float64))
+        self.seconds += time.perf_counter() - t0
+        self.stamps_s.append(float(t))
+        self.poses.append(np.array(self.odometry.last_pose, dtype=np.float64))
+
+    def trajectory(self) -> Trajectory | None:
+        """The estimate so far (None before the first scan)."""
+        if not self.poses:
+            return None
+        from scipy.spatial.transform import Rotation
+
+        poses = np.stack(self.poses)
+        return Trajectory(np.asarray(self.stamps_s), poses[:, :3, 3],
+                          Rotation.from_matrix(poses[:, :3, :3]).as_quat())
 
 
 def lidar_ground_truth(run: RunLog) -> Trajectory:

@@ -5,7 +5,8 @@ a status saying why there is none (never an exception).
 kind               estimate                                                    frame   align
 =================  ==========================================================  ======  =====
 wheel-odometry     the run's ``odom.tum`` (wheel odometry + IMU yaw)           base    SE(3)
-kiss-icp           KISS-ICP on the run's ROS 2 bag (:mod:`.kiss_icp`)          lidar   SE(3)
+kiss-icp           KISS-ICP fed each scan during the drive (``drive/live/``;     lidar   SE(3)
+                   on the run's ROS 2 bag in a benchmark folder made before)
 open3d-rgbd        Open3D ``compute_rgbd_odometry``, frame to frame (hybrid;   camera  SE(3)
                    ``wheel_prior``: the wheel odometry as guess and fallback,
                    :mod:`.rgbd_odometry`)
@@ -137,6 +138,19 @@ def _opencv_mono(cell: CellData, method: MethodSpec) -> Estimate:
     return Estimate(traj, frames_tracked=int(res.tracked.sum()), note=res.note)
 
 
+def _kiss_icp(cell: CellData, method: MethodSpec) -> Estimate:
+    live = cell.run_dir / "live" / f"{method.name}.tum"
+    if live.is_file():
+        return Estimate(read_tum(live))
+    if not (cell.run_dir / "bag").is_dir():
+        return Estimate(None, status="failed", note="no live KISS-ICP estimate and no bag")
+    from marsscene.benchmark.slam.kiss_icp import run_kiss_icp
+
+    traj = run_kiss_icp(cell.run_dir / "bag", timeout_s=method.timeout_s)
+    return Estimate(traj, status="ok" if traj is not None else "failed",
+                    note="" if traj is not None else "KISS-ICP wrote no trajectory")
+
+
 def _external(cell: CellData, method: MethodSpec, out_tum: Path) -> Estimate:
     fill = {**cell.paths, "method": method.name, "out_tum": str(out_tum)}
     if method.kind == "tum-file":
@@ -178,11 +192,7 @@ def estimate(method: MethodSpec, cell: CellData, out_tum: Path) -> Estimate:
         if method.kind == "wheel-odometry":
             est = Estimate(read_tum(cell.run_dir / "odom.tum"))
         elif method.kind == "kiss-icp":
-            from marsscene.benchmark.slam.kiss_icp import run_kiss_icp
-
-            traj = run_kiss_icp(cell.run_dir / "bag", timeout_s=method.timeout_s)
-            est = Estimate(traj, status="ok" if traj is not None else "failed",
-                           note="" if traj is not None else "KISS-ICP wrote no trajectory")
+            est = _kiss_icp(cell, method)
         elif method.kind == "open3d-rgbd":
             est = _open3d_rgbd(cell, method)
         else:

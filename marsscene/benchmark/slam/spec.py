@@ -102,15 +102,19 @@ class SlamSpec:
         check_range("benchmark.min_tracked_fraction", self.min_tracked_fraction, 0.0, 1.0)
         check_range("benchmark.rpe_distance_m", self.rpe_distance_m, 0.1, 1e4)
         unknown = sorted(set(self.sensors) - {"camera", "lidar", "noise", "noise_seed",
-                                              "noise_profile", "bag"})
+                                              "noise_profile", "bag", "lidar_files",
+                                              "keep_images"})
         if unknown:
             raise ConfigError(f"unknown sensors key(s) {unknown}; allowed: camera, lidar, noise "
-                              "(tables), noise_seed, noise_profile, bag")
+                              "(tables), noise_seed, noise_profile, bag, lidar_files, "
+                              "keep_images")
         if not isinstance(self.sensors.get("noise_profile", ""), str):
             raise ConfigError(f"sensors.noise_profile = {self.sensors['noise_profile']!r}; "
                               "must be a profile name (a string)")
-        if not isinstance(self.sensors.get("bag", False), bool):
-            raise ConfigError(f"sensors.bag = {self.sensors['bag']!r}; must be true or false")
+        for key in ("bag", "lidar_files", "keep_images"):
+            if not isinstance(self.sensors.get(key, False), bool):
+                raise ConfigError(f"sensors.{key} = {self.sensors[key]!r}; must be true or "
+                                  "false")
         seed = self.sensors.get("noise_seed", 0)
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise ConfigError(f"sensors.noise_seed = {seed!r}; must be an integer >= 0")
@@ -176,8 +180,8 @@ class SlamSpec:
         return int(self.sensors.get("noise_seed", 0))
 
     def needs_bag(self) -> bool:
-        return any(m.kind == "kiss-icp" or (m.kind == "command" and "{bag_dir}" in str(m.command))
-                   for m in self.methods)
+        """A method reads the cell's bag (KISS-ICP runs during the drive and needs none)."""
+        return any(m.kind == "command" and "{bag_dir}" in str(m.command) for m in self.methods)
 
 
 def _table(data: Any, key: str) -> dict[str, Any]:

@@ -168,6 +168,11 @@ class ExportOptions:
         With a bag that holds the LiDAR, also keep the run's ``lidar/*.ply`` (by default they
         are removed once the bag is written: the scans are kept once, in the bag, and
         ``lidar/stamps.csv`` stays).
+    lidar_files : bool
+        Write each LiDAR scan as ``lidar/NNNNNN.ply`` (default). False: the scans reach only
+        the drive's listeners (e.g. a live LiDAR odometry) and are never stored;
+        ``lidar/stamps.csv`` keeps their stamps and point counts. Not with a bag that holds
+        the LiDAR.
     """
 
     bag: BagOptions | None = None
@@ -175,12 +180,17 @@ class ExportOptions:
     overwrite: bool = False
     dataset_images: str = "link"
     keep_lidar_files: bool = False
+    lidar_files: bool = True
 
     def __post_init__(self) -> None:
         _choice("dataset_images", self.dataset_images, DATASET_IMAGES)
-        if not isinstance(self.keep_lidar_files, bool):
-            raise ExportError(f"keep_lidar_files = {plain(self.keep_lidar_files)!r}; expected "
-                              "true or false")
+        for key in ("keep_lidar_files", "lidar_files"):
+            if not isinstance(getattr(self, key), bool):
+                raise ExportError(f"{key} = {plain(getattr(self, key))!r}; expected true or "
+                                  "false")
+        if not self.lidar_files and self.lidar_into_bag():
+            raise ExportError("lidar_files = false stores no LiDAR scans, but the bag takes "
+                              "the LiDAR: give BagOptions(sensors=...) without 'lidar'")
         datasets = (self.datasets,) if isinstance(self.datasets, str) else tuple(self.datasets)
         for fmt in datasets:
             _choice("datasets", fmt, DATASET_FORMATS)
