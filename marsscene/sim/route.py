@@ -23,6 +23,7 @@ from scipy.ndimage import (
     binary_dilation,
     distance_transform_edt,
     gaussian_filter1d,
+    label,
     maximum_filter,
 )
 from scipy.sparse.csgraph import dijkstra
@@ -195,6 +196,10 @@ def _clear(blocked: NDArray[np.bool_], a: NDArray[np.float64], b: NDArray[np.flo
     return not blocked[rc[:, 0], rc[:, 1]].any()
 
 
+def _inside(rc: tuple[int, int], shape: tuple[int, ...]) -> tuple[int, int]:
+    return min(max(rc[0], 0), shape[0] - 1), min(max(rc[1], 0), shape[1] - 1)
+
+
 def _escape(grid: NDArray[np.bool_], start: tuple[int, int],
             nearest_free: NDArray[np.intp]) -> bool:
     """Open the straight cells from ``start`` to the nearest free cell of ``grid`` (in place):
@@ -309,6 +314,11 @@ def author_route(
     )
     rc = lambda p: (round((p[1] - oy) / cell), round((p[0] - ox) / cell))  # noqa: E731
     nearest_free = distance_transform_edt(plan, return_distances=False, return_indices=True)
+    parts, n_parts = label(~plan, structure=np.ones((3, 3), dtype=bool))
+    # a waypoint in a pocket of free ground walled in by rocks or slopes leaves it for the
+    # largest connected free area (the nearest free cell alone may be in that pocket)
+    main = parts == int(np.argmax(np.bincount(parts.ravel())[1:])) + 1 if n_parts > 1 else ~plan
+    nearest_main = distance_transform_edt(~main, return_distances=False, return_indices=True)
     escaped = np.zeros_like(plan)  # cells opened to leave a blocked waypoint
     pieces = [wp[:1]]
     for a, b in itertools.pairwise(wp):
@@ -319,8 +329,10 @@ def author_route(
             pieces.append(leg[1:])
             continue
         grid = plan.copy()
+        ra, rb = _inside(rc(a), plan.shape), _inside(rc(b), plan.shape)
+        apart = parts[ra] == 0 or parts[ra] != parts[rb]  # not one free area: meet in the main
         for end in (a, b):
-            if _escape(grid, rc(end), nearest_free):
+            if _escape(grid, _inside(rc(end), plan.shape), nearest_main if apart else nearest_free):
                 log.info("route: waypoint (%.1f, %.1f) m lies in a blocked area; the route "
                          "leaves it by the shortest way", end[0], end[1])
         escaped |= plan & ~grid

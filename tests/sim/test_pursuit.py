@@ -118,3 +118,22 @@ def test_route_outside_terrain_error() -> None:
 def test_cross_track_distance() -> None:
     route = Route(np.array([[0.0, 0.0], [10.0, 0.0]]))
     np.testing.assert_allclose(cross_track_m(route, [[5, 2], [-3, 4], [11, 0]]), [2, 5, 1])
+
+
+def test_route_leaves_a_pocket_walled_in_by_rocks() -> None:
+    """A waypoint on free ground that a ring of tall rocks walls in (the grand-canyon route of
+    scene seed 3 had one) leaves the pocket for the larger free area instead of "no route"."""
+    hf = Heightfield.centered(np.zeros((161, 161)), 0.25)
+    ang = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    ring = np.column_stack([4.5 * np.cos(ang), 4.5 * np.sin(ang)])  # rocks 1.18 m apart
+    rocks = Obstacles(ring, np.full(24, 0.4), np.full(24, 0.8))
+    start, goal = np.array([0.0, 0.0]), np.array([-15.0, 0.0])
+    route = author_route([start, goal], hf, obstacles=rocks, max_obstacle_height_m=0.3,
+                         clearance_m=1.5)
+    xy = route.xy_m
+    np.testing.assert_allclose(xy[[0, -1]], [start, goal])
+    assert np.hypot(*xy[-1]) > 4.5 and route.length_m < 20.0  # out through the ring, the short way
+    # a route from a free area to itself is untouched by the pocket rule
+    free = author_route([[-15.0, -5.0], [-15.0, 5.0]], hf, obstacles=rocks,
+                        max_obstacle_height_m=0.3, clearance_m=1.5)
+    assert np.abs(free.xy_m[:, 0] + 15.0).max() < 1e-9
