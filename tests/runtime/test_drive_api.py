@@ -68,8 +68,11 @@ def test_the_four_call_sites_drive_through_ms_drive(gentle_scene, tmp_path, monk
     cell_dir = tmp_path / "slam"
     (cell_dir / "scene").mkdir(parents=True)
     with pytest.raises(_Called):
-        slam_cell._drive(spec, spec.scenes[0], cell_dir, True, "hash", True)
-    assert calls[-1]["export"].bag.sensors == ("lidar",)  # KISS-ICP reads the LiDAR bag
+        slam_cell._drive(spec, spec.scenes[0], cell_dir, True, "hash", True,
+                         live=tuple(m for m in spec.methods if m.kind == "kiss-icp"))
+    # KISS-ICP runs during the drive: no bag, no stored scans, a live listener
+    assert calls[-1]["export"].bag is None and not calls[-1]["export"].lidar_files
+    assert [type(x).__name__ for x in calls[-1]["listeners"]] == ["LiveKissIcp"]
     vpr = VprSpec.from_toml("dust")
     with pytest.raises(_Called):
         vpr_dataset._traverse(vpr, "database", vpr.database, gentle_scene,
