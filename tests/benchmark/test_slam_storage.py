@@ -58,6 +58,9 @@ command = "cp {tum_rgbd_dir}/groundtruth.txt {out_tum}"
 [[methods]]
 name = "mono"
 kind = "opencv-mono"
+[[methods]]
+name = "mine"
+kind = "tum-file"
 """
 
 

@@ -166,12 +166,12 @@ def _needs_images(spec: SlamSpec, methods: list[MethodSpec], cell_dir: Path) -> 
     if not (run_dir / IMAGES_REMOVED).is_file():
         return False
     drive_key = str((_read_json(run_dir / DRIVE_FILE) or {}).get("key"))
-    for m in methods:
-        if m.sensor != "camera" and m.kind not in ("tum-file", "command"):
+    for m in methods:  # a tum-file method reads its own file, a command maybe the images
+        if m.kind == "tum-file" or (m.sensor != "camera" and m.kind != "command"):
             continue
         path, key = _method_file(spec, m, cell_dir, drive_key)
         done = _read_json(path)
-        if m.kind == "tum-file" or done is None or done.get("key") != key:
+        if done is None or done.get("key") != key:
             return True
     return False
 
