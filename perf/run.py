@@ -7,6 +7,7 @@ Each module defines ``main() -> None`` that prints its own figures.
 from __future__ import annotations
 
 import importlib.util
+import inspect
 import sys
 from pathlib import Path
 
@@ -23,7 +24,7 @@ def main(argv: list[str]) -> int:
         assert spec and spec.loader
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
-        module.main()
+        module.main(*([[]] if inspect.signature(module.main).parameters else []))  # defaults
     return 0
 
 
