@@ -1,11 +1,14 @@
-"""Wall time and peak memory of a call, measured in a child process (clean peak RSS)."""
+"""Shared pieces of the perf scripts: wall time and peak memory of a call, measured in a child
+process (clean peak RSS), and a paper-spec scene built once into a temporary folder."""
 
 from __future__ import annotations
 
 import multiprocessing as mp
 import resource
+import tempfile
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 
@@ -29,3 +32,20 @@ def measure(fn: Callable[[], Any]) -> tuple[float, float, Any]:
     result = queue.get()
     proc.join()
     return result
+
+
+def paper_scene(name: str, seed: int = 1) -> tuple[Path, bool]:
+    """Scene ``name`` of ``docs/examples/benchmark_slam_paper.toml`` as its SLAM cells build it
+    (MJCF only), in a temporary folder kept between runs. Returns ``(folder, built_now)``."""
+    import marsscene as ms
+    from marsscene.benchmark.slam.spec import SlamSpec
+
+    root = Path(__file__).resolve().parents[1]
+    spec = SlamSpec.from_toml(root / "docs" / "examples" / "benchmark_slam_paper.toml")
+    scene = next(s for s in spec.scenes if s.name == name)
+    folder = Path(tempfile.gettempdir()) / f"marsscene_paper_scene_{name}_{seed}"
+    if (folder / "mjcf" / "scene.xml").is_file():
+        return folder, False
+    cfg = ms.SceneConfig.from_dict(scene.base_config())
+    ms.write_scene(ms.build_scene(cfg, seed=seed), folder, formats=("mjcf",), overwrite=True)
+    return folder, True

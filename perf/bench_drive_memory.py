@@ -43,6 +43,8 @@ def _mark(what: str) -> None:
 
 
 def main(argv: list[str]) -> None:
+    from _measure import paper_scene
+
     import marsscene as ms
     from marsscene.benchmark.routes import auto_route, centred_on_asset
     from marsscene.benchmark.slam.spec import SlamSpec
@@ -56,10 +58,8 @@ def main(argv: list[str]) -> None:
     length = float(argv[2]) if len(argv) > 2 else 60.0
     spec = SlamSpec.from_toml(ROOT / "docs" / "examples" / "benchmark_slam_paper.toml")
     scene = next(s for s in spec.scenes if s.name == name)
-    folder = Path(tempfile.gettempdir()) / f"marsscene_bench_memory_{name}"
-    if not (folder / "mjcf" / "scene.xml").is_file():
-        cfg = ms.SceneConfig.from_dict(scene.base_config())
-        ms.write_scene(ms.build_scene(cfg, seed=1), folder, formats=("mjcf",), overwrite=True)
+    folder, built = paper_scene(name)
+    if built:
         _mark(f"built {name} (seed 1)")
         os.execv(sys.executable, [sys.executable, *sys.argv])  # measure in a fresh process
     _mark("start")

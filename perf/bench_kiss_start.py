@@ -126,16 +126,9 @@ def _report(run_dir: Path, model: str, mode: str) -> None:
 def _scene(argv: list[str]) -> Path:
     if argv and argv[0]:
         return Path(argv[0])
-    import marsscene as ms
-    from marsscene.benchmark.slam.spec import SlamSpec
+    from _measure import paper_scene
 
-    spec = SlamSpec.from_toml(ROOT / "docs" / "examples" / "benchmark_slam_paper.toml")
-    scene = next(s for s in spec.scenes if s.name == "main-crater")
-    folder = Path(tempfile.gettempdir()) / "marsscene_bench_kiss_start_scene"
-    if not (folder / "mjcf" / "scene.xml").is_file():
-        cfg = ms.SceneConfig.from_dict(scene.base_config())
-        ms.write_scene(ms.build_scene(cfg, seed=1), folder, formats=("mjcf",), overwrite=True)
-    return folder
+    return paper_scene("main-crater")[0]
 
 
 def main(argv: list[str] | None = None) -> None:
