@@ -1,22 +1,30 @@
 """Rock benchmark: 1 km x 1 km, k = 0.05, D in [0.1, 3] m (~1e6 rocks) on a 0.25 m terrain.
 
 Steps timed: prototypes, sample + place (``place_rocks``), author the USD PointInstancer and
-serialise it as ``.usdc``, the catalogue as ``rocks.csv`` and as ``rocks.parquet`` (each
+serialise it as ``.usdc``, author and serialise the rock colliders (``assets/rock_colliders.usdc``
+with the default ``[export]`` thresholds: obstacle rocks as instance prims, the other colliding
+rocks merged per tile; issue 42), the catalogue as ``rocks.csv`` and as ``rocks.parquet`` (each
 formatted and written to a file, median of 3; the Parquet one when pyarrow is installed).
 Target: < 10 s total, < 2 GB peak RSS.
-Run: ``python perf/run.py rocks``.
+Run: ``python perf/run.py rocks``; ``python perf/bench_rocks.py --collider-min-m 0`` makes every
+rock a collider (``[export] rock_collider_min_diameter_m = 0``).
 """
 
 from __future__ import annotations
 
+import tempfile
 import time
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
+from marsscene.export.config import ExportConfig
+
 SIZE_M = 1000.0
 POST_M = 0.25
+_COLLIDER_MIN_M = [ExportConfig().rock_collider_min_diameter_m]
 
 
 def _terrain() -> Any:
@@ -34,6 +42,7 @@ def _run() -> dict[str, float]:
     from pxr import Sdf
 
     from marsscene.craters.table import CraterTable
+    from marsscene.export.usd.rock_colliders import author_collider_layer
     from marsscene.export.usd.rocks import author_instancer
     from marsscene.export.usd.stage import crate_bytes, create_asset_stage
     from marsscene.rocks import RockConfig, make_prototypes, place_rocks
@@ -51,9 +60,19 @@ def _run() -> dict[str, float]:
     author_instancer(stage, Sdf.Path("/Rocks"), rocks, protos)
     blob = crate_bytes(stage)
     t3 = time.perf_counter()
+    export = ExportConfig(rock_collider_min_diameter_m=_COLLIDER_MIN_M[0])
+    keep = np.flatnonzero(rocks.diameter_m >= export.rock_collider_min_diameter_m)
+    layer = author_collider_layer(rocks.take(keep), keep, protos,
+                                  instance_min_diameter_m=export.rock_instance_min_diameter_m)
+    with tempfile.TemporaryDirectory() as tmp:
+        layer.Export(str(Path(tmp) / "rock_colliders.usdc"))
+        colliders_mb = (Path(tmp) / "rock_colliders.usdc").stat().st_size / 2**20
+    t4 = time.perf_counter()
+    big = int((rocks.diameter_m >= export.rock_instance_min_diameter_m).sum())
     scene = SimpleNamespace(rocks=rocks, config=SimpleNamespace(rocks=cfg))
     out.update(rocks=len(rocks), prototypes_s=t1 - t0, place_s=t2 - t1, usd_s=t3 - t2,
-               usdc_mb=len(blob) / 2**20)
+               usdc_mb=len(blob) / 2**20, colliders_s=t4 - t3, colliders_mb=colliders_mb,
+               collider_rocks=len(keep), collider_prims=big)
     out.update(_catalogues(scene))
     return out
 
@@ -61,8 +80,6 @@ def _run() -> dict[str, float]:
 def _catalogues(scene: Any) -> dict[str, float]:
     """Median write time (s) and size (MB) of rocks.csv and rocks.parquet."""
     import statistics
-    import tempfile
-    from pathlib import Path
 
     from marsscene.export.catalog_rocks import write_rock_catalog
 
@@ -87,22 +104,29 @@ def _catalogues(scene: Any) -> dict[str, float]:
     return out
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     from _measure import measure
+
+    args = list(argv or [])
+    if "--collider-min-m" in args:
+        _COLLIDER_MIN_M[0] = float(args[args.index("--collider-min-m") + 1])
 
     wall, peak_mb, r = measure(_run)
     n = r["rocks"]
     print(f"terrain 1 km x 1 km at {POST_M} m ({int(SIZE_M / POST_M) + 1}^2 posts); k = 0.05, "
           f"D in [0.1, 3] m")
     print(f"rocks placed          : {n:,.0f}")
-    for step in ("prototypes", "place", "usd", "csv", "parquet"):
+    for step in ("prototypes", "place", "usd", "colliders", "csv", "parquet"):
         if f"{step}_s" not in r:
             continue
         secs = r[f"{step}_s"]
         rate = f"{n / secs:,.0f} rocks/s" if step != "prototypes" else ""
         print(f"{step:<22}: {secs:6.2f} s  {rate}")
-    rock_s = r["prototypes_s"] + r["place_s"] + r["usd_s"]
-    print(f"sample+place+USD      : {rock_s:6.2f} s (target < 10 s)")
+    rock_s = r["prototypes_s"] + r["place_s"] + r["usd_s"] + r["colliders_s"]
+    print(f"sample+place+USD      : {rock_s:6.2f} s, colliders included (target < 10 s)")
+    print(f"colliders             : {r['collider_rocks']:,.0f} rocks (D >= the collider "
+          f"minimum), {r['collider_prims']:,.0f} of them instance prims, the rest merged; "
+          f"rock_colliders.usdc {r['colliders_mb']:.1f} MB")
     sizes = f"rocks.csv {r['csv_mb']:.1f} MB"
     if "parquet_mb" in r:
         sizes += f"; rocks.parquet {r['parquet_mb']:.1f} MB"
@@ -112,7 +136,6 @@ def main() -> None:
 
 if __name__ == "__main__":
     import sys
-    from pathlib import Path
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    main()
+    main(sys.argv[1:])

@@ -7,11 +7,20 @@ from dataclasses import dataclass
 from marsscene._validate import check_choice, check_range
 from marsscene.errors import ConfigError
 
-__all__ = ["EXPORT_FORMATS", "ROCK_CATALOGUES", "USD_FORMATS", "ExportConfig"]
+__all__ = ["CONTACT_MIN_DIAMETER_M", "EXPORT_FORMATS", "OBSTACLE_MIN_DIAMETER_M",
+           "ROCK_CATALOGUES", "USD_FORMATS", "ExportConfig"]
 
 EXPORT_FORMATS = ("usd", "mjcf")
 USD_FORMATS = ("usda", "usdc", "usdz")
 ROCK_CATALOGUES = ("csv", "parquet", "both")
+#: Rocks at least this wide are physics colliders by default, in MJCF and USD alike (m). With an
+#: exposed height of 0.35-0.65 D (``rocks.height_ratio``), a 0.2 m rock stands 0.07-0.13 m tall:
+#: under half the Perseverance-class wheel radius (0.2625 m), a sixth of the chassis' 0.75 m ride
+#: height; smaller rocks are gravel that the wheel rolls over (rendered only).
+CONTACT_MIN_DIAMETER_M = 0.2
+#: Rocks at least this wide are obstacles (m): about 0.25 m tall, as tall as the wheel radius,
+#: a step the rocker-bogie climbs rather than rolls over; USD gives each its own collider prim.
+OBSTACLE_MIN_DIAMETER_M = 0.5
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -34,10 +43,13 @@ class ExportConfig:
     """Where to place it (m, world frame); default: the terrain centre, as the runtime."""
     rover_yaw_deg: float = 0.0
     """Its heading (deg, counter-clockwise from east)."""
-    rock_collider_min_diameter_m: float = 0.0
-    """Rocks at least this wide get a collider prim under ``/World/RockColliders`` (m); the
-    smaller ones are rendered only. 0: every rock (the default scene's 120 000 colliders cost
-    about 10 s of writing and 8 s of a full stage open; 0.15 m keeps about 45 % of them)."""
+    rock_collider_min_diameter_m: float = CONTACT_MIN_DIAMETER_M
+    """Rocks at least this wide are colliders under ``/World/RockColliders`` (m), as in the
+    MJCF; the smaller ones are rendered only. 0: every rock."""
+    rock_instance_min_diameter_m: float = OBSTACLE_MIN_DIAMETER_M
+    """Colliders of rocks at least this wide are one native instance prim each (m); the
+    smaller colliders are merged into one static mesh per 64 m tile. 0: one prim per collider
+    (about 80 us a rock to write: a minute for 10^6 rocks)."""
 
     def __post_init__(self) -> None:
         if isinstance(self.formats, str) or not self.formats:
@@ -58,4 +70,6 @@ class ExportConfig:
             object.__setattr__(self, "rover_xy_m", (float(xy[0]), float(xy[1])))
         check_range("export.rover_yaw_deg", self.rover_yaw_deg, -360.0, 360.0)
         check_range("export.rock_collider_min_diameter_m", self.rock_collider_min_diameter_m,
+                    0.0, 1e4)
+        check_range("export.rock_instance_min_diameter_m", self.rock_instance_min_diameter_m,
                     0.0, 1e4)

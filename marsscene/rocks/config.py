@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from marsscene._validate import check_choice, check_range
 from marsscene.errors import ConfigError
+from marsscene.export.config import CONTACT_MIN_DIAMETER_M
 
 __all__ = ["COLLISION_MODES", "PLACEMENTS", "SMALL_ROCK_RULES", "RockConfig"]
 
@@ -92,7 +93,7 @@ class RockConfig:
     """Collision parts per prototype: "convex_hull" (default, ms) or "coacd" (cached)."""
     coacd_threshold: float = 0.08
     """coacd concavity threshold (only with ``collision = "coacd"``)."""
-    mjcf_min_diameter_m: float = 0.2
+    mjcf_min_diameter_m: float = CONTACT_MIN_DIAMETER_M
     """Only rocks at least this large become MJCF collision geoms (in m)."""
     mjcf_max_rocks: int = 1000
     """At most this many rocks (the largest) become MJCF geoms (MuJoCo performance)."""

@@ -15,10 +15,11 @@ the maximal-coordinate solvers (XPBD, semi-implicit) diverge on this rover's mas
 (20 kg wheels on 4 kg steering units) and Featherstone ignores loop joints. See
 ``docs/usd_rover.md``.
 
-Rocks: Newton's importer turns every collider prim into its own mesh (about 1 ms a rock), so
-the rock colliders (``/World/RockColliders``, one native instance per rock) are read here
-instead, one convex hull per prototype part shared by every rock, optionally only those
-within ``rocks_within_m`` of the rover.
+Rocks: Newton's importer turns every collider prim into its own mesh (about 1 ms a prim), so
+the rock colliders (``/World/RockColliders``: an instance per obstacle rock, the smaller rocks
+merged per tile) are read here instead (:mod:`marsscene.export.usd.rock_colliders_read`): one
+convex hull per prototype part shared by the obstacle rocks, one static mesh per tile of the
+merged ones, optionally only the rocks within ``rocks_within_m`` of the rover.
 """
 
 from __future__ import annotations
@@ -32,13 +33,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.errors import RuntimeSimError, missing_dependency
+from marsscene.export.usd.rock_colliders_read import ROCKS_PATH, merged_rocks, rock_instances
 from marsscene.rover.config import RoverConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
 
 __all__ = ["NewtonRover", "rock_instances"]
 
 ROVER_PATH = "/World/Rover"
-ROCKS_PATH = "/World/RockColliders"
 #: Contact buffer of the collision pipeline (the rover makes about 70 contacts on rough ground).
 CONTACTS_MAX = 2048
 #: Candidate shape pairs of the broad phase per step.
@@ -54,54 +55,6 @@ def _newton() -> tuple[Any, Any]:
     config: Any = wp.config  # typed in some Warp releases, not in others
     config.quiet = True
     return newton, wp
-
-
-def rock_instances(stage: Any) -> tuple[dict[str, list[Any]], NDArray[np.float64], list[str],
-                                         NDArray[np.int64], float]:
-    """The rock colliders of a scene stage (``/World/RockColliders``, native instances).
-
-    Returns
-    -------
-    parts : dict of str to list of (vertices (V, 3), triangle indices (F * 3,))
-        Collision meshes of each prototype (unit frame), by prototype prim path.
-    transforms : ndarray of shape (N, 4, 4)
-        World transform of each rock (USD row-vector convention: rows 0-2 are the scaled
-        axes, row 3 the position).
-    prototypes : list of str
-        Each rock's prototype path (a key of ``parts``).
-    rows : ndarray of int, shape (N,)
-        Each rock's row in the scene's rock table (its prim name ``rock_<row>``).
-    friction : float
-        Dynamic friction of the rocks' physics material (0.9 if none is bound).
-    """
-    from pxr import Usd, UsdGeom, UsdPhysics, UsdShade
-
-    root = stage.GetPrimAtPath(ROCKS_PATH)
-    cache = UsdGeom.XformCache()
-    parts: dict[str, list[Any]] = {}
-    mats, keys, rows = [], [], []
-    friction = 0.9
-    for prim in Usd.PrimRange(root) if root else ():
-        if not prim.IsInstance():
-            continue
-        key = str(prim.GetPrototype().GetPath())
-        if key not in parts:  # a handful of prototypes
-            parts[key] = []
-            for child in Usd.PrimRange(prim, Usd.TraverseInstanceProxies()):
-                if child.IsA(UsdGeom.Mesh):
-                    mesh = UsdGeom.Mesh(child)
-                    parts[key].append((np.asarray(mesh.GetPointsAttr().Get(), np.float32),
-                                       np.asarray(mesh.GetFaceVertexIndicesAttr().Get(),
-                                                  np.int32)))
-                    mat, _ = UsdShade.MaterialBindingAPI(child).ComputeBoundMaterial("physics")
-                    if mat and mat.GetPrim().HasAPI(UsdPhysics.MaterialAPI):
-                        api = UsdPhysics.MaterialAPI(mat.GetPrim())
-                        friction = float(api.GetDynamicFrictionAttr().Get())
-        keys.append(key)
-        rows.append(int(prim.GetName().rsplit("_", 1)[1]))
-        mats.append(np.asarray(cache.GetLocalToWorldTransform(prim)))
-    return (parts, np.asarray(mats, dtype=np.float64).reshape(-1, 4, 4), keys,
-            np.asarray(rows, dtype=np.int64), friction)
 
 
 class NewtonRover:
@@ -196,27 +149,36 @@ class NewtonRover:
         from marsscene.transforms import matrix_to_quat
 
         newton, wp = _newton()
-        parts, mats, keys, rows, friction = rock_instances(stage)
-        if not keys:
-            return 0
         rover = stage.GetPrimAtPath(ROVER_PATH)
         start = np.asarray(UsdGeom.XformCache().GetLocalToWorldTransform(rover))[3, :2]
+        rows_only = None if only is None else np.fromiter(only, dtype=np.int64)
+
+        def wanted(xy: Any, rows: Any) -> Any:
+            keep = np.ones(len(rows), dtype=bool) if within_m is None else \
+                np.hypot(*(xy - start).T) <= within_m
+            return keep if rows_only is None else keep & np.isin(rows, rows_only)
+
+        parts, mats, keys, rows, friction = rock_instances(stage)
+        cfg = newton.ModelBuilder.ShapeConfig(mu=friction)
+        keep = wanted(mats[:, 3, :2], rows)
         meshes = {k: [newton.Mesh(v, i, compute_inertia=False) for v, i in p]
                   for k, p in parts.items()}
-        keep = np.ones(len(keys), dtype=bool) if within_m is None else \
-            np.hypot(*(mats[:, 3, :2] - start).T) <= within_m
-        if only is not None:
-            keep &= np.isin(rows, np.fromiter(only, dtype=np.int64))
         scale = np.linalg.norm(mats[:, :3, :3], axis=2)  # rows: the scaled axes
         quat = matrix_to_quat(np.swapaxes(mats[:, :3, :3] / scale[:, :, None], 1, 2))
-        cfg = newton.ModelBuilder.ShapeConfig(mu=friction)
-        for j in np.flatnonzero(keep):  # a shape per rock part: Newton has no instancing
+        for j in np.flatnonzero(keep):  # a shape per obstacle rock part: no instancing
             w, x, y, z = quat[j].tolist()
             tf = wp.transform(wp.vec3(*mats[j, 3, :3].tolist()), wp.quat(x, y, z, w))
             for mesh in meshes[keys[j]]:
                 builder.add_shape_convex_hull(-1, xform=tf, mesh=mesh,
                                               scale=wp.vec3(*scale[j].tolist()), cfg=cfg)
-        return int(keep.sum())
+        loaded = int(keep.sum())
+        for tile in merged_rocks(stage):  # a static mesh per tile of the smaller rocks
+            points, faces, n = tile.select(wanted(tile.centres_xy_m(), tile.rows))
+            if n:
+                builder.add_shape_mesh(-1, mesh=newton.Mesh(points, faces.ravel(),
+                                                            compute_inertia=False), cfg=cfg)
+                loaded += n
+        return loaded
 
     # ---- commands --------------------------------------------------------------------------
     def apply(self, v_m_s: float, omega_rad_s: float) -> None:

@@ -17,7 +17,7 @@ from pxr import Kind, Usd, UsdGeom, UsdPhysics, UsdShade  # noqa: E402
 
 CFG = {
     "terrain": {"source": "procedural", "size_m": [100.0, 100.0], "post_m": 1.0},
-    "rocks": {"k": 0.05, "d_min_m": 0.5},  # 123 rocks: each is a collider prim to validate
+    "rocks": {"k": 0.05, "d_min_m": 0.3},  # 123 collider prims (D >= 0.5 m), 4 merged meshes
     "craters": {"d_min_m": 1.0},
     "export": {"max_tile_posts": 33, "rover": True},
 }
@@ -82,9 +82,12 @@ def test_physics_materials_match_the_mjcf_contact(written: Path) -> None:
     for tile in tiles:  # the render binding is still the surface material
         render, _ = UsdShade.MaterialBindingAPI(tile).ComputeBoundMaterial()
         assert render.GetPath().name == "Regolith"
-    approx = {p.GetName(): UsdPhysics.MeshCollisionAPI(p).GetApproximationAttr().Get()
-              for p in tiles[:1] + colliders[:1]}
-    assert sorted(approx.values()) == ["convexHull", "none"]
+    def approx(prims: list[Usd.Prim]) -> set[str]:
+        return {UsdPhysics.MeshCollisionAPI(p).GetApproximationAttr().Get() for p in prims}
+
+    merged = [p for p in colliders if "/Merged/" in str(p.GetPath())]
+    assert merged and approx(tiles) == approx(merged) == {"none"}  # static triangle meshes
+    assert approx([p for p in colliders if p not in merged]) == {"convexHull"}  # obstacles
 
 
 def test_kind_hierarchy_and_extents(written: Path) -> None:

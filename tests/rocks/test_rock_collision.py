@@ -83,6 +83,8 @@ def test_multi_part_prototype_exports(tmp_path: Path, monkeypatch: pytest.Monkey
     from pxr import Usd, UsdPhysics
 
     stage = Usd.Stage.Open(str(tmp_path / "out" / "scene.usda"))
-    rock = stage.GetPrimAtPath("/World/RockColliders/rock_0")  # every rock: prototype rock_00
+    widest = int(np.argmax(scene.rocks.diameter_m))  # an obstacle rock: an instance prim
+    assert scene.rocks.diameter_m[widest] >= cfg.export.rock_instance_min_diameter_m
+    rock = stage.GetPrimAtPath(f"/World/RockColliders/rock_{widest}")  # prototype rock_00
     parts = rock.GetPrototype().GetChildren()
     assert len(parts) == n_parts and all(p.HasAPI(UsdPhysics.CollisionAPI) for p in parts)

@@ -37,6 +37,7 @@ def test_usd_round_trip(written: tuple[ms.Scene, Path]) -> None:
     from pxr import Usd, UsdGeom, UsdPhysics
 
     from marsscene.export.usd import validate_stage
+    from marsscene.export.usd.rock_colliders_read import merged_rocks
 
     scene, out = written
     rocks = scene.rocks
@@ -61,8 +62,15 @@ def test_usd_round_trip(written: tuple[ms.Scene, Path]) -> None:
         assert UsdGeom.Mesh(stage.GetPrimAtPath(f"{path}/Visual"))
         assert not [p for p in Usd.PrimRange(stage.GetPrimAtPath(path))
                     if p.HasAPI(UsdPhysics.CollisionAPI)]
-    # the colliders: one instance per rock of a class prototype with convex-hull parts
-    for i in (0, len(rocks) - 1):
+    # the colliders: one instance per obstacle rock of a class prototype with convex-hull
+    # parts; the other rocks from the collider minimum up in merged meshes
+    export = scene.config.export
+    big = np.flatnonzero(rocks.diameter_m >= export.rock_instance_min_diameter_m)
+    mid = np.flatnonzero((rocks.diameter_m >= export.rock_collider_min_diameter_m)
+                         & (rocks.diameter_m < export.rock_instance_min_diameter_m))
+    merged = np.concatenate([t.rows for t in merged_rocks(stage)])
+    assert len(big) and len(mid) and sorted(merged.tolist()) == mid.tolist()
+    for i in (big[0], big[-1]):
         prim = stage.GetPrimAtPath(f"/World/RockColliders/rock_{i}")
         parts = prim.GetPrototype().GetChildren()
         assert prim.IsInstance() and parts
