@@ -21,9 +21,10 @@ Examples
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import marsscene._gl  # noqa: F401  (first: MUJOCO_GL before anything imports mujoco)
+from marsscene._lazy import lazy_attributes
 from marsscene._show_versions import show_versions as show_versions
 from marsscene._version import __version__ as __version__
 from marsscene.config import SceneConfig as SceneConfig
@@ -79,10 +80,4 @@ _LAZY = {
     "DriveOptions": "marsscene.sim.mission",
 }
 
-
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        import importlib
-
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'marsscene' has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, _LAZY)

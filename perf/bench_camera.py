@@ -4,7 +4,7 @@ Drives ~10 m straight at 0.3 m/s with 640x480 RGB-D at 10 Hz (shadows on, auto-e
 reports: sim/wall ratio, per-frame render times (RGB, depth), mean intensity and saturation,
 Shi-Tomasi corners per frame, consecutive pairs tracked with >= 30 PnP-RANSAC inliers, and the
 RGB-D VO end-point drift as a fraction of the camera path (the OpenCV front end of
-``marsscene/testing/vision.py``). Targets: median >= 300 corners, >= 95 % pairs, drift <= 2 %,
+``tests/support/vision.py``). Targets: median >= 300 corners, >= 95 % pairs, drift <= 2 %,
 mean 0.3-0.6, saturation < 2 %, >= 1x real time on the 2-core CPU.
 
 ``MARSSCENE_BENCH_SCENE=path`` uses an already built scene (e.g. on a GPU machine without
@@ -16,12 +16,14 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
 os.environ.setdefault("MUJOCO_GL", "egl")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: tests.support
 
 from _measure import measure
 
@@ -70,13 +72,13 @@ def _drive(shadows: bool, size: tuple[int, int]) -> dict[str, float]:
 
 
 def rgbd_vo_of_run(run: Path) -> tuple[Any, list[Any]]:
-    """The OpenCV RGB-D VO of a run folder's camera frames (marsscene/testing/vision.py) and the
+    """The OpenCV RGB-D VO of a run folder's camera frames (tests/support/vision.py) and the
     RGB frames."""
     import numpy as np
     from PIL import Image
 
     from marsscene.runtime import RoverConfig, read_tum
-    from marsscene.testing.vision import camera_poses, rgbd_vo
+    from tests.support.vision import camera_poses, rgbd_vo
 
     intr = json.loads((run / "camera/intrinsics.json").read_text())
     rows = [r.split(",") for r in (run / "camera/stamps.csv").read_text().splitlines()[1:]]

@@ -59,6 +59,7 @@ def drive(minutes: float, out: Path, jpeg_cache: Any = None) -> tuple[float, flo
     from marsscene.sim.driver import DriveProgress
     from marsscene.sim.driver import drive_sim as run_drive
     from marsscene.sim.mission import prepare_drive
+    from marsscene.sim.session import SessionOptions
 
     lap = np.array([[-10.0, -10.0], [10.0, -10.0], [10.0, 10.0], [-10.0, 10.0]])
     laps = max(2, int(minutes * 60 * 0.5 / 80) + 2)  # 80 m a lap; never done before the limit
@@ -78,7 +79,8 @@ def drive(minutes: float, out: Path, jpeg_cache: Any = None) -> tuple[float, flo
             print(marks[-1], flush=True)
 
     res = run_drive(sim, route=route, seconds=minutes * 60.0, out_dir=out,
-                    rng=stage_rng(7, "sensors"), progress=sample, jpeg_cache=jpeg_cache)
+                    rng=stage_rng(7, "sensors"), progress=sample,
+                    session=SessionOptions(jpeg_cache=jpeg_cache))
     wall = time.perf_counter() - t0
     print(f"peak RSS (VmHWM) {_status_kb('VmHWM') / 1024:.0f} MB; "
           f"{res.summary['path_length_m']:.1f} m in {res.summary['sim_time_s']:.0f} sim s, "

@@ -35,7 +35,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from marsscene.testing.newton_checks import (
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: tests.support
+
+from tests.support.newton_checks import (
     V_M_S,
     check_rock,
     check_slope,

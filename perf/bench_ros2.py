@@ -3,7 +3,7 @@ write time of one image and one cloud.
 
 One command: ``python perf/bench_ros2.py`` (``BENCH_ROS2_SECONDS`` of sim time per session,
 default 10). On a 60 m procedural scene, every DDS packet on 127.0.0.1, with an independent
-subscriber process (``marsscene/testing/dds_peer.py``: plain cyclonedds + rosbags) taking every
+subscriber process (``tests/support/dds_peer.py``: plain cyclonedds + rosbags) taking every
 topic:
 
 1. **write time per message** of a 640 x 480 rgb8 ``sensor_msgs/Image`` (921,600 B of pixels)
@@ -33,7 +33,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
 
-PEER = str(Path(__file__).resolve().parents[1] / "marsscene" / "testing" / "dds_peer.py")
+PEER = str(Path(__file__).resolve().parents[1] / "tests" / "support" / "dds_peer.py")
 SECONDS = float(os.environ.get("BENCH_ROS2_SECONDS", "10"))
 ALL = {
     "/clock": ["rosgraph_msgs/msg/Clock", False, False, 100],

@@ -32,7 +32,9 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
 
-from marsscene.testing.shadow_truth import disc_visible, horizon_excess_deg
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
+
+from tests.support.shadow_truth import disc_visible, horizon_excess_deg
 
 _SCENE = Path(tempfile.gettempdir()) / "marsscene_bench_rockfree_scene"
 #: (x, y) m, heading (rad): across, toward and away from the sun (azimuth 30 deg)

@@ -6,7 +6,7 @@ One command: ``python perf/closed_loop_ros2.py [SCENE_DIR]`` (default: builds th
 (simulated, at least 0.45 m tall and 0.8 m wide, on gentle ground with no other tall rock near
 the line), starts the rover 12 m before it facing it, with the goal 20 m ahead (8 m beyond the
 rock), serves the rover (``marsscene serve --lidar``, os1-128, 127.0.0.1 only) and runs the
-independent peer (``marsscene/testing/dds_peer.py goto``: plain cyclonedds + rosbags) with a
+independent peer (``tests/support/dds_peer.py goto``: plain cyclonedds + rosbags) with a
 stop distance of 6 m. It prints where the peer stopped and why, and the true clearance between
 the rover's front and the rock (run folder ground truth).
 """
@@ -24,7 +24,7 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-PEER = Path(__file__).resolve().parents[1] / "marsscene" / "testing" / "dds_peer.py"
+PEER = Path(__file__).resolve().parents[1] / "tests" / "support" / "dds_peer.py"
 DOMAIN, AHEAD_M, GOAL_M, STOP_M = 78, 12.0, 20.0, 4.0
 #: base_link to the front of the front wheels (wheelbase 1.05 m + wheel radius 0.2625 m)
 FRONT_M = 1.05 + 0.2625
@@ -73,7 +73,7 @@ def main() -> None:
               "ahead")
         run = work / "run"
         serve = subprocess.Popen(
-            ["marsscene", "serve", str(scene), "--ros2", "--localhost", "--domain-id",
+            ["marsscene", "serve", str(scene), "--localhost", "--domain-id",
              str(DOMAIN), "--lidar", "--start", str(sx), str(sy), "--yaw", str(yaw),
              "--seconds", "150", "--out", str(run)],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

@@ -82,7 +82,7 @@ def check(peer: Path, work: Path, rcvbuf: int) -> None:
 
     run = work / f"run-{rcvbuf}"
     serve = subprocess.Popen(
-        ["marsscene", "serve", str(work / "scene"), "--ros2", "--localhost", "--domain-id",
+        ["marsscene", "serve", str(work / "scene"), "--localhost", "--domain-id",
          str(DOMAIN), "--seconds", str(SECONDS), "--camera", "--camera-size", CAMERA,
          "--images", "raw", "--lidar-model", LIDAR, "--out", str(run)],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any, TypeVar
@@ -22,6 +23,24 @@ def user_errors() -> Iterator[None]:
         raise click.ClickException(str(err)) from err
     except MemoryError as err:
         raise click.ClickException(f"out of memory: {err}") from err
+
+
+@contextmanager
+def sigterm_interrupts() -> Iterator[None]:
+    """SIGTERM raises KeyboardInterrupt inside the block (a no-op off the main thread)."""
+
+    def terminate(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    try:  # only the main thread may set handlers
+        previous: Any = signal.signal(signal.SIGTERM, terminate)
+    except ValueError:
+        previous = None
+    try:
+        yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 def compose(*decorators: Callable[[F], F]) -> Callable[[F], F]:

@@ -3,25 +3,20 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
 import click
 
-from marsscene.cli._common import user_errors
+from marsscene.cli._common import sigterm_interrupts, user_errors
 from marsscene.cli._progress import DriveMeter, ProgressBar
 from marsscene.cli.bag import BAG_OPTION_NAMES, bag_options, bag_options_of, echo_bag
-from marsscene.rover.config import noise_profiles
-from marsscene.rover.lidar import lidar_models
+from marsscene.cli.options_run import RUN_OPTION_NAMES, run_config, run_options
+from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RunConfig
 from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
-
-
-_LIDAR_MODELS = tuple(lidar_models())
-_NOISE_PROFILES = tuple(noise_profiles())
 
 
 def _read_waypoints(path: Path) -> Any:
@@ -46,20 +41,20 @@ def _read_waypoints(path: Path) -> Any:
     return np.asarray(rows)
 
 
-def _size(text: str) -> tuple[int, int]:
-    from marsscene.errors import ConfigError
+_HELP = f"""Drive the rover along a route with pure pursuit (v <= {V_MAX_M_S} m/s,
+|w| <= {OMEGA_MAX_RAD_S} rad/s, {RunConfig.control_hz:g} Hz), or with your controller.
 
-    parts = text.lower().split("x")
-    try:
-        w, h = int(parts[0]), int(parts[1])
-        if len(parts) != 2:
-            raise ValueError
-    except (ValueError, IndexError):
-        raise ConfigError(f"--camera-size {text!r} must be WIDTHxHEIGHT, e.g. 640x480") from None
-    return w, h
+\b
+Examples:
+  marsscene drive scenes/demo --waypoints wp.txt --lidar --out runs/r1
+  marsscene drive scenes/demo --route route.tum --seconds 60 --camera
+  marsscene drive scenes/demo --waypoints wp.txt --camera --bag --dataset euroc
+  marsscene drive scenes/demo --waypoints wp.txt --lidar --controller my_nav:Planner
+"""
 
 
-@click.command(short_help="Drive the rover on a built scene and log GT, odometry, IMU, sensors.")
+@click.command(short_help="Drive the rover on a built scene and log GT, odometry, IMU, sensors.",
+               help=_HELP)
 @click.argument("scene_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--route", "route_path", type=_PATH, help="Route as a TUM file (x, y are used).")
 @click.option(
@@ -82,36 +77,7 @@ def _size(text: str) -> tuple[int, int]:
     show_default=True,
     help="Run folder.",
 )
-@click.option("--camera", is_flag=True, help="Log RGB-D mast camera images (docs/camera.md).")
-@click.option("--camera-size", default="640x480", show_default=True, metavar="WxH",
-              help="Camera image size in pixels.")
-@click.option("--camera-hz", type=float, default=10.0, show_default=True,
-              help="Camera rate (must divide 500 Hz).")
-@click.option("--stereo", is_flag=True,
-              help="Also log a rectified Navcam-like stereo pair (0.424 m baseline).")
-@click.option("--exposure", type=click.Choice(["auto", "fixed"]), default="auto",
-              show_default=True, help="Auto-exposure (mean 0.45) or a fixed exposure.")
-@click.option("--exposure-gain", type=click.FloatRange(min=0, min_open=True), default=1.0,
-              show_default=True, help="Gain of --exposure fixed.")
-@click.option("--camera-noise", is_flag=True, help="Add seeded shot + read noise to images.")
-@click.option("--no-shadows", is_flag=True, help="Turn the sun's shadow map off (faster).")
-@click.option("--tau", type=click.FloatRange(0, 10), default=None,
-              help="Override the scene's dust optical depth for the camera's lighting.")
-@click.option("--sun-elevation", type=click.FloatRange(-10, 90), default=None,
-              help="Override the sun elevation (deg) for the camera's lighting.")
-@click.option("--lidar", is_flag=True,
-              help="Log a spinning 3D LiDAR (default model os1-128: 128 x 1024 at 10 Hz; PLY).")
-@click.option("--lidar-model", type=click.Choice(_LIDAR_MODELS), default=None,
-              help="LiDAR model from datasheets (docs/runtime.md); implies --lidar.")
-@click.option("--run-config", type=_PATH,
-              help="TOML/JSON run config: [run], [lidar] (e.g. model = \"vlp16\"), [camera], "
-              "[noise] tables; options given on the command line win.")
-@click.option("--noise-config", type=_PATH, help="TOML/JSON noise config ([noise] table).")
-@click.option("--noise-profile", type=click.Choice(_NOISE_PROFILES), default=None,
-              help="Named IMU + wheel-odometry noise profile from datasheets (docs/runtime.md); "
-              "keys set in --noise-config / --run-config still win. Default: the config's "
-              "profile, else none: a noise-free IMU and exact encoders, an optimistic "
-              "odometry (the SLAM benchmark uses ln200s).")
+@run_options(*RUN_OPTION_NAMES)
 @click.option(
     "--seed",
     type=click.IntRange(min=0),
@@ -164,19 +130,12 @@ def _size(text: str) -> tuple[int, int]:
               "default the scans are kept once, in the bag).")
 @bag_options
 def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
-          seconds: float | None, out_dir: Path, seed: int, write_rover_xml: bool,
-          controller_ref: str | None, write_bag: bool, datasets: tuple[str, ...],
-          overwrite: bool, dataset_images: str, keep_lidar_files: bool, **opts: Any) -> None:
-    """Drive the rover along a route with pure pursuit (v <= 0.5 m/s, |w| <= 0.2 rad/s, 50 Hz),
-    or with your controller.
-
-    \b
-    Examples:
-      marsscene drive scenes/demo --waypoints wp.txt --lidar --out runs/r1
-      marsscene drive scenes/demo --route route.tum --seconds 60 --camera
-      marsscene drive scenes/demo --waypoints wp.txt --camera --bag --dataset euroc
-      marsscene drive scenes/demo --waypoints wp.txt --lidar --controller my_nav:Planner
-    """
+          seconds: float | None, out_dir: Path, seed: int, lookahead: float, max_slope: float,
+          corridor: float, write_rover_xml: bool, controller_ref: str | None, write_bag: bool,
+          datasets: tuple[str, ...], overwrite: bool, dataset_images: str,
+          keep_lidar_files: bool, **opts: Any) -> None:
+    """``marsscene drive`` (its help text: :data:`_HELP`); ``opts`` holds the run and bag
+    options."""
     import marsscene as ms
     from marsscene.runs.export.options import ExportOptions
     from marsscene.sim.driver import DriveInterrupted
@@ -188,9 +147,9 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
         raise click.UsageError("give --route or --waypoints (or a --controller)")
     bag_values = {k: opts.pop(k) for k in list(opts) if k in BAG_OPTION_NAMES}
     with user_errors():
-        run = _run_config(**opts)
-        options = ms.DriveOptions(max_slope_deg=opts["max_slope"], corridor_m=opts["corridor"],
-                                  pursuit=PursuitConfig(lookahead_m=opts["lookahead"]))
+        run = run_config(opts)
+        options = ms.DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
+                                  pursuit=PursuitConfig(lookahead_m=lookahead))
         export = ExportOptions(bag=bag_options_of(bag_values) if write_bag else None,
                                datasets=datasets, overwrite=overwrite,
                                dataset_images=dataset_images,
@@ -200,7 +159,7 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
                                        options) if controller_ref else None)
         if write_rover_xml:
             click.echo(f"   rover: {_write_rover_xml(scene_dir, run)}")
-    with ExitStack() as stack, _sigterm_interrupts():
+    with ExitStack() as stack, sigterm_interrupts():
         meter = _Progress(stack)
         try:
             with user_errors():
@@ -310,25 +269,6 @@ def _report(run: Any, out_dir: Path) -> None:
     click.echo(f"    logs: {out_dir}")
 
 
-@contextmanager
-def _sigterm_interrupts() -> Iterator[None]:
-    """SIGTERM raises KeyboardInterrupt inside the block (a no-op off the main thread)."""
-    import signal
-
-    def terminate(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
-    try:  # only the main thread may set handlers
-        previous: Any = signal.signal(signal.SIGTERM, terminate)
-    except ValueError:
-        previous = None
-    try:
-        yield
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
-
-
 def _write_rover_xml(scene_dir: Path, run: Any) -> Path:
     """``SCENE_DIR/mjcf/rover.xml``: the rover the drive attaches to the scene."""
     from marsscene._atomic import write_atomic
@@ -338,32 +278,3 @@ def _write_rover_xml(scene_dir: Path, run: Any) -> Path:
     fovy = run.camera.fovy_deg if run.camera is not None else 60.0
     target = scene_dir / "mjcf" / "rover.xml"
     return write_atomic(target, rover_mjcf(RoverConfig(), camera_fovy_deg=fovy))
-
-
-def _run_config(*, run_config: Path | None, noise_config: Path | None, lidar: bool,
-                lidar_model: str | None, camera: bool, stereo: bool, camera_size: str,
-                noise_profile: str | None, camera_hz: float, exposure: str,
-                exposure_gain: float, camera_noise: bool, no_shadows: bool, tau: float | None,
-                sun_elevation: float | None, **_: Any) -> Any:
-    """The drive's :class:`~marsscene.rover.config.RunConfig`: the run config file (if any),
-    then the command-line options over it."""
-    import dataclasses
-
-    from marsscene.rover.config import CameraConfig, LidarConfig, NoiseConfig, RunConfig
-
-    run = RunConfig.from_toml(run_config) if run_config else RunConfig()
-    if noise_config:
-        run = dataclasses.replace(run, noise=NoiseConfig.from_toml(noise_config))
-    if noise_profile:
-        run = dataclasses.replace(run, noise=run.noise.with_profile(noise_profile))
-    if lidar or lidar_model:
-        base = run.lidar if run.lidar is not None else LidarConfig()
-        lid = dataclasses.replace(base, model=lidar_model) if lidar_model else base
-        run = dataclasses.replace(run, lidar=lid)
-    if camera or stereo:
-        w, h = _size(camera_size)
-        run = dataclasses.replace(run, camera=CameraConfig(
-            width_px=w, height_px=h, rate_hz=camera_hz, stereo=stereo, exposure=exposure,
-            exposure_gain=exposure_gain, sensor_noise=camera_noise, shadows=not no_shadows,
-            tau=tau, sun_elevation_deg=sun_elevation))
-    return run

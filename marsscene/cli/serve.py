@@ -11,54 +11,54 @@ from typing import Any
 
 import click
 
-from marsscene.cli._common import compose, user_errors
-from marsscene.cli.drive import _LIDAR_MODELS, _NOISE_PROFILES, _run_config, _sigterm_interrupts
+from marsscene.cli._common import compose, sigterm_interrupts, user_errors
+from marsscene.cli.options_run import RUN_OPTION_NAMES, run_config, run_option
+from marsscene.ros2.options import PACES, SENSOR_QOS, Ros2Options
+from marsscene.runs.export.options import DISTROS, IMAGES
 
+_R = Ros2Options()  # the defaults live in Ros2Options only
+
+#: The run options serve offers (the drive's others take their defaults), with serve's help.
 _sensor_options = compose(
-    click.option("--camera", is_flag=True, help="RGB-D navcam (docs/camera.md)."),
-    click.option("--camera-size", default="640x480", show_default=True, metavar="WxH",
-                 help="Camera image size in pixels."),
-    click.option("--camera-hz", type=float, default=10.0, show_default=True,
-                 help="Camera rate (must divide 500 Hz)."),
-    click.option("--stereo", is_flag=True, help="Also a rectified stereo pair."),
-    click.option("--lidar", is_flag=True, help="Spinning 3D LiDAR (default model os1-128)."),
-    click.option("--lidar-model", type=click.Choice(_LIDAR_MODELS), default=None,
-                 help="LiDAR model (implies --lidar)."),
-    click.option("--noise-profile", type=click.Choice(_NOISE_PROFILES), default=None,
-                 help="IMU + wheel-odometry noise profile (default: noise-free)."),
-    click.option("--run-config", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-                 help="TOML/JSON run config ([run], [lidar], [camera], [noise])."),
+    run_option("camera", "RGB-D navcam (docs/camera.md)."),
+    run_option("camera_size"),
+    run_option("camera_hz"),
+    run_option("stereo", "Also a rectified stereo pair."),
+    run_option("lidar", "Spinning 3D LiDAR (default model os1-128)."),
+    run_option("lidar_model", "LiDAR model (implies --lidar)."),
+    run_option("noise_profile", "IMU + wheel-odometry noise profile (default: noise-free)."),
+    run_option("run_config", "TOML/JSON run config ([run], [lidar], [camera], [noise])."),
 )
 
 _ros_options = compose(
-    click.option("--ros2", is_flag=True, default=True,
-                 help="Speak ROS 2 over DDS (Cyclone DDS; the only transport so far)."),
     click.option("--domain-id", type=click.IntRange(0, 232), default=None,
                  help="DDS domain (default: ROS_DOMAIN_ID, else 0)."),
     click.option("--localhost/--network", "localhost", default=None,
                  help="Keep DDS on 127.0.0.1 (no multicast) or use the network (default: "
                  "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST or ROS_LOCALHOST_ONLY=1 turn it on)."),
-    click.option("--cmd-vel-topic", default="/cmd_vel", show_default=True,
+    click.option("--cmd-vel-topic", default=_R.cmd_vel_topic, show_default=True,
                  help="Velocity commands to obey."),
     click.option("--cmd-vel-stamped", is_flag=True,
                  help="geometry_msgs/TwistStamped commands (Nav2 enable_stamped_cmd_vel)."),
-    click.option("--cmd-timeout", type=click.FloatRange(min=0), default=0.5, show_default=True,
+    click.option("--cmd-timeout", type=click.FloatRange(min=0), default=_R.cmd_timeout_s,
+                 show_default=True,
                  help="Stop after this many sim seconds without a command (0: never)."),
-    click.option("--pace", type=click.Choice(["realtime", "max"]), default="realtime",
-                 show_default=True, help="Follow the wall clock, or run as fast as it goes."),
-    click.option("--rtf", type=click.FloatRange(min=0, min_open=True), default=1.0,
-                 show_default=True, help="Sim seconds per wall second with --pace realtime."),
-    click.option("--sensor-qos", type=click.Choice(["best-effort", "reliable"]),
-                 default="best-effort", show_default=True,
-                 help="QoS of IMU, camera and LiDAR topics."),
-    click.option("--images", type=click.Choice(["both", "raw", "compressed"]), default="both",
+    click.option("--pace", type=click.Choice(PACES), default=_R.pace, show_default=True,
+                 help="Follow the wall clock, or run as fast as it goes."),
+    click.option("--rtf", type=click.FloatRange(min=0, min_open=True),
+                 default=_R.realtime_factor, show_default=True,
+                 help="Sim seconds per wall second with --pace realtime."),
+    click.option("--sensor-qos", type=click.Choice(SENSOR_QOS), default=_R.sensor_qos,
+                 show_default=True, help="QoS of IMU, camera and LiDAR topics."),
+    # listed as before, the default first: both, raw, compressed
+    click.option("--images", type=click.Choice(IMAGES[::-1]), default=_R.images,
                  show_default=True, help="Image topics offered (each encoded only while "
                  "subscribed)."),
     click.option("--stop-at-goal", is_flag=True,
                  help="End when the goal (/marsscene/goal) is reached."),
-    click.option("--ros-distro", type=click.Choice(["jazzy", "humble"]), default="jazzy",
+    click.option("--ros-distro", type=click.Choice(DISTROS), default=_R.distro,
                  show_default=True, help="Message definitions."),
-    click.option("--map-tf/--no-map-tf", default=True, show_default=True,
+    click.option("--map-tf/--no-map-tf", default=_R.map_tf, show_default=True,
                  help="Publish map -> odom from ground truth (off when a SLAM stack does)."),
 )
 
@@ -86,18 +86,17 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
 
     \b
     Examples:
-      marsscene serve scenes/demo --ros2 --lidar --camera --localhost
-      marsscene serve scenes/demo --ros2 --pace max --seconds 60 --out runs/live --record
+      marsscene serve scenes/demo --lidar --camera --localhost
+      marsscene serve scenes/demo --pace max --seconds 60 --out runs/live --record
     Then, on a machine with ROS 2: ros2 topic list; rviz2 (docs/ros2_live.md).
     """
     import marsscene as ms
-    from marsscene.ros2 import Ros2Options
     from marsscene.runs.export.options import BagOptions
 
     with user_errors():
         from marsscene.ros2 import serve as serve_live  # MissingDependencyError: one line
 
-        run = _run_config(**_drive_defaults(opts))
+        run = run_config({k: opts.pop(k) for k in list(opts) if k in RUN_OPTION_NAMES})
         ros = Ros2Options(
             domain_id=opts["domain_id"], localhost=opts["localhost"],
             cmd_vel_topic=opts["cmd_vel_topic"], cmd_vel_stamped=opts["cmd_vel_stamped"],
@@ -107,7 +106,7 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
         options = ms.DriveOptions(start_xy_m=start, start_yaw_rad=yaw)
         where = "127.0.0.1 only" if ros.localhost_only else "the network"
         meter = _Meter()
-        with _sigterm_interrupts(), _interrupted_before_start():
+        with sigterm_interrupts(), _interrupted_before_start():
             res = serve_live(scene_dir, ros=ros, config=run, options=options, seconds=seconds,
                              out_dir=out_dir, record=BagOptions() if record else None,
                              seed=seed, progress=meter,
@@ -133,13 +132,6 @@ def _interrupted_before_start() -> Iterator[None]:
     except KeyboardInterrupt:
         click.echo("marsscene: interrupted before the session started", err=True)
         sys.exit(130)
-
-
-def _drive_defaults(opts: dict[str, Any]) -> dict[str, Any]:
-    """The drive command's sensor defaults for what serve does not offer."""
-    return {"noise_config": None, "exposure": "auto", "exposure_gain": 1.0,
-            "camera_noise": False, "no_shadows": False, "tau": None, "sun_elevation": None,
-            **opts}
 
 
 class _Meter:

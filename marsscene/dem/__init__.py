@@ -3,8 +3,9 @@ the only rasterio importers, loaded lazily) and pure operations (``ops``, ``crs`
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from marsscene._lazy import lazy_attributes
 from marsscene.dem.model import DEM as DEM
 from marsscene.dem.model import Ortho as Ortho
 from marsscene.dem.ops import Crop as Crop
@@ -16,13 +17,6 @@ if TYPE_CHECKING:
 __all__ = ["DEM", "Crop", "Ortho", "read_dem", "read_ortho"]
 
 
-def __getattr__(name: str) -> Any:  # lazy: rasterio loads only when a raster is read
-    if name == "read_dem":
-        from marsscene.dem.io import read_dem
-
-        return read_dem
-    if name == "read_ortho":
-        from marsscene.dem.io_ortho import read_ortho
-
-        return read_ortho
-    raise AttributeError(name)
+#: rasterio loads only when a raster is read
+__getattr__ = lazy_attributes(__name__, {"read_dem": "marsscene.dem.io",
+                                         "read_ortho": "marsscene.dem.io_ortho"})

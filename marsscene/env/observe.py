@@ -29,7 +29,9 @@ from numpy.typing import NDArray
 
 from marsscene._validate import check_range
 from marsscene.errors import ConfigError
+from marsscene.rover.config import LidarConfig
 from marsscene.rover.geometry import body_twist_from_wheels
+from marsscene.units import MARS_GRAVITY_M_S2
 
 __all__ = ["OBSERVATION_SIZE", "HeightScan", "ObsConfig", "observation_vector"]
 
@@ -75,7 +77,8 @@ class ObsConfig:
         A LiDAR model (``vlp16``, ``os1-64`` ...): ``"lidar_range"`` (channels, columns) float32
         in m (0: no return) and ``"lidar_mask"`` (channels, columns) int8.
     lidar_rate_hz : float
-        LiDAR revolutions per second (the observation holds the newest finished scan).
+        LiDAR revolutions per second: a scan's sweep lasts one revolution (its rays' times,
+        hence its motion distortion); each observation holds a scan started at its instant.
     pose_source : {"truth", "odometry"}
         Where the goal-relative terms come from: the ground truth (as a localization system
         would provide them; RLRoverLab's choice) or the rover's own wheel odometry (it drifts,
@@ -104,8 +107,20 @@ class ObsConfig:
         if self.depth and self.camera is None:
             raise ConfigError("depth = true needs camera = (width, height)")
 
-    def spaces(self, lidar_shape: tuple[int, int] | None) -> dict[str, Any]:
-        """The ``gymnasium.spaces`` of each key (``lidar_shape``: channels, columns)."""
+    def lidar_config(self) -> LidarConfig | None:
+        """The observed LiDAR's configuration (None: no LiDAR)."""
+        if self.lidar is None:
+            return None
+        return LidarConfig(model=self.lidar, rate_hz=self.lidar_rate_hz)
+
+    @property
+    def lidar_shape(self) -> tuple[int, int] | None:
+        """The LiDAR range image's (channels, columns) (None: no LiDAR)."""
+        lidar = self.lidar_config()
+        return None if lidar is None else (lidar.spec.channels, lidar.spec.horizontal_samples)
+
+    def spaces(self) -> dict[str, Any]:
+        """The ``gymnasium.spaces`` of each key."""
         from gymnasium import spaces
 
         out: dict[str, Any] = {
@@ -121,6 +136,7 @@ class ObsConfig:
             out["rgb"] = spaces.Box(0, 255, (h, w, 3), np.uint8)
             if self.depth:
                 out["depth"] = spaces.Box(0.0, np.inf, (h, w), np.float32)
+        lidar_shape = self.lidar_shape
         if lidar_shape is not None:
             out["lidar_range"] = spaces.Box(0.0, np.inf, lidar_shape, np.float32)
             out["lidar_mask"] = spaces.Box(0, 1, lidar_shape, np.int8)
@@ -140,7 +156,7 @@ def observation_vector(obs: Any, rover: Any, goal_xy_m: NDArray[np.float64], sou
     dist = math.hypot(gx, gy)
     bearing = math.atan2(gy, gx)
     v, w = body_twist_from_wheels(obs.wheel_rates_rad_s, obs.steer_rad, rover)
-    acc = obs.accel_m_s2 if obs.accel_m_s2 is not None else np.array([0.0, 0.0, 3.72])
+    acc = obs.accel_m_s2 if obs.accel_m_s2 is not None else np.array([0.0, 0.0, MARS_GRAVITY_M_S2])
     gyr = obs.gyro_rad_s if obs.gyro_rad_s is not None else np.zeros(3)
     roll = math.atan2(acc[1], acc[2])
     pitch = math.atan2(-acc[0], math.hypot(acc[1], acc[2]))

@@ -43,7 +43,8 @@ from numpy.typing import NDArray
 
 from marsscene.errors import ConfigError
 
-__all__ = ["RewardConfig", "compute_reward", "goal_terms", "step_terms"]
+__all__ = ["RewardConfig", "compute_reward", "goal_reached", "goal_terms", "info_field",
+           "step_terms"]
 
 TERMS = ("distance", "bearing", "goal", "oscillation", "reverse", "heading_away", "collision",
          "stray")
@@ -74,13 +75,23 @@ def _bearing(ag: NDArray[np.float64], dg: NDArray[np.float64],
     return (ang + math.pi) % (2.0 * math.pi) - math.pi
 
 
+def _distance_m(ag: Any, dg: Any) -> NDArray[np.float64]:
+    return np.linalg.norm(np.asarray(ag, dtype=np.float64) - np.asarray(dg, dtype=np.float64),
+                          axis=-1)
+
+
+def goal_reached(ag: Any, dg: Any, tolerance_m: float) -> NDArray[np.bool_]:
+    """Whether each achieved goal (x, y) is within ``tolerance_m`` of its desired goal."""
+    return np.asarray(_distance_m(ag, dg) < tolerance_m)
+
+
 def goal_terms(ag: Any, dg: Any, *, yaw_rad: Any, steps_left: Any, steps_total: float,
                tolerance_m: float, cfg: RewardConfig) -> dict[str, NDArray[np.float64]]:
     """The goal-dependent terms (weighted), vectorised over leading dimensions."""
     ag = np.asarray(ag, dtype=np.float64)
     dg = np.asarray(dg, dtype=np.float64)
-    d = np.linalg.norm(ag - dg, axis=-1)
-    reached = d < tolerance_m
+    d = _distance_m(ag, dg)
+    reached = goal_reached(ag, dg, tolerance_m)
     if cfg.kind == "sparse":
         return {"goal": np.where(reached, 0.0, -1.0)}
     b = np.abs(_bearing(ag, dg, np.asarray(yaw_rad, dtype=np.float64)))
@@ -110,11 +121,13 @@ def step_terms(action: NDArray[np.float64], last_action: NDArray[np.float64], *,
     }
 
 
-def _field(info: Any, key: str) -> NDArray[np.float64]:
+def info_field(info: Any, key: str, dtype: Any = np.float64) -> NDArray[Any]:
+    """``info[key]`` as an array, of one step's info dict, a dict of arrays (a vector
+    environment's) or a sequence of info dicts."""
     if isinstance(info, Mapping):
-        return np.asarray(info[key], dtype=np.float64)
+        return np.asarray(info[key], dtype=dtype)
     if isinstance(info, Sequence) or isinstance(info, np.ndarray):
-        return np.asarray([i[key] for i in info], dtype=np.float64)
+        return np.asarray([i[key] for i in info], dtype=dtype)
     raise ConfigError("info must be a dict (one step or arrays) or a sequence of dicts")
 
 
@@ -125,9 +138,9 @@ def compute_reward(achieved_goal: Any, desired_goal: Any, info: Any, *,
     ``info``: one step's info dict, a dict of arrays, or a sequence of info dicts; it supplies
     ``yaw_rad``, ``steps_left`` and ``reward_other`` (the goal-free terms of the step).
     """
-    yaw = _field(info, "yaw_rad")
-    left = _field(info, "steps_left")
-    other = _field(info, "reward_other")
+    yaw = info_field(info, "yaw_rad")
+    left = info_field(info, "steps_left")
+    other = info_field(info, "reward_other")
     terms = goal_terms(achieved_goal, desired_goal, yaw_rad=yaw, steps_left=left,
                        steps_total=steps_total, tolerance_m=tolerance_m, cfg=cfg)
     total = sum(terms.values()) + other

@@ -41,6 +41,11 @@ class NavTask:
         rover's half width, 1 m, as the clearance from a rock's edge to its centre line).
     margin_m : float
         Start and goal keep this distance from the terrain's edge.
+    start_max_tilt_deg : float
+        A drawn start where the settled rover leans over this (roll or pitch) is drawn again; a
+        given start is refused.
+    start_settle_s : float
+        Simulated time the rover settles on the ground at the start before the episode begins.
     max_tilt_deg : float
         Roll or pitch beyond this ends the episode (tipped over).
     stuck_s, stuck_m : float
@@ -48,6 +53,9 @@ class NavTask:
         turning) ends it (stuck).
     max_stray_m : float
         Leaving the corridor of this half width around the start-goal line ends it.
+    edge_m : float
+        Coming within this distance of the terrain's edge ends it (left the world); less than
+        ``margin_m``.
     """
 
     distance_m: tuple[float, float] = (5.0, 20.0)
@@ -57,10 +65,13 @@ class NavTask:
     max_obstacle_height_m: float = 0.3
     clearance_m: float = 1.0
     margin_m: float = 4.0
+    start_max_tilt_deg: float = 20.0
+    start_settle_s: float = 3.0
     max_tilt_deg: float = 35.0
     stuck_s: float = 20.0
     stuck_m: float = 0.2
     max_stray_m: float = 11.0
+    edge_m: float = 2.0
 
     def __post_init__(self) -> None:
         lo, hi = (float(v) for v in self.distance_m)
@@ -71,10 +82,18 @@ class NavTask:
         check_range("task.max_episode_s", self.max_episode_s, 1.0, 1e5)
         check_range("task.max_slope_deg", self.max_slope_deg, 1.0, 60.0)
         check_range("task.margin_m", self.margin_m, 2.0, 1e3)
+        check_range("task.start_max_tilt_deg", self.start_max_tilt_deg, 1.0, 90.0)
+        check_range("task.start_settle_s", self.start_settle_s, 0.0, 60.0)
         check_range("task.max_tilt_deg", self.max_tilt_deg, 5.0, 90.0)
         check_range("task.stuck_s", self.stuck_s, 0.5, 1e4)
         check_range("task.stuck_m", self.stuck_m, 0.0, 100.0)
         check_range("task.max_stray_m", self.max_stray_m, 1.0, 1e4)
+        check_range("task.edge_m", self.edge_m, 0.0, self.margin_m, hi_open=True)
+
+    def episode_steps(self, control_hz: float) -> int:
+        """Control steps in ``max_episode_s`` at ``control_hz`` (at least one): the step at
+        which an episode is truncated, and the ``max_episode_steps`` of the registered ids."""
+        return max(1, round(self.max_episode_s * control_hz))
 
 
 class TaskMap:

@@ -1,4 +1,4 @@
-"""Live ROS 2 over DDS with no ROS installation: ``marsscene serve SCENE --ros2``.
+"""Live ROS 2 over DDS with no ROS installation: ``marsscene serve SCENE``.
 
 :func:`serve` runs the MuJoCo rover with its sensors and speaks ROS 2 on the wire through
 Eclipse Cyclone DDS (``pip install "marsscene[ros2]"``): the bag's topics published live (the

@@ -2,10 +2,12 @@
 
 As a **listener** (:mod:`marsscene.sim.session`) it publishes every sample as it is made: the
 messages come from :class:`~marsscene.runs.export.sample_messages.SampleMessages` (the bag's
-builders) and go out as ``rosbags`` CDR through :mod:`.dds`; a topic nobody subscribes to is not
-built. As the **controller** (:mod:`marsscene.sim.control`) it is called once per control step:
-it reads the command topics (``cmd_vel``, reset, teleport, goal), stops the rover when the
-command is older than the timeout, and paces the simulation against the wall clock.
+builders) and go out as ``rosbags`` CDR through :mod:`.dds`, on the bag's topics with their QoS
+(:mod:`marsscene.runs.export.topic_table`; sensor data as ``sensor_qos`` says); a topic nobody
+subscribes to is not built. As the **controller** (:mod:`marsscene.sim.control`) it is called
+once per control step: it reads the command topics (``cmd_vel``, reset, teleport, goal), stops
+the rover when the command is older than the timeout, and paces the simulation against the wall
+clock.
 
 Topics it subscribes to (besides ``cmd_vel``), in the spirit of OmniLRS's robot topics:
 
@@ -31,16 +33,12 @@ from marsscene.errors import RuntimeSimError
 from marsscene.ros2.dds import Participant, RawWriter
 from marsscene.ros2.options import Ros2Options
 from marsscene.runs.export.sample_messages import SampleMessages
+from marsscene.transforms import yaw_of_quat
 
 __all__ = ["Bridge", "SessionStats"]
 
 log = logging.getLogger("marsscene")
 
-#: QoS profile (:data:`marsscene.ros2.dds.QOS`) of each published topic kind.
-_STATE_QOS = {"/clock": "clock", "/tf": "tf", "/tf_static": "latched",
-              "/rover/robot_description": "latched", "/rover/odom": "default",
-              "/rover/GT_Trajectory": "default", "/rover/joint_states": "default",
-              "/rover/cmd_vel": "default"}
 _CONTROL_TOPICS = {"/marsscene/reset": "std_msgs/msg/Empty",
                    "/marsscene/teleport": "geometry_msgs/msg/Pose",
                    "/marsscene/goal": "geometry_msgs/msg/PoseStamped"}
@@ -91,9 +89,10 @@ class Bridge:
         self.store = messages.b.store
         self.stats = SessionStats()
         sensor = "sensor" if opts.sensor_qos == "best-effort" else "sensor-reliable"
-        self.writers: dict[str, RawWriter] = {
-            topic: part.writer(self.store, topic, mt, _STATE_QOS.get(topic, sensor))
-            for topic, mt in messages.topics() if topic != "/rover/cmd_vel"}
+        self.writers: dict[str, RawWriter] = {  # the command is read here, not published
+            t.name: part.writer(self.store, t.name, t.msgtype,
+                                sensor if t.qos == "sensor" else t.qos)
+            for t in messages.topics() if t.name != "/rover/cmd_vel"}
         messages.wanted = self.wanted
         cmd_type = ("geometry_msgs/msg/TwistStamped" if opts.cmd_vel_stamped
                     else "geometry_msgs/msg/Twist")
@@ -200,7 +199,7 @@ class Bridge:
         for raw in readers["/marsscene/teleport"].take()[-1:]:
             pose: Any = self.store.deserialize_cdr(raw, "geometry_msgs/msg/Pose")
             q = pose.orientation
-            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            yaw = float(yaw_of_quat((q.w, q.x, q.y, q.z)))
             if self._place((pose.position.x, pose.position.y), yaw):
                 self.stats.teleports += 1
         for raw in readers["/marsscene/goal"].take()[-1:]:

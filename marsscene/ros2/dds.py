@@ -11,8 +11,8 @@ The only importer of ``cyclonedds``. What makes a DDS endpoint a ROS 2 one:
   sequences costs tens of milliseconds per image): :class:`RawWriter` hands the ``rosbags``
   CDR bytes, the bag's very bytes, to Cyclone's C writer, and :class:`RawReader` takes raw
   samples for ``rosbags`` to decode;
-* QoS as ROS 2 sets it (:data:`QOS`), participant USER_DATA ``enclave=/;`` and the
-  ``ros_discovery_info`` topic (:mod:`.discovery`).
+* QoS as ROS 2 sets it (:data:`QOS`, built from the topic table's profiles), participant
+  USER_DATA ``enclave=/;`` and the ``ros_discovery_info`` topic (:mod:`.discovery`).
 
 Localhost mode (:func:`cyclone_config`) binds to 127.0.0.1, turns multicast off and discovers
 peers by unicast on 127.0.0.1 only; a ``CYCLONEDDS_URI`` of the user's comes first, ours last
@@ -26,6 +26,7 @@ import threading
 from typing import Any
 
 from marsscene.errors import RuntimeSimError, missing_dependency
+from marsscene.runs.export.topic_table import QOS_PROFILES, QosProfile
 
 __all__ = ["QOS", "Participant", "RawReader", "RawWriter", "cyclone_config", "dds_topic",
            "dds_type"]
@@ -46,24 +47,18 @@ except ImportError:  # pragma: no cover - exercised without the extra only
 
 _P = _qos.Policy
 _t: Any = _types  # its generic aliases (array[...], sequence[...]) are not typed
-_FOREVER = 10 * 365 * 24 * 3600 * 10**9
 
 
-def _profile(reliable: bool, depth: int, transient_local: bool = False) -> Any:
-    rel = _P.Reliability.Reliable(max_blocking_time=100_000_000) if reliable \
+def _qos_of(p: QosProfile) -> Any:
+    rel = _P.Reliability.Reliable(max_blocking_time=100_000_000) if p.reliable \
         else _P.Reliability.BestEffort
-    dur = _P.Durability.TransientLocal if transient_local else _P.Durability.Volatile
-    return _qos.Qos(rel, dur, _P.History.KeepLast(depth))
+    dur = _P.Durability.TransientLocal if p.transient_local else _P.Durability.Volatile
+    return _qos.Qos(rel, dur, _P.History.KeepLast(p.depth))
 
 
-#: ROS 2's QoS conventions: rclcpp's SensorDataQoS (best effort, depth 5), ClockQoS (best effort,
-#: depth 1), tf2's (reliable, 100) and static-tf / latched topics (reliable, transient local, 1),
-#: the default profile (reliable, depth 10) for the rest.
-QOS: dict[str, Any] = {
-    "sensor": _profile(False, 5), "sensor-reliable": _profile(True, 5),
-    "clock": _profile(False, 1), "tf": _profile(True, 100),
-    "latched": _profile(True, 1, transient_local=True), "default": _profile(True, 10),
-}
+#: Cyclone DDS QoS of each named profile of :data:`~marsscene.runs.export.topic_table.
+#: QOS_PROFILES` (ROS 2's conventions).
+QOS: dict[str, Any] = {name: _qos_of(p) for name, p in QOS_PROFILES.items()}
 
 _BASE = {"bool": bool, "int8": _t.int8, "uint8": _t.uint8, "byte": _t.byte, "char": _t.uint8,
          "int16": _t.int16, "uint16": _t.uint16, "int32": _t.int32, "uint32": _t.uint32,

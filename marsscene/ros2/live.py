@@ -1,20 +1,20 @@
 """``serve``: the live rover on ROS 2 (over DDS, no ROS installation), one call.
 
-It sets the rover on the scene as a drive does (:func:`~marsscene.sim.mission.prepare_drive`),
-opens a DDS participant (:mod:`.dds`), announces the node (:mod:`.discovery`), and drives with
-the :class:`~.bridge.Bridge` as controller and listener (:func:`~marsscene.sim.driver.drive_sim`,
-the loop of every drive), so a served session writes the same run folder a drive does; with
-``record`` its bag is written from that folder at the end, as ``marsscene drive --bag`` does.
+A served session is a drive (:func:`marsscene.drive`, the one place a drive is set up) whose
+controller is the :class:`~.bridge.Bridge`: made from the prepared simulator
+(:class:`~marsscene.sim.control.OnStart`), it opens a DDS participant (:mod:`.dds`), announces
+the node (:mod:`.discovery`), obeys ``/cmd_vel`` and, as a listener, publishes every sample.
+So a session writes the run folder, bag and dataset folders a drive writes, with the drive's
+JPEG cache, overwrite rule, progress and errors; Ctrl-C is its usual end
+(``DriveOptions.stop_on_interrupt``).
 """
 
 from __future__ import annotations
 
-import math
+import dataclasses
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from marsscene.errors import RuntimeSimError
@@ -24,56 +24,21 @@ from marsscene.ros2.discovery import publish_discovery_info
 from marsscene.ros2.options import Ros2Options
 from marsscene.rover.config import RunConfig
 from marsscene.runs.export.bag_topics import ImageOptions
-from marsscene.runs.export.options import BagOptions
+from marsscene.runs.export.options import BagOptions, ExportOptions
 from marsscene.runs.export.sample_messages import SampleMessages
-from marsscene.runtime.api import _scene_dir
-from marsscene.seeding import stage_rng
-from marsscene.sim.driver import DriveInterrupted, DriveProgress, DriveResult, drive_sim
-from marsscene.sim.mission import DriveOptions, prepare_drive
+from marsscene.runtime.api import DriveRun, drive
+from marsscene.sim.control import OnStart
+from marsscene.sim.mission import DriveOptions
 
 if TYPE_CHECKING:
-    from marsscene.runs.export.bag import BagSummary
     from marsscene.scene import Scene
 
 __all__ = ["ServeResult", "serve"]
 
 #: Sim-time limit of a session without ``seconds`` (it ends with Ctrl-C or at the goal).
 FOREVER_S = 1e9
-
-
-@dataclass(frozen=True)
-class ServeResult:
-    """A finished live session.
-
-    Attributes
-    ----------
-    out_dir : Path or None
-        The run folder (None without one).
-    result : DriveResult
-        Ground truth, odometry, commands and the summary, as a drive's.
-    stats : dict
-        Messages, bytes and write seconds per topic; commands, time-outs, resets, teleports,
-        the goal's sim time.
-    wall_s : float
-        Wall-clock seconds from the first control step to the end.
-    bag : BagSummary or None
-        The recorded bag (``record``).
-    """
-
-    out_dir: Path | None
-    result: DriveResult
-    stats: dict[str, Any] = field(default_factory=dict)
-    wall_s: float = math.nan
-    bag: BagSummary | None = None
-
-    @property
-    def sim_s(self) -> float:
-        return float(self.result.summary["sim_time_s"])
-
-    @property
-    def realtime_factor(self) -> float:
-        """Sim seconds per wall second."""
-        return self.sim_s / self.wall_s if self.wall_s > 0 else math.nan
+#: A served session's result is a drive's (``stats`` holds the bridge's counts).
+ServeResult = DriveRun
 
 
 def serve(
@@ -85,10 +50,11 @@ def serve(
     seconds: float | None = None,
     out_dir: str | os.PathLike[str] | None = None,
     record: BagOptions | None = None,
+    export: ExportOptions | None = None,
     seed: int = 0,
-    progress: Callable[[DriveProgress], None] | None = None,
+    progress: Callable[[Any], None] | None = None,
     ready: Callable[[Bridge], None] | None = None,
-) -> ServeResult:
+) -> DriveRun:
     """Run the rover on ``scene`` live: sensors out, ``cmd_vel`` in, over ROS 2's DDS.
 
     Parameters
@@ -106,55 +72,59 @@ def serve(
     out_dir : path, optional
         Also write the session's run folder here.
     record : BagOptions, optional
-        Write the session's bag into ``out_dir/bag`` at the end (needs ``out_dir``).
+        Write the session's bag into ``out_dir/bag`` at the end (needs ``out_dir``); the
+        same as ``export=ExportOptions(bag=record)``.
+    export : ExportOptions, optional
+        Bag and dataset folders written from the run folder at the end, as a drive's.
     seed : int
         Seed of the sensor noise.
     progress : callable, optional
-        ``progress(DriveProgress)`` once per simulated second.
+        As :func:`marsscene.drive`'s: a :class:`~marsscene.sim.driver.DriveProgress` once per
+        simulated second, then the exports' progress.
     ready : callable, optional
         ``ready(bridge)`` once the node is announced, before the first step.
 
     Returns
     -------
-    ServeResult
+    DriveRun
+        The drive's result; ``stats`` holds the bridge's counts and ``wall_s`` runs from the
+        first control step (the renderer's set-up before it is not session time).
 
     Raises
     ------
     MarsSceneError
-        A missing scene, a start off the terrain, a bag without a run folder.
+        A missing scene, a start off the terrain, exports that cannot be written.
     MissingDependencyError
         Without ``cyclonedds`` or ``rosbags`` (``pip install "marsscene[ros2]"``).
     """
     ros = ros if ros is not None else Ros2Options()
     config = config if config is not None else RunConfig()
-    out = Path(out_dir) if out_dir is not None else None
-    if record is not None and out is None:
-        raise RuntimeSimError("recording a bag needs a run folder: give out_dir (--out)")
-    if record is not None and out is not None and (out / "bag").exists():
-        raise RuntimeSimError(f"{out / 'bag'} exists; choose another --out")
-    with _scene_dir(scene, out) as scene_path:
-        sim, _ = prepare_drive(scene_path, config, options=options)
-        bridge = _bridge(sim, config, ros)
-        try:
-            publish_discovery_info(bridge.part, bridge.store, ros.node_name)
-            bridge.publish_static()
-            if ready is not None:
-                ready(bridge)
-            res = drive_sim(sim, controller=bridge, listeners=[bridge],
-                            seconds=seconds if seconds is not None else FOREVER_S, out_dir=out,
-                            rng=stage_rng(seed, "sensors"), progress=progress)
-        except DriveInterrupted as stop:  # Ctrl-C: the usual end of a served session
-            res = stop.result
-        finally:
-            # from the first control step (the renderer's set-up before it is not session time)
-            wall = time.perf_counter() - (bridge.wall_start or time.perf_counter())
-            bridge.part.close()
-    bag = None
-    if record is not None and out is not None:
-        from marsscene.runs.export.bag import write_bag
+    if record is not None and export is not None and export.bag is not None:
+        raise RuntimeSimError("give the bag's options once: record= or export=, not both")
+    if record is not None:
+        export = dataclasses.replace(export or ExportOptions(), bag=record)
+    options = dataclasses.replace(options or DriveOptions(), stop_on_interrupt=True)
+    made: list[Bridge] = []
 
-        bag = write_bag(out, options=record)
-    return ServeResult(out, res, bridge.stats.as_dict(), wall, bag)
+    def start(sim: Any) -> Bridge:
+        made.append(_bridge(sim, config, ros))
+        publish_discovery_info(made[0].part, made[0].store, ros.node_name)
+        made[0].publish_static()
+        if ready is not None:
+            ready(made[0])
+        return made[0]
+
+    try:
+        run = drive(scene, controller=OnStart(start, listen=True), config=config,
+                    options=options, export=export, out_dir=out_dir, seed=seed,
+                    seconds=seconds if seconds is not None else FOREVER_S, progress=progress)
+    finally:
+        for bridge in made:
+            bridge.part.close()
+    bridge = made[0]
+    wall = time.perf_counter() - (bridge.wall_start or time.perf_counter())
+    return dataclasses.replace(run, stats=bridge.stats.as_dict(),
+                               wall_s=min(wall - run.export_s, run.wall_s))
 
 
 def _bridge(sim: Any, config: RunConfig, ros: Ros2Options) -> Bridge:

@@ -9,11 +9,14 @@ from typing import Any
 
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError
+from marsscene.runs.export.options import DISTROS, IMAGES
 
-__all__ = ["Ros2Options", "localhost_from_env"]
+__all__ = ["PACES", "SENSOR_QOS", "Ros2Options", "localhost_from_env"]
 
-_PACE = ("realtime", "max")
-_SENSOR_QOS = ("best-effort", "reliable")
+#: How sim time runs: with the wall clock, or as fast as it goes.
+PACES = ("realtime", "max")
+#: The sensor topics' reliability: ROS 2's sensor-data QoS, or reliable.
+SENSOR_QOS = ("best-effort", "reliable")
 
 
 def localhost_from_env(env: Mapping[str, str] | None = None) -> bool:
@@ -93,10 +96,10 @@ class Ros2Options:
         check_range("ros2.cmd_timeout_s", self.cmd_timeout_s, 0.0, 1e6)
         check_range("ros2.realtime_factor", self.realtime_factor, 0.0, 1e3, lo_open=True)
         check_range("ros2.goal_tolerance_m", self.goal_tolerance_m, 0.0, 1e6, lo_open=True)
-        for name, value, allowed in (("pace", self.pace, _PACE),
-                                     ("sensor_qos", self.sensor_qos, _SENSOR_QOS),
-                                     ("images", self.images, ("both", "raw", "compressed")),
-                                     ("distro", self.distro, ("jazzy", "humble"))):
+        for name, value, allowed in (("pace", self.pace, PACES),
+                                     ("sensor_qos", self.sensor_qos, SENSOR_QOS),
+                                     ("images", self.images, IMAGES),
+                                     ("distro", self.distro, DISTROS)):
             if value not in allowed:
                 raise ConfigError(f"ros2.{name} = {value!r}; expected one of "
                                   f"{', '.join(allowed)}")

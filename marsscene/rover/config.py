@@ -17,10 +17,15 @@ from marsscene.errors import ConfigError
 from marsscene.rover.lidar import LidarConfig
 
 __all__ = [
-    "CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig", "RunConfig", "noise_profiles",
+    "OMEGA_MAX_RAD_S", "V_MAX_M_S", "CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig",
+    "RunConfig", "noise_profiles",
 ]
 
 _PHYSICS_HZ = 500.0  # scene.xml timestep 0.002 s
+#: The MarsLab protocol's bounds on ``cmd_vel``: forward speed (m/s) and yaw rate (rad/s). The
+#: route follower and the environments' actions are held to them.
+V_MAX_M_S = 0.5
+OMEGA_MAX_RAD_S = 0.2
 
 
 def _read_doc(path: str | Path, what: str) -> Any:

@@ -24,14 +24,14 @@ Examples
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from marsscene._lazy import lazy_attributes
 from marsscene.rover.config import CameraConfig, LidarConfig, NoiseConfig, RoverConfig, RunConfig
 from marsscene.runs.evaluation import ate, rpe
 from marsscene.runs.export.options import BagOptions, ExportOptions
 from marsscene.runs.tum import Trajectory, read_tum, write_tum
-from marsscene.sim.control import Controller, Observation, OpenLoop
+from marsscene.sim.control import Controller, Observation, OnStart, OpenLoop
 from marsscene.sim.mission import DriveOptions
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
 from marsscene.sim.route import Obstacles, Route, author_route
@@ -40,7 +40,7 @@ if TYPE_CHECKING:
     from marsscene.runtime.api import DriveRun, ExportProgress, drive
     from marsscene.sim.driver import DriveInterrupted, DriveProgress, DriveResult, drive_sim
     from marsscene.sim.rover_sim import RoverSim
-    from marsscene.sim.session import DriveSession
+    from marsscene.sim.session import DriveSession, SessionOptions
     from marsscene.sim.world import SceneWorld, load_world
 
 __all__ = [
@@ -59,6 +59,7 @@ __all__ = [
     "NoiseConfig",
     "Observation",
     "Obstacles",
+    "OnStart",
     "OpenLoop",
     "PurePursuit",
     "PursuitConfig",
@@ -67,6 +68,7 @@ __all__ = [
     "RoverSim",
     "RunConfig",
     "SceneWorld",
+    "SessionOptions",
     "Trajectory",
     "ate",
     "author_route",
@@ -89,12 +91,10 @@ _LAZY = {
     "DriveResult": "marsscene.sim.driver",
     "RoverSim": "marsscene.sim.rover_sim",
     "DriveSession": "marsscene.sim.session",
+    "SessionOptions": "marsscene.sim.session",
     "SceneWorld": "marsscene.sim.world",
     "load_world": "marsscene.sim.world",
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'marsscene.runtime' has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, _LAZY)

@@ -11,6 +11,7 @@ drive with the sensors on (:func:`~marsscene.sim.driver.drive_sim`, the noise fr
 from __future__ import annotations
 
 import logging
+import math
 import os
 import tempfile
 import time
@@ -27,10 +28,11 @@ from marsscene.rover.config import RunConfig
 from marsscene.runs.export.options import ExportOptions
 from marsscene.runs.tum import Trajectory, read_tum, write_tum
 from marsscene.seeding import stage_rng
-from marsscene.sim.control import Controller
-from marsscene.sim.driver import DriveProgress, DriveResult, drive_sim
+from marsscene.sim.control import Controller, OnStart
+from marsscene.sim.driver import DriveInterrupted, DriveProgress, DriveResult, drive_sim
 from marsscene.sim.mission import DriveOptions, prepare_drive
 from marsscene.sim.route import Route
+from marsscene.sim.session import SessionOptions
 
 if TYPE_CHECKING:
     from marsscene.runs.export.bag import BagSummary
@@ -74,6 +76,9 @@ class DriveRun:
         Wall-clock seconds of the exports (bag and datasets).
     rocks_kept : (int, int)
         MJCF rocks simulated near the route, of those in the scene.
+    stats : dict
+        What the controller reports of itself (a live session: messages, bytes and write
+        seconds per topic, commands, time-outs, resets, teleports, the goal's sim time).
     """
 
     out_dir: Path | None
@@ -84,10 +89,21 @@ class DriveRun:
     wall_s: float = float("nan")
     export_s: float = 0.0
     rocks_kept: tuple[int, int] = (0, 0)
+    stats: dict[str, Any] = field(default_factory=dict)
 
     @property
     def summary(self) -> dict[str, Any]:
         return self.result.summary
+
+    @property
+    def sim_s(self) -> float:
+        """Simulated seconds driven."""
+        return float(self.result.summary["sim_time_s"])
+
+    @property
+    def realtime_factor(self) -> float:
+        """Sim seconds per wall second of the drive."""
+        return self.sim_s / self.wall_s if self.wall_s > 0 else math.nan
 
     @property
     def gt(self) -> Trajectory:
@@ -101,7 +117,7 @@ class DriveRun:
 def _check_exports(export: ExportOptions, config: RunConfig, out: Path | None) -> None:
     """Refuse, before driving, exports that cannot be written."""
     if out is None and (export.bag is not None or export.datasets):
-        raise RuntimeSimError("exports (a bag, datasets) need a run folder: give out_dir")
+        raise RuntimeSimError("exports (a bag, datasets) need a run folder: give out_dir (--out)")
     if export.datasets and config.camera is None:
         raise RuntimeSimError(f"datasets {', '.join(export.datasets)} need the camera: "
                               "drive with RunConfig(camera=CameraConfig(...)) (--camera)")
@@ -145,7 +161,7 @@ def drive(
     *,
     route: Route | str | os.PathLike[str] | None = None,
     waypoints: ArrayLike | None = None,
-    controller: Controller | Callable[[Any], tuple[float, float]] | None = None,
+    controller: Controller | Callable[[Any], tuple[float, float]] | OnStart | None = None,
     command: tuple[float, float] | Callable[[float], tuple[float, float]] | None = None,
     seconds: float | None = None,
     config: RunConfig | None = None,
@@ -173,7 +189,8 @@ def drive(
         ``controller(Observation) -> (v, omega)`` once per control period
         (:mod:`marsscene.sim.control`); with a route it steers instead of pure pursuit (the
         route then sets the start, the rock corridor and the cross-track summary). Its
-        optional ``done`` attribute ends the drive.
+        optional ``done`` attribute ends the drive. An :class:`~marsscene.sim.control.OnStart`
+        makes it from the prepared simulator (the live ROS 2 bridge).
     command : (v, omega) or callable t -> (v, omega), optional
         An open-loop command instead.
     seconds : float, optional
@@ -205,7 +222,8 @@ def drive(
     Raises
     ------
     DriveInterrupted
-        On Ctrl-C during the drive; the run folder is complete up to there (no exports).
+        On Ctrl-C during the drive; the run folder is complete up to there (no exports),
+        unless ``options.stop_on_interrupt``.
     MarsSceneError
         A missing scene, a route off the terrain, exports that cannot be written: before
         anything is driven.
@@ -229,35 +247,59 @@ def drive(
     with _scene_dir(scene, out) as scene_path:
         sim, path = prepare_drive(scene_path, config, route=_route(route),
                                   waypoints_xy_m=waypoints, options=options)
-        if path is not None and sim.rocks_kept[1]:
-            log.info("rocks: %d of %d MJCF rocks lie near the route and are simulated",
-                     *sim.rocks_kept)
-        if out is not None:
-            out.mkdir(parents=True, exist_ok=True)
-            if path is not None:
-                write_tum(out / "route.tum", path.to_trajectory(sim.heightfield),
-                          header=(options.route_note or ROUTE_NOTE).format(
-                              length_m=path.length_m))
-        cache = None
-        if out is not None and export.bag is not None and config.camera is not None \
-                and export.bag.wants_jpeg:
-            from marsscene.runs.export.bag_images import JpegCache  # no rosbags import
-
-            cache = JpegCache.fresh(out, export.bag.jpeg_quality)
-        try:
+        _write_route(out, sim, path, options)
+        ctrl, heard = _started(controller, sim)
+        with _jpeg_cache(out, export, config) as cache:
+            session = SessionOptions(keep_sensors=keep_sensors, lidar_files=export.lidar_files,
+                                     listeners=(*listeners, *heard), jpeg_cache=cache)
             t0 = time.perf_counter()
-            res = drive_sim(sim, route=path, controller=controller, command=command,
-                            seconds=seconds, out_dir=out, rng=stage_rng(seed, "sensors"),
-                            pursuit=options.pursuit, keep_sensors=keep_sensors,
-                            progress=progress, jpeg_cache=cache, listeners=listeners,
-                            lidar_files=export.lidar_files)
+            try:
+                res = drive_sim(sim, route=path, controller=ctrl, command=command,
+                                seconds=seconds, out_dir=out, rng=stage_rng(seed, "sensors"),
+                                pursuit=options.pursuit, session=session, progress=progress)
+            except DriveInterrupted as stop:  # Ctrl-C
+                if not options.stop_on_interrupt:
+                    raise
+                res = stop.result
             t1 = time.perf_counter()
             bag, datasets = _export(out, export, cache, progress)
-        finally:
-            if cache is not None:
-                cache.remove()
     return DriveRun(out, res, path, bag, datasets, wall_s=t1 - t0,
                     export_s=time.perf_counter() - t1, rocks_kept=sim.rocks_kept)
+
+
+def _write_route(out: Path | None, sim: Any, path: Route | None, options: DriveOptions) -> None:
+    """``route.tum`` of a drive along a route, into its run folder."""
+    if path is not None and sim.rocks_kept[1]:
+        log.info("rocks: %d of %d MJCF rocks lie near the route and are simulated",
+                 *sim.rocks_kept)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        if path is not None:
+            write_tum(out / "route.tum", path.to_trajectory(sim.heightfield),
+                      header=(options.route_note or ROUTE_NOTE).format(length_m=path.length_m))
+
+
+def _started(controller: Any, sim: Any) -> tuple[Any, tuple[Any, ...]]:
+    """The drive's controller (made now from an :class:`OnStart`) and the listeners it adds."""
+    if not isinstance(controller, OnStart):
+        return controller, ()
+    made = controller.make(sim)
+    return made, ((made,) if controller.listen else ())
+
+
+@contextmanager
+def _jpeg_cache(out: Path | None, export: ExportOptions, config: RunConfig) -> Iterator[Any]:
+    """The bag's JPEG cache, filled while driving (None when no bag wants JPEG frames)."""
+    if out is None or export.bag is None or config.camera is None or not export.bag.wants_jpeg:
+        yield None
+        return
+    from marsscene.runs.export.bag_images import JpegCache  # no rosbags import
+
+    cache = JpegCache.fresh(out, export.bag.jpeg_quality)
+    try:
+        yield cache
+    finally:
+        cache.remove()
 
 
 def _export(out: Path | None, export: ExportOptions, cache: Any,

@@ -28,12 +28,13 @@ A controller that drives a circle for 20 s and stops when the odometry says it w
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CameraFrame", "Controller", "Observation", "OpenLoop"]
+__all__ = ["CameraFrame", "Controller", "Observation", "OnStart", "OpenLoop"]
 
 
 @runtime_checkable
@@ -150,3 +151,17 @@ class OpenLoop:
 
     def __repr__(self) -> str:
         return f"OpenLoop({self.command!r})"
+
+
+@dataclass(frozen=True)
+class OnStart:
+    """A controller made from the prepared simulator, just before the first control step.
+
+    Pass it as ``controller`` to :func:`marsscene.drive` when the controller needs the rover
+    it drives (its sensors, intrinsics, start pose), as the live ROS 2 bridge does to describe
+    its topics. ``make(sim)`` returns the controller; with ``listen`` it also receives every
+    sample as a listener of the session (:mod:`marsscene.sim.session`).
+    """
+
+    make: Callable[[Any], Any]
+    listen: bool = False

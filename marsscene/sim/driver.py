@@ -14,10 +14,10 @@ folder up to that moment (``summary.status = "interrupted"``).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -30,10 +30,7 @@ from marsscene.sim.control import Controller, OpenLoop
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
 from marsscene.sim.route import Route, cross_track_m
 from marsscene.sim.run_writer import GT_HEADER, ODOM_HEADER
-from marsscene.sim.session import DriveSession
-
-if TYPE_CHECKING:
-    from marsscene.runs.export.bag_images import JpegCache
+from marsscene.sim.session import DriveSession, SessionOptions
 
 __all__ = ["DriveInterrupted", "DriveProgress", "DriveResult", "drive_sim"]
 
@@ -214,11 +211,8 @@ def drive_sim(
     out_dir: str | Path | None = None,
     rng: np.random.Generator,
     pursuit: PursuitConfig | None = None,
-    keep_sensors: bool = False,
+    session: SessionOptions | None = None,
     progress: Callable[[DriveProgress], None] | None = None,
-    jpeg_cache: JpegCache | None = None,
-    listeners: Sequence[Any] = (),
-    lidar_files: bool = True,
 ) -> DriveResult:
     """Drive a prepared simulator and log every sensor.
 
@@ -242,16 +236,10 @@ def drive_sim(
         Sensor noise stream (e.g. ``stage_rng(seed, "sensors")``).
     pursuit : PursuitConfig, optional
         Of the route follower.
-    keep_sensors : bool
-        Keep LiDAR scans, images and IMU samples in memory in the result.
+    session : SessionOptions, optional
+        Samples kept in memory, LiDAR files, listeners, the bag's JPEG cache.
     progress : callable, optional
         ``progress(DriveProgress)`` called once per simulated second.
-    jpeg_cache : JpegCache, optional
-        Also JPEG-encode every colour frame into this cache (for a bag written right after).
-    listeners : sequence, optional
-        Objects that receive every sample as it is made (:mod:`marsscene.sim.session`).
-    lidar_files : bool
-        Write the LiDAR scans into the run folder (False: to the listeners only).
 
     Raises
     ------
@@ -262,32 +250,38 @@ def drive_sim(
     ctrl, meta = _controller(route, controller, command, pursuit)
     limit_s = _time_limit_s(route, seconds)
     rows = _Rows() if out_dir is None else None
-    session = DriveSession(sim, rng=rng, out_dir=out_dir, keep_sensors=keep_sensors,
-                           jpeg_cache=jpeg_cache, listeners=(*listeners, *([rows] if rows else [])),
-                           meta=meta, lidar_files=lidar_files)
+    opts = session if session is not None else SessionOptions()
+    if rows is not None:
+        opts = replace(opts, listeners=(*opts.listeners, rows))
+    loop = DriveSession(sim, rng=rng, out_dir=out_dir, options=opts, meta=meta)
     follower = ctrl if isinstance(ctrl, PurePursuit) else None
 
     def report(t: float) -> None:
         if progress is not None:
-            progress(DriveProgress(t, limit_s, session.distance_m,
+            progress(DriveProgress(t, limit_s, loop.distance_m,
                                    float(follower.s[follower.index]) if follower else None,
                                    float(follower.s[-1]) if follower else None))
 
-    steps_limit = round(limit_s / sim.dt_physics_s)
     try:
-        obs = session.observe()
-        while True:
-            v, w = _checked(ctrl(obs))
-            session.act(v, w)
-            if getattr(ctrl, "done", False) or not session.advance(steps_limit, report):
-                break
-            obs = session.observe()
+        _run(loop, ctrl, round(limit_s / sim.dt_physics_s), report)
     except KeyboardInterrupt:
-        if session.n_control == 0:
-            session.close()
+        if loop.n_control == 0:
+            loop.close()
             raise
-        raise DriveInterrupted(_result(session, rows, ctrl, route, "interrupted")) from None
+        raise DriveInterrupted(_result(loop, rows, ctrl, route, "interrupted")) from None
     except BaseException:  # a controller's error, a diverged simulation: free the threads
-        session.close()
+        loop.close()
         raise
-    return _result(session, rows, ctrl, route, "complete")
+    return _result(loop, rows, ctrl, route, "complete")
+
+
+def _run(loop: DriveSession, ctrl: Any, steps_limit: int,
+         report: Callable[[float], None]) -> None:
+    """Observe, command, advance, until the controller is done or the time limit."""
+    obs = loop.observe()
+    while True:
+        v, w = _checked(ctrl(obs))
+        loop.act(v, w)
+        if getattr(ctrl, "done", False) or not loop.advance(steps_limit, report):
+            return
+        obs = loop.observe()

@@ -49,6 +49,10 @@ class DriveOptions:
     route_note : str, optional
         Header line of the run's ``route.tum``; ``{length_m:.1f}`` in it is replaced by the
         route's length.
+    stop_on_interrupt : bool
+        Ctrl-C ends the drive as its time limit would: the run is finished, exported and
+        returned (a live session's usual end), instead of raising ``DriveInterrupted``
+        without exports.
     """
 
     max_slope_deg: float = 20.0
@@ -58,6 +62,7 @@ class DriveOptions:
     start_xy_m: tuple[float, float] | None = None
     start_yaw_rad: float = 0.0
     route_note: str | None = None
+    stop_on_interrupt: bool = False
 
     def __post_init__(self) -> None:
         check_range("drive.max_slope_deg", self.max_slope_deg, 0.0, 90.0, lo_open=True)

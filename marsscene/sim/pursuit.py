@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from marsscene._validate import check_range
+from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S
 from marsscene.sim.route import Route
 
 __all__ = ["PurePursuit", "PursuitConfig"]
@@ -21,20 +22,20 @@ __all__ = ["PurePursuit", "PursuitConfig"]
 
 @dataclass(frozen=True, kw_only=True)
 class PursuitConfig:
-    """Pure-pursuit parameters (m, m/s, rad/s, Hz)."""
+    """Pure-pursuit parameters (m, m/s, rad/s); it is called at the run's control rate
+    (``RunConfig.control_hz``)."""
 
     lookahead_m: float = 1.0
-    v_max_m_s: float = 0.5
-    omega_max_rad_s: float = 0.2
-    rate_hz: float = 50.0
+    v_max_m_s: float = V_MAX_M_S
+    omega_max_rad_s: float = OMEGA_MAX_RAD_S
     goal_tolerance_m: float = 0.25
     slow_down_m: float = 1.0
 
     def __post_init__(self) -> None:
         check_range("pursuit.lookahead_m", self.lookahead_m, 0.05, 50.0)
-        check_range("pursuit.v_max_m_s", self.v_max_m_s, 0.0, 0.5, lo_open=True)
-        check_range("pursuit.omega_max_rad_s", self.omega_max_rad_s, 0.0, 0.2, lo_open=True)
-        check_range("pursuit.rate_hz", self.rate_hz, 1.0, 500.0)
+        check_range("pursuit.v_max_m_s", self.v_max_m_s, 0.0, V_MAX_M_S, lo_open=True)
+        check_range("pursuit.omega_max_rad_s", self.omega_max_rad_s, 0.0, OMEGA_MAX_RAD_S,
+                    lo_open=True)
         check_range("pursuit.goal_tolerance_m", self.goal_tolerance_m, 0.01, 10.0)
         check_range("pursuit.slow_down_m", self.slow_down_m, 0.0, 50.0)
 

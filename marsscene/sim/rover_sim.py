@@ -1,8 +1,9 @@
 """``RoverSim``: a built scene + the rover in MuJoCo, driven by ``cmd_vel``.
 
 The scene's ``mjcf/scene.xml`` is loaded with :class:`mujoco.MjSpec` and the rover is attached
-in memory (prefix ``rover/``), so ``scene.xml`` stays rover-free. One :meth:`RoverSim.step` is one
-control period (default 50 Hz = 10 physics steps of 2 ms).
+in memory (prefix ``rover/``), so ``scene.xml`` stays rover-free. :meth:`RoverSim.apply` sets the
+``cmd_vel`` targets and :meth:`RoverSim.advance` steps the physics; a control period (default
+50 Hz) is ``substeps`` physics steps (10 of 2 ms).
 """
 
 from __future__ import annotations
@@ -191,22 +192,12 @@ class RoverSim:
         *,
         xy_m: tuple[float, float] | None = None,
         yaw_rad: float | None = None,
-        rng: np.random.Generator | None = None,
-        jitter_xy_m: float = 0.5,
-        jitter_yaw_rad: float = 0.2,
     ) -> None:
-        """Spawn the rover on the terrain, let it settle (wheels braked), set time to 0.
-
-        With ``rng`` the spawn pose is perturbed uniformly by up to ``jitter_xy_m`` in x and y
-        and ``jitter_yaw_rad`` in heading (randomised episodes); without it, it is exact.
-        """
+        """Spawn the rover on the terrain at ``xy_m`` facing ``yaw_rad`` (default: the start
+        pose), let it settle (wheels braked), set time to 0."""
         mujoco.mj_resetData(self.model, self.data)
         xy = xy_m if xy_m is not None else self.start_xy_m
         yaw = self.start_yaw_rad if yaw_rad is None else float(yaw_rad)
-        if rng is not None:
-            dx, dy, dyaw = rng.uniform(-1.0, 1.0, size=3)
-            xy = (float(xy[0]) + jitter_xy_m * dx, float(xy[1]) + jitter_xy_m * dy)
-            yaw += jitter_yaw_rad * dyaw
         self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy, yaw)
         mujoco.mj_forward(self.model, self.data)
         self.data.ctrl[:] = 0.0
@@ -233,13 +224,6 @@ class RoverSim:
         self.data.ctrl[self.drive_act] = rates
         self.data.ctrl[self.steer_act] = steer
         self.cmd = (float(v_m_s), float(omega_rad_s))
-
-    def step(self, v_m_s: float, omega_rad_s: float) -> None:
-        """Apply ``cmd_vel`` and advance one control period."""
-        self.apply(v_m_s, omega_rad_s)
-        mujoco.mj_step(self.model, self.data, nstep=self.substeps)
-        if not np.isfinite(self.data.qpos).all():
-            raise RuntimeSimError(f"simulation diverged at t = {self.data.time:.3f} s")
 
     def advance(self, nstep: int) -> None:
         """Advance the physics ``nstep`` steps with the current actuator targets."""

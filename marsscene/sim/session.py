@@ -17,8 +17,9 @@ that sends each sample on as it is made.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +33,7 @@ from marsscene.sensors.odometry import WheelOdometry, measure_wheels
 from marsscene.sim.control import CameraFrame, Observation
 from marsscene.sim.run_writer import RunWriter
 
-__all__ = ["DriveSession"]
+__all__ = ["DriveSession", "SessionOptions"]
 
 _STREAMS = ("control", "imu", "lidar", "camera", "stereo")
 
@@ -46,6 +47,29 @@ def _period(sim: Any, rate_hz: float) -> int:
     return round(steps)
 
 
+@dataclass(frozen=True)
+class SessionOptions:
+    """What a drive's session does with its samples besides logging them: one object that
+    :func:`marsscene.drive` fills and hands down to the session.
+
+    Parameters
+    ----------
+    keep_sensors : bool
+        Keep LiDAR scans, images and IMU samples in memory (:attr:`DriveSession.scans` ...).
+    lidar_files : bool
+        Write each LiDAR scan to the run folder (False: to the listeners only, stamps kept).
+    listeners : tuple
+        Objects that receive every sample as the run writer does.
+    jpeg_cache : JpegCache, optional
+        Also JPEG-encode every colour frame into this cache (for a bag written right after).
+    """
+
+    keep_sensors: bool = False
+    lidar_files: bool = True
+    listeners: tuple[Any, ...] = ()
+    jpeg_cache: Any = None
+
+
 class DriveSession:
     """One drive of ``sim`` (a reset :class:`~marsscene.sim.rover_sim.RoverSim`), step by step.
 
@@ -57,14 +81,8 @@ class DriveSession:
         streams spawned from it, so adding a sensor never moves the IMU or wheel noise.
     out_dir : path, optional
         Run folder; nothing is written if omitted.
-    keep_sensors : bool
-        Keep LiDAR scans, images and IMU samples in memory (:attr:`scans` ...).
-    jpeg_cache : JpegCache, optional
-        Also JPEG-encode every colour frame into this cache (for a bag written right after).
-    lidar_files : bool
-        Write each LiDAR scan to the run folder (False: to the listeners only, stamps kept).
-    listeners : sequence
-        Objects that receive every sample as the run writer does.
+    options : SessionOptions, optional
+        Samples kept in memory, LiDAR files, listeners, the bag's JPEG cache.
     meta : dict, optional
         Extra ``run.json`` entries (``pursuit``: the follower's config; ``controller``).
     renderer, lidar : optional
@@ -74,11 +92,11 @@ class DriveSession:
     """
 
     def __init__(self, sim: Any, *, rng: np.random.Generator, out_dir: str | Path | None = None,
-                 keep_sensors: bool = False, jpeg_cache: Any = None,
-                 listeners: Sequence[Any] = (), meta: dict[str, Any] | None = None,
-                 renderer: Any = None, lidar: Lidar | None = None, lidar_files: bool = True):
+                 options: SessionOptions | None = None, meta: dict[str, Any] | None = None,
+                 renderer: Any = None, lidar: Lidar | None = None):
         run = sim.run
-        self.sim, self.rng, self.keep = sim, rng, keep_sensors
+        opts = options if options is not None else SessionOptions()
+        self.sim, self.rng, self.keep = sim, rng, opts.keep_sensors
         self.periods = {"control": _period(sim, run.control_hz), "imu": _period(sim, run.imu_hz)}
         self.renderer = None
         self.trigger_m = run.camera.trigger_distance_m if run.camera is not None else None
@@ -103,10 +121,10 @@ class DriveSession:
         out = Path(out_dir) if out_dir is not None else None
         self.writer = RunWriter(out, sim, lidar=self.lidar is not None,
                                 camera=self.renderer is not None, stereo=self.stereo,
-                                meta=meta or {}, jpeg_cache=jpeg_cache,
-                                lidar_files=lidar_files)
+                                meta=meta or {}, jpeg_cache=opts.jpeg_cache,
+                                lidar_files=opts.lidar_files)
         self.sinks: dict[str, list[Any]] = {
-            s: [x for x in (self.writer, *listeners) if hasattr(x, s)] for s in _STREAMS}
+            s: [x for x in (self.writer, *opts.listeners) if hasattr(x, s)] for s in _STREAMS}
         pos0, _ = sim.pose()
         self.odo = WheelOdometry(sim.rover, pos0[0], pos0[1], pos0[2], sim.yaw_rad())
         self.tick = math.gcd(*self.periods.values())

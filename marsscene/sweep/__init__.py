@@ -19,8 +19,9 @@ seed=2__lighting.tau=3.0
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from marsscene._lazy import lazy_attributes
 from marsscene.sweep.cell import run_cell
 from marsscene.sweep.grid import Cell, cell_id, expand_grid
 from marsscene.sweep.spec import DriveSpec, SweepSpec
@@ -41,9 +42,6 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:  # dask is imported when a sweep is run
-    if name in ("Progress", "SweepResult", "run_sweep"):
-        from marsscene.sweep import run
-
-        return getattr(run, name)
-    raise AttributeError(f"module 'marsscene.sweep' has no attribute {name!r}")
+#: dask is imported when a sweep is run
+__getattr__ = lazy_attributes(__name__, dict.fromkeys(("Progress", "SweepResult", "run_sweep"),
+                                                      "marsscene.sweep.run"))

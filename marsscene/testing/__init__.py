@@ -1,9 +1,13 @@
-"""Helpers for testing and measuring code that uses marsscene (not needed to build or drive).
+"""Public helpers for testing code that uses marsscene, like :mod:`numpy.testing` (not needed
+to build a scene or drive the rover).
 
 * :mod:`.pds3`: writes HiRISE-style PDS3 DTMs and orthoimages (attached or detached label;
-  GDAL cannot write PDS3) from an array, to test DEM pipelines without downloading a product;
-* :mod:`.vision`: a small OpenCV visual front end (corners, KLT, PnP RGB-D odometry) scored
-  against a run's ground truth (needs ``opencv-python-headless``).
+  GDAL cannot write PDS3) from an array, to test DEM pipelines without downloading a product.
+  It needs only the core dependencies.
 
-The test suite and the performance scripts (``perf/``) share them.
+This package is part of the public API: its names keep their meaning between releases. A
+helper added here that needs an optional dependency imports it inside the function and raises
+:func:`marsscene.errors.missing_dependency` (one line naming the extra) when it is missing.
+The marsscene test suite's own support code (the DDS peer, the Newton checks, the shadow truth,
+the OpenCV front end) lives with the tests, in ``tests/support/``.
 """

@@ -10,6 +10,23 @@ README: DOI-USGS/ISIS3 @ 7ca57fa9, OSGeo/gdal @ 2935a95e).
 
 ``write_pds3_dtm`` writes a DTEEC-style ``.IMG`` with an attached label (``^IMAGE`` = record
 number, ``RECORD_BYTES`` = one line) or, with ``detached=True``, a ``.LBL`` plus a raw ``.IMG``.
+``write_hirise_ortho`` writes a HiRISE RDR-style orthoimage (JPEG 2000 plus a detached label).
+
+Public: use it to test your own DEM pipelines (``marsscene.dem.read_dem``, ``marsscene build
+--dem``) on a DTM of any size, shape and content without downloading a product. Needs only the
+core dependencies (numpy; rasterio with GDAL's JP2OpenJPEG driver for the orthoimage).
+
+Examples
+--------
+>>> import tempfile
+>>> from pathlib import Path
+>>> import numpy as np
+>>> from marsscene.dem import read_dem
+>>> from marsscene.testing.pds3 import write_pds3_dtm
+>>> z = np.full((64, 48), -2500.0, np.float32)
+>>> path = write_pds3_dtm(Path(tempfile.mkdtemp()) / "DTEEC_TEST.IMG", z, map_scale_m=1.0)
+>>> read_dem(path).elevation_m.shape
+(64, 48)
 """
 
 from __future__ import annotations
@@ -18,6 +35,8 @@ from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
+
+__all__ = ["NULL4", "dtm_label", "write_hirise_ortho", "write_pds3_dtm"]
 
 NULL4 = np.array([0xFF7FFFFB], dtype="<u4").view("<f4")[0]
 """HiRISE/ISIS MISSING_CONSTANT 16#FF7FFFFB# as a float32."""
@@ -107,7 +126,36 @@ def dtm_label(
     product_id: str = "DTEEC_045994_1985_046060_1985_U01",
     valid_range: tuple[float, float] = (-2700.0, -2400.0), proj_type: str = "EQUIRECTANGULAR",
 ) -> str:
-    """Assembled DTEEC label text (CRLF line ends are not needed by parsers; LF used)."""
+    """The text of an assembled DTEEC-style PDS3 label (LF line ends; parsers need no CRLF).
+
+    Parameters
+    ----------
+    lines, samples : int
+        Image rows and columns.
+    pointer : str
+        The whole ``^IMAGE = ...`` line (a record number, or a detached ``.IMG`` file name).
+    record_bytes, file_records : int
+        ``RECORD_BYTES`` and ``FILE_RECORDS``.
+    map_scale_m : float
+        Post spacing (m/pixel); ``MAP_RESOLUTION`` follows from it and ``radius_km``.
+    center_lat, center_lon : float
+        Centre of projection (deg, planetocentric, east-positive).
+    radius_km : float
+        The three axis radii (km): the local radius at ``center_lat``.
+    lpo, spo : float
+        ``LINE_PROJECTION_OFFSET`` and ``SAMPLE_PROJECTION_OFFSET`` (pixels).
+    product_id : str
+        ``PRODUCT_ID``.
+    valid_range : tuple of float
+        ``VALID_MINIMUM`` and ``VALID_MAXIMUM`` (m).
+    proj_type : str
+        ``MAP_PROJECTION_TYPE`` (``"EQUIRECTANGULAR"`` or ``"POLAR STEREOGRAPHIC"``).
+
+    Returns
+    -------
+    str
+        The label, ending with ``END``.
+    """
     map_res = float(np.pi * radius_km * 1000.0 / 180.0 / map_scale_m)
     head = (f"PDS_VERSION_ID            = PDS3\n\n/* File format and length */\n"
             f"RECORD_TYPE               = FIXED_LENGTH\n"
@@ -127,16 +175,36 @@ def write_pds3_dtm(
     shape: tuple[int, int] | None = None, blocks: Iterable[np.ndarray] | None = None,
     pointer_record: int | None = None, **label_kw: object,
 ) -> Path:
-    """Write an assembled DTEEC-style PDS3 DTM; return the path to open (``.IMG`` or ``.LBL``).
+    """Write an assembled DTEEC-style PDS3 DTM.
 
-    Give ``z`` (rows, cols) float32 (NaN -> MISSING_CONSTANT), or ``shape`` plus ``blocks``
-    (row blocks, for files too big to hold in memory). ``pointer_record`` overrides the
-    ``^IMAGE`` record (to write a deliberately wrong pointer).
+    Parameters
+    ----------
+    path : Path
+        The product's path; its suffix is replaced by ``.IMG`` (and ``.LBL`` when detached).
+    z : ndarray, optional
+        Elevations (rows, cols) in m, written as little-endian float32; NaN and inf become
+        ``MISSING_CONSTANT`` (:data:`NULL4`).
+    detached : bool
+        Write the label to a ``.LBL`` beside a raw ``.IMG`` instead of attaching it.
+    shape : tuple of int, optional
+        ``(rows, cols)``, with ``blocks`` instead of ``z``.
+    blocks : iterable of ndarray, optional
+        Row blocks of the image, top first (for files too big to hold in memory).
+    pointer_record : int, optional
+        Overrides the attached label's ``^IMAGE`` record (to write a deliberately wrong pointer).
+    **label_kw
+        Passed to :func:`dtm_label` (``map_scale_m``, ``lpo``, ``spo``, ...).
+
+    Returns
+    -------
+    Path
+        The file to open: the ``.IMG`` (attached label) or the ``.LBL`` (detached).
     """
     if z is not None:
         shape = z.shape
         blocks = [z]
-    assert shape is not None and blocks is not None
+    if shape is None or blocks is None:
+        raise ValueError("write_pds3_dtm needs z, or shape and blocks")
     lines, samples = shape
     rb = samples * 4
     img_path = path.with_suffix(".IMG")
@@ -176,6 +244,31 @@ def write_hirise_ortho(
     the file name, image size, MAP_SCALE and projection offsets replaced so that the upper-left
     pixel corner is at projected ``(x0_m, y0_m)``. Its DN scaling (SCALING_FACTOR, OFFSET) and
     CORE_NULL = 0 are the real label's.
+
+    Parameters
+    ----------
+    folder : Path
+        Where both files are written.
+    dn : ndarray
+        The image (rows, cols), written as uint16 DN.
+    template : Path
+        The real RDR label to start from (GDAL autotest's ``ESP_013951_1955_RED.LBL``).
+    x0_m, y0_m : float
+        Projected coordinates of the upper-left pixel corner (m).
+    scale_m : float
+        Pixel size (m).
+    name : str
+        File stem.
+
+    Returns
+    -------
+    Path
+        The ``.LBL`` to open.
+
+    Raises
+    ------
+    ValueError
+        If ``template`` is not that label (a keyword to replace is missing).
     """
     import re
     import warnings
@@ -205,7 +298,8 @@ def write_hirise_ortho(
             f"SAMPLE_PROJECTION_OFFSET     = {spo!r} <PIXEL>",
     }
     for old, new in subs.items():
-        assert old in text, old
+        if old not in text:
+            raise ValueError(f"{template} is not GDAL's ESP_013951_1955_RED.LBL: no {old!r}")
         text = text.replace(old, new)
     text = re.sub(r"^PDS_VERSION_ID.*$", "PDS_VERSION_ID            = PDS3\n"
                   "/* ASSEMBLED TEST FIXTURE: real HiRISE RDR label with test geometry */",

@@ -24,6 +24,7 @@ from marsscene.runs.runlog import RunLog
 from marsscene.seeding import stage_rng
 from marsscene.sim.driver import drive_sim
 from marsscene.sim.rover_sim import RoverSim
+from marsscene.sim.session import SessionOptions
 
 
 def test_kiss_icp_tracks_an_8_m_drive_within_1_percent(tmp_path):
@@ -37,7 +38,7 @@ def test_kiss_icp_tracks_an_8_m_drive_within_1_percent(tmp_path):
                    contact_corridor_m=40.0)
     live = LiveKissIcp()  # the same odometry fed during the drive
     drive_sim(sim, command=(0.5, 0.0), seconds=16.0, out_dir=tmp_path / "r",
-              rng=stage_rng(1, "sensors"), listeners=[live])
+              rng=stage_rng(1, "sensors"), session=SessionOptions(listeners=(live,)))
     write_bag(tmp_path / "r", tmp_path / "r" / "bag")
     run = RunLog(tmp_path / "r")
     estimate = run_kiss_icp(tmp_path / "r" / "bag")

@@ -14,15 +14,14 @@ import numpy as np
 import pytest
 
 import marsscene as ms
-import marsscene.testing
 from marsscene.ros2 import Ros2Options, serve
-from marsscene.runs.export.bag_topics import ImageOptions
-from marsscene.runs.export.sample_messages import topic_table
+from marsscene.runs.export.topic_table import topic_table
 from marsscene.runs.tum import read_tum
+from tests.support import DDS_PEER
 
 pytest.importorskip("mujoco")
 
-PEER = str(Path(marsscene.testing.__file__).with_name("dds_peer.py"))
+PEER = str(DDS_PEER)
 DOMAIN = 212
 SECONDS = 3.0
 TOPICS = {  # name: [msgtype, reliable, transient local] as a ROS 2 subscriber would ask
@@ -93,7 +92,7 @@ def test_every_topic_arrives_at_its_rate_and_decodes(session):
     # writer per published topic
     ns, name, readers, writers = got["ros_discovery_info"]["nodes"][-1]
     assert (ns, name, readers) == ("/", "marsscene_rover", 4)
-    table = topic_table(camera=True, depth=True, lidar=True, images=ImageOptions(images="both"))
+    table = topic_table(camera=True, depth=True, lidar=True, images="both")
     assert writers == len(table) - 1 + 1  # not /rover/cmd_vel (subscribed); + goal_reached
 
 

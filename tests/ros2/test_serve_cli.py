@@ -7,11 +7,11 @@ from marsscene.cli import main
 
 def test_record_needs_a_run_folder(runner, tmp_path):
     (tmp_path / "scene").mkdir()
-    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--ros2", "--record",
+    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--record",
                                "--localhost"])
     assert res.exit_code == 1
     assert res.output.strip().splitlines()[-1] == (
-        "Error: recording a bag needs a run folder: give out_dir (--out)")
+        "Error: exports (a bag, datasets) need a run folder: give out_dir (--out)")
 
 
 def test_bad_topic_and_missing_scene_are_one_line_errors(runner, tmp_path):

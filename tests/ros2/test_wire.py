@@ -9,20 +9,19 @@ import json
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-import marsscene.testing
 from marsscene.ros2 import dds
 from marsscene.ros2.options import Ros2Options, localhost_from_env
 from marsscene.rover.config import NoiseConfig, RoverConfig
 from marsscene.rover.lidar import LidarConfig
 from marsscene.runs.export.bag_topics import ImageOptions
 from marsscene.runs.export.sample_messages import SampleMessages
+from tests.support import DDS_PEER
 
-PEER = str(Path(marsscene.testing.__file__).with_name("dds_peer.py"))
+PEER = str(DDS_PEER)
 INTR = {"width": 32, "height": 24, "fx": 20.0, "fy": 20.0, "cx": 16.0, "cy": 12.0}
 
 
@@ -56,7 +55,7 @@ def _messages(images: str = "both") -> tuple[SampleMessages, list[tuple[str, obj
 def test_every_published_type_round_trips_rosbags_cdr_through_cyclone():
     sm, pairs = _messages()
     store = sm.b.store
-    assert {topic for topic, _ in pairs} == {t for t, _ in sm.topics()}  # every topic
+    assert {topic for topic, _ in pairs} == {t.name for t in sm.topics()}  # every topic
     types = {msg.__msgtype__: msg for _, msg in pairs}
     types["geometry_msgs/msg/TwistStamped"] = store.types["geometry_msgs/msg/TwistStamped"](
         header=sm.b.header(1.5, "base_link"), twist=sm.b.twist(0.2, -0.1))

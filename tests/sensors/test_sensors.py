@@ -22,7 +22,9 @@ from marsscene.sensors.lidar import Lidar
 from marsscene.sensors.odometry import WheelOdometry, measure_wheels
 from marsscene.sim.driver import drive_sim
 from marsscene.sim.rover_sim import RoverSim
+from marsscene.sim.session import SessionOptions
 from marsscene.transforms import quat_to_matrix
+from tests.support.drive import step
 
 
 def _straight_then_turn(t: float) -> tuple[float, float]:
@@ -76,7 +78,8 @@ def test_imu_at_rest_reads_mars_gravity(flat_scene, bias_z: float) -> None:
     )
     sim = RoverSim(flat_scene, run=RunConfig(noise=noise, imu_hz=250.0))
     res = drive_sim(
-        sim, command=(0.0, 0.0), seconds=2.0, rng=stage_rng(1, "sensors"), keep_sensors=True
+        sim, command=(0.0, 0.0), seconds=2.0, rng=stage_rng(1, "sensors"),
+        session=SessionOptions(keep_sensors=True),
     )
     acc, gyr = res.imu[:, 1:4], res.imu[:, 4:7]
     n = len(acc)
@@ -218,7 +221,7 @@ def test_camera_terrain_window_matches_full_render(gentle_scene) -> None:
         run = RunConfig(camera=CameraConfig(width_px=80, height_px=60, terrain_window_m=window))
         sim = RoverSim(gentle_scene, run=run, start_xy_m=(5.0, 3.0))
         for _ in range(25):
-            sim.step(0.5, 0.1)
+            step(sim, 0.5, 0.1)
         try:
             cam = sim.make_renderer()
         except RuntimeSimError as err:
@@ -245,7 +248,7 @@ def test_far_window_bounds_replays_the_cameras_window(gentle_scene) -> None:
     xy, bounds = [sim.pose()[0][:2].copy()], []  # placed where the camera was made
     for _ in range(60):  # ~15 m at 0.5 m/s, turning
         for _ in range(25):
-            sim.step(1.0, 0.15)
+            step(sim, 1.0, 0.15)
         sim.render(cam)
         xy.append(sim.pose()[0][:2].copy())
         bounds.append(cam.world.window_bounds_xy_m())

@@ -59,6 +59,16 @@ def test_pursuit_config_rejects_protocol_violations() -> None:
         PursuitConfig(omega_max_rad_s=0.5)
 
 
+def test_pursuit_rate_is_the_control_rate() -> None:
+    """Pure pursuit runs at ``RunConfig.control_hz``: a ``rate_hz`` in a drive table (the
+    removed, never-read field) is a one-line ConfigError naming the allowed keys."""
+    from marsscene.sim.mission import DriveOptions
+
+    assert "rate_hz" not in PursuitConfig.__dataclass_fields__
+    with pytest.raises(ConfigError, match=r"unknown key drive\.pursuit\.rate_hz.*lookahead_m"):
+        DriveOptions.from_dict({"pursuit": {"lookahead_m": 2.0, "rate_hz": 50.0}})
+
+
 def _hill() -> Heightfield:
     x = (np.arange(161) - 80) * 0.25
     xx, yy = np.meshgrid(x, x)

@@ -9,7 +9,7 @@ that both the bag and the DDS wire carry."""
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +17,7 @@ import numpy as np
 
 from marsscene._threads import ordered_map
 from marsscene.errors import missing_dependency
+from marsscene.runs.export.topic_table import QOS_PROFILES, Topic
 from marsscene.runs.runlog import CameraStream
 
 __all__ = ["MessageBuilder"]
@@ -25,8 +26,8 @@ __all__ = ["MessageBuilder"]
 class MessageBuilder:
     """ROS 2 message builders on one ``rosbags`` typestore (Jazzy or Humble), and the queue.
 
-    ``topic`` registers a topic (in write order for equal stamps), ``add`` queues a message,
-    ``write`` builds, serialises (CDR) and writes them in stamp order.
+    ``register`` adds topics (:mod:`.topic_table` rows; in write order for equal stamps),
+    ``add`` queues a message, ``write`` builds, serialises (CDR) and writes them in stamp order.
     """
 
     def __init__(self, distro: str = "jazzy") -> None:
@@ -37,11 +38,13 @@ class MessageBuilder:
         self.store = get_typestore(Stores.ROS2_HUMBLE if distro == "humble" else Stores.ROS2_JAZZY)
         self.distro = distro
         self.T: Any = self.store.types
-        self.topics: dict[str, tuple[str, bool]] = {}  # topic -> (msgtype, latched)
+        self.topics: dict[str, Topic] = {}
         self.events: list[tuple[int, int, int, Callable[..., Any], tuple[Any, ...]]] = []
 
-    def topic(self, name: str, msgtype: str, *, latched: bool = False) -> None:
-        self.topics[name] = (msgtype, latched)
+    def register(self, topics: Iterable[Topic]) -> None:
+        """Add ``topics`` after those registered so far."""
+        for topic in topics:
+            self.topics[topic.name] = topic
 
     def add(self, topic: str, t_s: float, build: Callable[..., Any], *args: Any) -> None:
         """Queue a message: ``build(*args)`` is called when it is written (images load late)."""
@@ -207,18 +210,23 @@ class MessageBuilder:
         from marsscene.runs.export.bag_writer import finish_metadata, open_writer
 
         forever = QosTime(sec=2147483647, nsec=4294967295)
-        latched = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE,
-                      QosDurability.TRANSIENT_LOCAL, forever, forever, QosLiveliness.AUTOMATIC,
-                      forever, False)
+
+        def offered(topic: Topic) -> list[Qos]:  # rosbag2 records the profile of latched topics
+            if not topic.latched:
+                return []
+            p = QOS_PROFILES[topic.qos]
+            return [Qos(QosHistory.KEEP_LAST, p.depth,
+                        QosReliability.RELIABLE if p.reliable else QosReliability.BEST_EFFORT,
+                        QosDurability.TRANSIENT_LOCAL, forever, forever,
+                        QosLiveliness.AUTOMATIC, forever, False)]
+
         counts = dict.fromkeys(self.topics, 0)
         names = list(self.topics)
         self.events.sort(key=lambda e: e[:3])
         with open_writer(path, storage, compression, self.distro) as w:
-            conns = [
-                w.add_connection(name, mt, typestore=self.store,
-                                 offered_qos_profiles=[latched] if lat else [])
-                for name, (mt, lat) in self.topics.items()
-            ]
+            conns = [w.add_connection(t.name, t.msgtype, typestore=self.store,
+                                      offered_qos_profiles=offered(t))
+                     for t in self.topics.values()]
             for i, (ns, order, data) in enumerate(ordered_map(
                     self._encode, self.events, workers=self.workers, window=8 * self.workers,
                     name="marsscene-bag")):

@@ -1,4 +1,5 @@
-"""The bag's topics: which messages, at which stamps, built from which run-folder logs.
+"""The bag's messages: which topics (rows of :mod:`.topic_table`), at which stamps, built from
+which run-folder logs.
 
 Each ``add_*`` queues ``(stamp, topic, builder, args)`` on a
 :class:`marsscene.runs.export.bag_messages.MessageBuilder`; images and scans are read only when
@@ -20,6 +21,7 @@ from marsscene.errors import RuntimeSimError
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.runs.export import bag_data as bd
 from marsscene.runs.export import bag_images as bi
+from marsscene.runs.export import topic_table as tt
 from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
 from marsscene.runs.export.imu_noise import imu_noise_declared
 from marsscene.runs.runlog import CameraStream, RunLog, read_image, read_ply
@@ -59,16 +61,8 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     extra = {c.name: c.intrinsics for c in cams[1:]} if stereo else {}
     statics = static_transforms(run.rover, extra)
     t0 = float(run.gt.timestamps_s[0])
-    for name, mt in (("/clock", "rosgraph_msgs/msg/Clock"), ("/tf", "tf2_msgs/msg/TFMessage")):
-        bag.topic(name, mt)
-    bag.topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True)
-    bag.topic("/rover/robot_description", "std_msgs/msg/String", latched=True)
-    for name, mt in (("/rover/cmd_vel", "geometry_msgs/msg/Twist"),
-                     ("/rover/odom", "nav_msgs/msg/Odometry"),
-                     ("/rover/GT_Trajectory", "nav_msgs/msg/Odometry"),
-                     ("/rover/joint_states", "sensor_msgs/msg/JointState"),
-                     ("/rover/imu_noisy", "sensor_msgs/msg/Imu")):
-        bag.topic(name, mt)
+    bag.register(tt.state_topics(imu_true=run.imu_true is not None))
+
     def tf_static() -> Any:
         return bag.tf_message([bag.tf(t0, s.parent, s.child, s.xyz_m, s.quat_xyzw)
                                for s in statics])
@@ -119,7 +113,6 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     for row in run.imu:
         bag.add("/rover/imu_noisy", row[0], bag.imu, row[0], row[1:4], row[4:7], g_var, a_var)
     if run.imu_true is not None:
-        bag.topic("/rover/imu", "sensor_msgs/msg/Imu")
         for row in run.imu_true:
             bag.add("/rover/imu", row[0], bag.imu, row[0], row[1:4], row[4:7], 0.0, 0.0)
 
@@ -129,11 +122,8 @@ def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> No
     frame = camera_frame(cam.name)
     raw, packed = opts.images in ("raw", "both"), opts.images in ("compressed", "both")
     rgb_topic = "/rover/rgb/image_raw"
-    if raw:
-        bag.topic(rgb_topic, "sensor_msgs/msg/Image")
-    if packed:
-        bag.topic(rgb_topic + "/compressed", "sensor_msgs/msg/CompressedImage")
-    bag.topic("/rover/rgb/camera_info", "sensor_msgs/msg/CameraInfo")
+    bag.register(tt.camera_topics(images=opts.images, depth=bool(cam.depth_files),
+                                   depth_cloud=opts.depth_cloud))
 
     def rgb(i: int, t: float) -> Any:
         return bag.image(t, frame, read_image(cam.rgb_files[i]), "rgb8")
@@ -152,13 +142,6 @@ def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> No
     if not cam.depth_files:
         return
     encoding, depth_topic = opts.depth_encoding, "/rover/depth/image_raw"
-    if raw:
-        bag.topic(depth_topic, "sensor_msgs/msg/Image")
-    if packed:
-        bag.topic(depth_topic + "/compressedDepth", "sensor_msgs/msg/CompressedImage")
-    bag.topic("/rover/depth/camera_info", "sensor_msgs/msg/CameraInfo")
-    if opts.depth_cloud:
-        bag.topic("/rover/depth/points", "sensor_msgs/msg/PointCloud2")
     dtype = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
     # the image and the cloud share one PNG decode
     depth = _Shared(lambda i: read_image(cam.depth_files[i]), int(raw) + int(opts.depth_cloud))
@@ -192,11 +175,7 @@ def add_stereo(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> No
     tx = -float(cam.k[0, 0]) * float(base) if cam.name == "right" else 0.0  # ROS P[0,3]
     img, info = f"/rover/stereo/{cam.name}/image_raw", f"/rover/stereo/{cam.name}/camera_info"
     raw, packed = opts.images in ("raw", "both"), opts.images in ("compressed", "both")
-    if raw:
-        bag.topic(img, "sensor_msgs/msg/Image")
-    if packed:
-        bag.topic(img + "/compressed", "sensor_msgs/msg/CompressedImage")
-    bag.topic(info, "sensor_msgs/msg/CameraInfo")
+    bag.register(tt.stereo_topics(cam.name, images=opts.images))
 
     def build(i: int, t: float) -> Any:
         arr = read_image(cam.rgb_files[i])
@@ -221,8 +200,7 @@ def add_lidar(
     cfg = run.meta.get("lidar") or {}
     if "channels" not in cfg:
         raise RuntimeSimError(f"{run.path / 'run.json'} has no LiDAR configuration")
-    bag.topic("/rover/lidar/points", "sensor_msgs/msg/PointCloud2")
-    bag.topic("/rover/scan", "sensor_msgs/msg/LaserScan")
+    bag.register(tt.lidar_topics())
     period = 1.0 / float(cfg.get("rate_hz", 10.0))
     load = _Shared(lambda i: read_ply(files[i]), 2)  # the cloud and the scan share one read
 

@@ -32,46 +32,12 @@ from marsscene.runs.export.bag_messages import MessageBuilder
 from marsscene.runs.export.bag_topics import ImageOptions
 from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
 from marsscene.runs.export.imu_noise import imu_noise_of
+from marsscene.runs.export.topic_table import STEREO_SIDES, Topic, topic_table
 from marsscene.runs.logs import depth_mm, scan_record
 
-__all__ = ["SampleMessages", "topic_table"]
+__all__ = ["SampleMessages"]
 
 Pairs = list[tuple[str, Any]]
-
-
-def topic_table(*, imu: bool = True, camera: bool = False, depth: bool = False,
-                stereo: bool = False, lidar: bool = False,
-                images: ImageOptions | None = None) -> list[tuple[str, str]]:
-    """``(topic, msgtype)`` of every topic the bag writes for these sensors, in its order."""
-    opts = images if images is not None else ImageOptions()
-    raw, packed = opts.images in ("raw", "both"), opts.images in ("compressed", "both")
-    img, cinfo, comp = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo",
-                        "sensor_msgs/msg/CompressedImage")
-    out = [("/clock", "rosgraph_msgs/msg/Clock"), ("/tf", "tf2_msgs/msg/TFMessage"),
-           ("/tf_static", "tf2_msgs/msg/TFMessage"),
-           ("/rover/robot_description", "std_msgs/msg/String"),
-           ("/rover/cmd_vel", "geometry_msgs/msg/Twist"), ("/rover/odom", "nav_msgs/msg/Odometry"),
-           ("/rover/GT_Trajectory", "nav_msgs/msg/Odometry"),
-           ("/rover/joint_states", "sensor_msgs/msg/JointState"),
-           ("/rover/imu_noisy", "sensor_msgs/msg/Imu")]
-    out += [("/rover/imu", "sensor_msgs/msg/Imu")] if imu else []
-    if camera:
-        out += [("/rover/rgb/image_raw", img)] if raw else []
-        out += [("/rover/rgb/image_raw/compressed", comp)] if packed else []
-        out += [("/rover/rgb/camera_info", cinfo)]
-    if camera and depth:
-        out += [("/rover/depth/image_raw", img)] if raw else []
-        out += [("/rover/depth/image_raw/compressedDepth", comp)] if packed else []
-        out += [("/rover/depth/camera_info", cinfo)]
-        out += [("/rover/depth/points", "sensor_msgs/msg/PointCloud2")] if opts.depth_cloud else []
-    for side in ("left", "right") if stereo else ():
-        out += [(f"/rover/stereo/{side}/image_raw", img)] if raw else []
-        out += [(f"/rover/stereo/{side}/image_raw/compressed", comp)] if packed else []
-        out += [(f"/rover/stereo/{side}/camera_info", cinfo)]
-    if lidar:
-        out += [("/rover/lidar/points", "sensor_msgs/msg/PointCloud2"),
-                ("/rover/scan", "sensor_msgs/msg/LaserScan")]
-    return out
 
 
 def _xyzw(q_wxyz: Any) -> np.ndarray:
@@ -124,12 +90,11 @@ class SampleMessages:
         self._angle = np.zeros(6)
         self._pose_cov = PoseCovarianceStep()
 
-    def topics(self) -> list[tuple[str, str]]:
-        """``(topic, msgtype)`` of everything this publisher can make."""
-        return topic_table(camera=self.cam_intr is not None,
-                           depth=self.cam_intr is not None and self.camera_depth,
-                           stereo=bool(self.stereo_intr), lidar=self.lidar_cfg is not None,
-                           images=self.opts)
+    def topics(self) -> list[Topic]:
+        """Every topic this publisher can make (:mod:`.topic_table` rows, in the bag's order)."""
+        return topic_table(images=self.opts.images, camera=self.cam_intr is not None,
+                           depth=self.camera_depth, stereo=bool(self.stereo_intr),
+                           lidar=self.lidar_cfg is not None, depth_cloud=self.opts.depth_cloud)
 
     def static(self, t_s: float) -> Pairs:
         """``/tf_static`` (sensor mounts) and ``/rover/robot_description`` (the URDF)."""
@@ -247,7 +212,7 @@ class SampleMessages:
     def stereo(self, t: float, index: int, pair: Any) -> Pairs:
         """Both views of the rectified stereo pair, each with its camera info."""
         out: Pairs = []
-        for side, img in zip(("left", "right"), pair, strict=True):
+        for side, img in zip(STEREO_SIDES, pair, strict=True):
             intr = self.stereo_intr.get(side)
             if intr is None:
                 continue

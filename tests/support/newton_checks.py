@@ -192,12 +192,13 @@ def check_sphere(tmp: Path) -> dict[str, Any]:
 
 def _mujoco_run(scene: Path, plan: list[tuple[float, float, int]]) -> Any:
     from marsscene.sim.rover_sim import RoverSim
+    from tests.support.drive import step
 
     sim = RoverSim(scene)
     out = [np.r_[sim.pose()[0], sim.yaw_rad()]]
     for v, w, n in plan:
         for _ in range(n):
-            sim.step(v, w)
+            step(sim, v, w)
             out.append(np.r_[sim.pose()[0], sim.yaw_rad()])
     return np.array(out)
 

@@ -1,0 +1,125 @@
+"""The rover's ROS 2 topics, stated once: name, message type and QoS of each, in the bag's order.
+
+The bag (:mod:`.bag_topics` registers these rows on its :class:`~.bag_messages.MessageBuilder`),
+the live messages (:class:`~.sample_messages.SampleMessages`) and the live bridge
+(:mod:`marsscene.ros2.bridge`) all read this table; so do the QoS settings: the bag's offered
+profile of a latched topic (:mod:`.bag_messages`) and the DDS endpoints (:mod:`marsscene.ros2.dds`)
+are both built from :data:`QOS_PROFILES`. Pure data: no ``rosbags`` or ``cyclonedds`` import.
+
+Examples
+--------
+>>> [t.name for t in topic_table(images="compressed") if t.latched]
+['/tf_static', '/rover/robot_description']
+>>> QOS_PROFILES["latched"]
+QosProfile(reliable=True, depth=1, transient_local=True)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["QOS_PROFILES", "STEREO_SIDES", "QosProfile", "Topic", "camera_topics",
+           "lidar_topics", "state_topics", "stereo_topics", "topic_table"]
+
+
+@dataclass(frozen=True)
+class QosProfile:
+    """A ROS 2 QoS profile as far as the rover's topics differ: reliability, history depth
+    (keep last) and durability (transient local: "latched", served to late joiners)."""
+
+    reliable: bool
+    depth: int
+    transient_local: bool = False
+
+
+#: ROS 2's QoS conventions: rclcpp's SensorDataQoS (best effort, depth 5), ClockQoS (best effort,
+#: depth 1), tf2's (reliable, 100), static-tf / latched topics (reliable, transient local, 1) and
+#: the default profile (reliable, depth 10); ``sensor-reliable`` is the sensor profile for
+#: subscribers that insist on reliable topics.
+QOS_PROFILES: dict[str, QosProfile] = {
+    "sensor": QosProfile(False, 5), "sensor-reliable": QosProfile(True, 5),
+    "clock": QosProfile(False, 1), "tf": QosProfile(True, 100),
+    "latched": QosProfile(True, 1, transient_local=True), "default": QosProfile(True, 10),
+}
+
+#: The stereo pair's views, in the bag's order.
+STEREO_SIDES = ("left", "right")
+
+_IMAGE = "sensor_msgs/msg/Image"
+_COMPRESSED = "sensor_msgs/msg/CompressedImage"
+_CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
+_CLOUD = "sensor_msgs/msg/PointCloud2"
+
+
+@dataclass(frozen=True)
+class Topic:
+    """One topic: ``name``, ``msgtype`` (``pkg/msg/Type``) and ``qos``, a key of
+    :data:`QOS_PROFILES` (``"sensor"`` for sensor data, which a live session may offer
+    reliably instead)."""
+
+    name: str
+    msgtype: str
+    qos: str = "sensor"
+
+    @property
+    def latched(self) -> bool:
+        """Transient local: the bag offers the latched profile, late joiners get the message."""
+        return QOS_PROFILES[self.qos].transient_local
+
+
+def state_topics(*, imu_true: bool = True) -> list[Topic]:
+    """Clock, TF, the URDF, the command, odometry, ground truth, joints and the IMU
+    (``imu_true``: also the noise-free ``/rover/imu``)."""
+    out = [Topic("/clock", "rosgraph_msgs/msg/Clock", "clock"),
+           Topic("/tf", "tf2_msgs/msg/TFMessage", "tf"),
+           Topic("/tf_static", "tf2_msgs/msg/TFMessage", "latched"),
+           Topic("/rover/robot_description", "std_msgs/msg/String", "latched"),
+           Topic("/rover/cmd_vel", "geometry_msgs/msg/Twist", "default"),
+           Topic("/rover/odom", "nav_msgs/msg/Odometry", "default"),
+           Topic("/rover/GT_Trajectory", "nav_msgs/msg/Odometry", "default"),
+           Topic("/rover/joint_states", "sensor_msgs/msg/JointState", "default"),
+           Topic("/rover/imu_noisy", "sensor_msgs/msg/Imu")]
+    return [*out, Topic("/rover/imu", "sensor_msgs/msg/Imu")] if imu_true else out
+
+
+def _colour(prefix: str, images: str) -> list[Topic]:
+    """``PREFIX/image_raw`` (raw), ``.../compressed`` (compressed) and ``PREFIX/camera_info``."""
+    out = [Topic(f"{prefix}/image_raw", _IMAGE)] if images in ("raw", "both") else []
+    if images in ("compressed", "both"):
+        out.append(Topic(f"{prefix}/image_raw/compressed", _COMPRESSED))
+    return [*out, Topic(f"{prefix}/camera_info", _CAMERA_INFO)]
+
+
+def camera_topics(*, images: str, depth: bool = True,
+                  depth_cloud: bool = False) -> list[Topic]:
+    """The navcam: colour, then (``depth``) depth images, camera info and (``depth_cloud``)
+    the organised cloud; ``images`` is ``"raw"``, ``"compressed"`` or ``"both"``."""
+    out = _colour("/rover/rgb", images)
+    if not depth:
+        return out
+    out += [Topic("/rover/depth/image_raw", _IMAGE)] if images in ("raw", "both") else []
+    if images in ("compressed", "both"):
+        out.append(Topic("/rover/depth/image_raw/compressedDepth", _COMPRESSED))
+    out.append(Topic("/rover/depth/camera_info", _CAMERA_INFO))
+    return [*out, Topic("/rover/depth/points", _CLOUD)] if depth_cloud else out
+
+
+def stereo_topics(side: str, *, images: str) -> list[Topic]:
+    """One view of the stereo pair (``side``: one of :data:`STEREO_SIDES`)."""
+    return _colour(f"/rover/stereo/{side}", images)
+
+
+def lidar_topics() -> list[Topic]:
+    """The LiDAR's point cloud and its ``LaserScan``."""
+    return [Topic("/rover/lidar/points", _CLOUD), Topic("/rover/scan", "sensor_msgs/msg/LaserScan")]
+
+
+def topic_table(*, images: str, imu_true: bool = True, camera: bool = False,
+                depth: bool = False, stereo: bool = False, lidar: bool = False,
+                depth_cloud: bool = False) -> list[Topic]:
+    """Every topic of a bag (or a live session) with these sensors, in the bag's order."""
+    out = state_topics(imu_true=imu_true)
+    out += camera_topics(images=images, depth=depth, depth_cloud=depth_cloud) if camera else []
+    for side in STEREO_SIDES if stereo else ():
+        out += stereo_topics(side, images=images)
+    return out + lidar_topics() if lidar else out
