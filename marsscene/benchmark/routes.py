@@ -24,7 +24,10 @@ from marsscene.errors import RuntimeSimError
 from marsscene.sim.route import Obstacles, Route, author_route
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["asset_xy_m", "auto_route", "centred_on_asset", "shape_waypoints"]
+__all__ = ["MAX_LENGTH_ERROR", "asset_xy_m", "auto_route", "centred_on_asset", "shape_waypoints"]
+
+#: An automatic route further than this from its asked length (relative) is refused, not driven.
+MAX_LENGTH_ERROR = 0.5
 
 
 def asset_xy_m(scene_dir: Path, name: str) -> tuple[float, float]:
@@ -106,20 +109,34 @@ def auto_route(spec: RouteSpec, hf: Heightfield, obstacles: Obstacles | None, *,
     Returns
     -------
     Route
-        Closed (it ends where it starts), within ``tolerance`` of ``length_m`` when possible.
+        Closed (it ends where it starts), within ``tolerance`` of ``length_m`` when possible,
+        else the closest one authored.
+
+    Raises
+    ------
+    RuntimeSimError
+        When the shape does not fit the terrain, or the closest route authored is more than
+        :data:`MAX_LENGTH_ERROR` off ``length_m`` (a short route around a large asset).
     """
     if spec.shape is None or spec.length_m is None:
         raise RuntimeSimError("auto_route needs route.shape and route.length_m")
-    scale, best = 1.0, None
+    scale, best, tried = 1.0, None, []
     for _ in range(passes):
         pts = shape_waypoints(spec, scale)
         _fit_inside(pts, hf, margin_m)
         route = author_route(pts, hf, max_slope_deg=spec.max_slope_deg, obstacles=obstacles)
+        tried.append(f"{route.length_m:.0f}")
         err = route.length_m / spec.length_m - 1.0
         if best is None or abs(err) < abs(best[0]):
             best = (err, route)
-        if abs(err) <= tolerance:
+        if abs(err) <= tolerance or err <= -1.0:  # within tolerance, or shrunk to nothing
             break
         scale /= 1.0 + err
     assert best is not None
+    if abs(best[0]) > MAX_LENGTH_ERROR:
+        raise RuntimeSimError(
+            f"no {spec.shape} route of about {spec.length_m:g} m could be authored around "
+            f"({spec.center_xy_m[0]:.1f}, {spec.center_xy_m[1]:.1f}) m: the planner's detours "
+            f"around rocks, slopes and assets gave {', '.join(tried)} m; choose another "
+            "route.length_m (--length-m) or route.center_xy_m")
     return best[1]

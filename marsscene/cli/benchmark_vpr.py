@@ -23,7 +23,7 @@ __all__ = ["vpr", "vpr_eval"]
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               required=True, help="Dataset folder: database/, queries/, poses.csv, results.")
 @click.option("--length-m", type=click.FloatRange(min=5.0), default=None,
-              help="Shorten (or lengthen) the automatic route, e.g. 40 for a quick look.")
+              help="Shorten (or lengthen) the automatic route, e.g. 60 for a quick look.")
 @click.option("--overwrite", is_flag=True, help="Replace a dataset in --out.")
 @click.option("--resume", is_flag=True,
               help="Reuse traversals already finished in --out (same spec).")
@@ -41,7 +41,7 @@ def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, r
     \b
     Examples:
       marsscene benchmark vpr dust --out vpr/dust
-      marsscene benchmark vpr day-dark --out vpr/daydark --length-m 40
+      marsscene benchmark vpr day-dark --out vpr/daydark --length-m 60
     Then any method: marsscene benchmark vpr-eval vpr/dust --descriptors my_descs/
     """
     from marsscene.benchmark.vpr.dataset import generate_vpr

@@ -79,9 +79,11 @@ _ros_options = compose(
               "--out).")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Seed of the sensor noise.")
+@click.option("--ros2", "ros2_flag", is_flag=True, hidden=True,
+              help="Accepted and ignored (serve always speaks ROS 2); to be removed.")
 def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
           seconds: float | None, out_dir: Path | None, record: bool, seed: int,
-          **opts: Any) -> None:
+          ros2_flag: bool, **opts: Any) -> None:
     """Run the rover live: sensors published, /cmd_vel obeyed, sim time on /clock.
 
     \b
@@ -93,6 +95,9 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
     import marsscene as ms
     from marsscene.runs.export.options import BagOptions
 
+    if ros2_flag:
+        click.echo("marsscene: --ros2 is not needed (serve always speaks ROS 2) and will be "
+                   "removed; drop it", err=True)
     with user_errors():
         from marsscene.ros2 import serve as serve_live  # MissingDependencyError: one line
 

@@ -59,8 +59,20 @@ def small_hulls(prototypes: tuple[Any, ...], max_vertices: int = HULL_VERTICES) 
                         max_vertices=max_vertices) for proto in prototypes]
 
 
+def _cell_name(row: int, col: int) -> str:
+    """``rocks_<row>_<col>`` of a tile (``m`` for minus: ``rocks_m1_0`` lies south of the
+    origin's tile)."""
+    def part(i: int) -> str:
+        return f"m{-i}" if i < 0 else str(i)
+
+    return f"rocks_{part(row)}_{part(col)}"
+
+
 def _tile_ids(xy: NDArray[np.float64], tile_m: float) -> tuple[NDArray[np.int64], int,
                                                               NDArray[np.int64]]:
+    """Each rock's tile as one index, the index's row stride, and the south-west tile's cell
+    (tiles are anchored at the world origin: the same square has the same name in any
+    payload part)."""
     cell = np.floor(xy / tile_m).astype(np.int64)
     lo = cell.min(axis=0) if len(cell) else np.zeros(2, np.int64)
     cell -= lo
@@ -116,7 +128,8 @@ def merge_tiles(rocks: RockTable, index: NDArray[np.int64], hulls: list[Any], *,
     hulls : list of trimesh.Trimesh
         One hull per prototype in the unit frame (:func:`small_hulls`).
     tile_m : float
-        Tile side (m); tiles are named ``rocks_<row>_<col>`` from the rocks' south-west one.
+        Tile side (m); the tile holding world point (x, y) is ``rocks_<row>_<col>`` with
+        ``row = floor(y / tile_m)``, ``col = floor(x / tile_m)`` (``m`` for a minus sign).
     """
     index = np.asarray(index, dtype=np.int64)
     proto = np.asarray(rocks.prototype, dtype=np.int64)
@@ -124,7 +137,7 @@ def merge_tiles(rocks: RockTable, index: NDArray[np.int64], hulls: list[Any], *,
                np.asarray(h.vertex_normals, dtype=np.float32),
                np.asarray(h.faces, dtype=np.int64)) for h in hulls]
     poses = _Poses.of(rocks)
-    tile, ncol, _ = _tile_ids(np.asarray(rocks.position_xyz_m, dtype=np.float64)[:, :2], tile_m)
+    tile, ncol, lo = _tile_ids(np.asarray(rocks.position_xyz_m, dtype=np.float64)[:, :2], tile_m)
     order = np.lexsort((proto, tile))  # tile-major, then prototype, then table order
     key = tile[order] * len(hulls) + proto[order]
     tiles = np.unique(tile)
@@ -134,7 +147,8 @@ def merge_tiles(rocks: RockTable, index: NDArray[np.int64], hulls: list[Any], *,
     for j, t in enumerate(tiles.tolist()):  # one mesh per tile (hundreds at most)
         segments = [(order[a:b], hull) for a, b, hull in zip(start[j], stop[j], arrays,
                                                              strict=True)]
-        yield _tile_mesh(f"rocks_{t // ncol}_{t % ncol}", poses, index, segments)
+        name = _cell_name(t // ncol + int(lo[1]), t % ncol + int(lo[0]))
+        yield _tile_mesh(name, poses, index, segments)
 
 
 def _tile_mesh(name: str, poses: _Poses, index: NDArray[np.int64],

@@ -28,6 +28,7 @@ from marsscene.runs.export.options import BagOptions, ExportOptions
 from marsscene.runs.export.sample_messages import SampleMessages
 from marsscene.runtime.api import DriveRun, drive
 from marsscene.sim.control import OnStart
+from marsscene.sim.driver import DriveProgress
 from marsscene.sim.mission import DriveOptions
 
 if TYPE_CHECKING:
@@ -37,7 +38,8 @@ __all__ = ["ServeResult", "serve"]
 
 #: Sim-time limit of a session without ``seconds`` (it ends with Ctrl-C or at the goal).
 FOREVER_S = 1e9
-#: A served session's result is a drive's (``stats`` holds the bridge's counts).
+#: A served session's result is a drive's (``stats`` holds the bridge's counts). Its fields
+#: are ``DriveRun``'s, in ``DriveRun``'s order.
 ServeResult = DriveRun
 
 
@@ -75,12 +77,12 @@ def serve(
         Write the session's bag into ``out_dir/bag`` at the end (needs ``out_dir``); the
         same as ``export=ExportOptions(bag=record)``.
     export : ExportOptions, optional
-        Bag and dataset folders written from the run folder at the end, as a drive's.
+        Bag and dataset folders written from the run folder at the end, as a drive's
+        (``overwrite=True`` replaces existing ones).
     seed : int
         Seed of the sensor noise.
     progress : callable, optional
-        As :func:`marsscene.drive`'s: a :class:`~marsscene.sim.driver.DriveProgress` once per
-        simulated second, then the exports' progress.
+        ``progress(DriveProgress)`` once per simulated second.
     ready : callable, optional
         ``ready(bridge)`` once the node is announced, before the first step.
 
@@ -114,17 +116,23 @@ def serve(
             ready(made[0])
         return made[0]
 
+    def drive_progress(p: Any) -> None:  # the session's progress; not the exports'
+        if progress is not None and isinstance(p, DriveProgress):
+            progress(p)
+
     try:
         run = drive(scene, controller=OnStart(start, listen=True), config=config,
                     options=options, export=export, out_dir=out_dir, seed=seed,
-                    seconds=seconds if seconds is not None else FOREVER_S, progress=progress)
+                    seconds=seconds if seconds is not None else FOREVER_S,
+                    progress=drive_progress)
     finally:
         for bridge in made:
             bridge.part.close()
     bridge = made[0]
-    wall = time.perf_counter() - (bridge.wall_start or time.perf_counter())
-    return dataclasses.replace(run, stats=bridge.stats.as_dict(),
-                               wall_s=min(wall - run.export_s, run.wall_s))
+    wall = run.wall_s  # from the first control step to the end of the drive, when there was one
+    if bridge.wall_start is not None:
+        wall = min(time.perf_counter() - run.export_s - bridge.wall_start, run.wall_s)
+    return dataclasses.replace(run, stats=bridge.stats.as_dict(), wall_s=wall)
 
 
 def _bridge(sim: Any, config: RunConfig, ros: Ros2Options) -> Bridge:
@@ -137,4 +145,9 @@ def _bridge(sim: Any, config: RunConfig, ros: Ros2Options) -> Bridge:
                 if cam is not None and cam.stereo else None),
         camera_depth=cam is not None and cam.depth,
         images=ImageOptions(images=ros.images), distro=ros.distro, map_tf=ros.map_tf)
-    return Bridge(sim, msgs, ros, Participant(ros.domain, ros.localhost_only))
+    part = Participant(ros.domain, ros.localhost_only)
+    try:
+        return Bridge(sim, msgs, ros, part)
+    except BaseException:
+        part.close()
+        raise

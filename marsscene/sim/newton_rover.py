@@ -33,7 +33,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.errors import RuntimeSimError, missing_dependency
-from marsscene.export.usd.rock_colliders_read import ROCKS_PATH, merged_rocks, rock_instances
+from marsscene.export.usd.rock_colliders import COLLIDERS_PATH
+from marsscene.export.usd.rock_colliders_read import merged_rocks, rock_instances
 from marsscene.rover.config import RoverConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
 
@@ -99,7 +100,7 @@ class NewtonRover:
             raise RuntimeSimError(f"{path} has no {ROVER_PATH}: write the scene with "
                                   "`marsscene build --rover` ([export] rover = true)")
         builder = newton.ModelBuilder(up_axis=newton.Axis.Z)
-        builder.add_usd(stage, ignore_paths=[ROCKS_PATH])
+        builder.add_usd(stage, ignore_paths=[COLLIDERS_PATH])
         self.load_info = {"rocks_loaded": self._add_rocks(builder, stage, rocks_within_m,
                                                           rock_rows)}
         if edit_builder is not None:
@@ -176,7 +177,8 @@ class NewtonRover:
             points, faces, n = tile.select(wanted(tile.centres_xy_m(), tile.rows))
             if n:
                 builder.add_shape_mesh(-1, mesh=newton.Mesh(points, faces.ravel(),
-                                                            compute_inertia=False), cfg=cfg)
+                                                            compute_inertia=False),
+                                       cfg=newton.ModelBuilder.ShapeConfig(mu=tile.friction))
                 loaded += n
         return loaded
 

@@ -66,7 +66,8 @@ def session(gentle_scene: Path, tmp_path_factory: pytest.TempPathFactory):
 
     try:
         res = serve(gentle_scene, ros=Ros2Options(domain_id=DOMAIN, localhost=True),
-                    config=config, seconds=SECONDS, out_dir=out, seed=5, ready=ready)
+                    config=config, seconds=SECONDS, out_dir=out, seed=5, ready=ready,
+                    record=ms.BagOptions(), progress=_PROGRESS.append)
     except ms.MarsSceneError as err:
         if "OpenGL" in str(err):
             pytest.skip("no headless OpenGL (EGL/OSMesa) here")
@@ -75,6 +76,22 @@ def session(gentle_scene: Path, tmp_path_factory: pytest.TempPathFactory):
         cmd.kill()
     yield res, out, listen
     listen.kill()
+
+
+#: What serve's progress callback received (the session fixture's).
+_PROGRESS: list = []
+
+
+def test_the_session_records_its_bag_and_reports_only_its_progress(session):
+    """``record`` writes the bag through the drive's exports; ``progress`` hears the session
+    (a DriveProgress a simulated second), never the bag export's own progress."""
+    from marsscene.runtime import DriveProgress
+
+    res, out, _ = session
+    assert res.bag is not None and res.bag.path == out / "bag" and res.bag.path.is_dir()
+    assert len(_PROGRESS) >= int(SECONDS) - 1
+    assert all(isinstance(p, DriveProgress) for p in _PROGRESS)
+    assert 0 < res.wall_s < 60.0
 
 
 def test_every_topic_arrives_at_its_rate_and_decodes(session):

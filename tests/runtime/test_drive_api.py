@@ -83,7 +83,7 @@ def test_the_four_call_sites_drive_through_ms_drive(gentle_scene, tmp_path, monk
 
 #: Pieces of a drive that only ``marsscene.runtime.api`` wires together.
 _WIRING_NAMES = {"drive_sim", "prepare_drive", "DriveSession", "JpegCache", "write_bag",
-                 "export_dataset", "stage_rng", "_scene_dir"}
+                 "export_dataset", "stage_rng", "scene_dir", "jpeg_cache", "export_run"}
 #: Where a piece may still be imported, and why: ``marsscene bag`` and ``marsscene export``
 #: convert existing run folders; a Gymnasium environment steps a session itself (one control
 #: period per ``step``), its world and start drawn by its task, not a drive.

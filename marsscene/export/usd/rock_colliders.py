@@ -142,7 +142,8 @@ def _instances(layer: Sdf.Layer, root: Sdf.Path, rocks: Any, index: Any,
 
 
 def author_collider_layer(rocks: Any, index: Any, prototypes: tuple[Any, ...], *,
-                          instance_min_diameter_m: float = 0.0) -> Sdf.Layer:
+                          instance_min_diameter_m: float = 0.0,
+                          hulls: list[Any] | None = None) -> Sdf.Layer:
     """The collider asset layer of ``rocks`` (rows ``index`` of the scene's rock table).
 
     Parameters
@@ -155,6 +156,9 @@ def author_collider_layer(rocks: Any, index: Any, prototypes: tuple[Any, ...], *
     instance_min_diameter_m : float
         Rocks at least this wide become one instance prim each; the others are merged into
         one mesh per :data:`~marsscene.rocks.merged.TILE_M` tile. 0: a prim per rock.
+    hulls : list of trimesh.Trimesh, optional
+        The merged rocks' hull per prototype (:func:`~marsscene.rocks.merged.small_hulls`
+        of ``prototypes`` by default).
 
     Returns
     -------
@@ -173,7 +177,8 @@ def author_collider_layer(rocks: Any, index: Any, prototypes: tuple[Any, ...], *
     used = set(np.unique(np.asarray(rocks.prototype, dtype=np.int64)[big]).tolist())
     protos = _prototypes(stage, root, tuple(prototypes), used, physics) if len(big) else []
     if len(small):
-        tiles = merge_tiles(rocks.take(small), index[small], small_hulls(tuple(prototypes)))
+        hulls = hulls if hulls is not None else small_hulls(tuple(prototypes))
+        tiles = merge_tiles(rocks.take(small), index[small], hulls)
         _tiles(stage, root.AppendChild("Merged"), tiles, physics)
     # the instances go to a bare layer: no stage recomposes 10^5 prims as they are authored
     layer = Sdf.Layer.CreateAnonymous(".usdc")
@@ -203,7 +208,10 @@ def author_rock_colliders(stage: Any, scene: Any, assets: dict[str, Any]) -> Non
     wide = np.asarray(scene.rocks.diameter_m) >= export.rock_collider_min_diameter_m
     if not wide.any():
         return
-    kw = {"instance_min_diameter_m": export.rock_instance_min_diameter_m}
+    from marsscene.rocks.merged import small_hulls
+
+    kw = {"instance_min_diameter_m": export.rock_instance_min_diameter_m,
+          "hulls": small_hulls(protos)}
     if scene.outer is None:
         keep = np.flatnonzero(wide)
         assets[COLLIDERS_ASSET] = author_collider_layer(scene.rocks.take(keep), keep, protos,

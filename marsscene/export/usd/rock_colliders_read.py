@@ -10,11 +10,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene.export.usd.physics import ROCK_PHYSICS
 from marsscene.export.usd.rock_colliders import COLLIDERS_PATH, FIRST_FACE_ATTR, ROWS_ATTR
 
-__all__ = ["ROCKS_PATH", "MergedRocks", "merged_rocks", "rock_instances"]
+__all__ = ["MergedRocks", "merged_rocks", "rock_instances"]
 
-ROCKS_PATH = COLLIDERS_PATH
 
 
 @dataclass(frozen=True, slots=True)
@@ -27,6 +27,7 @@ class MergedRocks:
     faces: NDArray[np.int32]
     rows: NDArray[np.int64]
     first_face: NDArray[np.int64]
+    friction: float = ROCK_PHYSICS.dynamic_friction
 
     def rock_of_face(self) -> NDArray[np.int64]:
         """Index (into :attr:`rows`) of the rock each triangle belongs to."""
@@ -48,11 +49,22 @@ class MergedRocks:
                 int(np.count_nonzero(keep)))
 
 
+def _friction(prim: Any) -> float:
+    """Dynamic friction of the physics material bound to ``prim`` (the rock material's if
+    none is)."""
+    from pxr import UsdPhysics, UsdShade
+
+    mat, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial("physics")
+    if mat and mat.GetPrim().HasAPI(UsdPhysics.MaterialAPI):
+        return float(UsdPhysics.MaterialAPI(mat.GetPrim()).GetDynamicFrictionAttr().Get())
+    return float(ROCK_PHYSICS.dynamic_friction)
+
+
 def merged_rocks(stage: Any) -> list[MergedRocks]:
     """The merged tile meshes under ``/World/RockColliders`` (every payload part)."""
     from pxr import Usd, UsdGeom
 
-    root = stage.GetPrimAtPath(ROCKS_PATH)
+    root = stage.GetPrimAtPath(COLLIDERS_PATH)
     out = []
     for prim in Usd.PrimRange(root) if root else ():
         rows = prim.GetAttribute(ROWS_ATTR)
@@ -63,7 +75,8 @@ def merged_rocks(stage: Any) -> list[MergedRocks]:
             str(prim.GetPath()), np.asarray(mesh.GetPointsAttr().Get(), dtype=np.float32),
             np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), dtype=np.int32).reshape(-1, 3),
             np.asarray(rows.Get(), dtype=np.int64),
-            np.asarray(prim.GetAttribute(FIRST_FACE_ATTR).Get(), dtype=np.int64)))
+            np.asarray(prim.GetAttribute(FIRST_FACE_ATTR).Get(), dtype=np.int64),
+            _friction(prim)))
     return out
 
 
@@ -84,15 +97,16 @@ def rock_instances(stage: Any) -> tuple[dict[str, list[Any]], NDArray[np.float64
     rows : ndarray of int, shape (N,)
         Each rock's row in the scene's rock table (its prim name ``rock_<row>``).
     friction : float
-        Dynamic friction of the rocks' physics material (0.9 if none is bound).
+        Dynamic friction of the rocks' physics material (the rock material's if none is
+        bound).
     """
-    from pxr import Usd, UsdGeom, UsdPhysics, UsdShade
+    from pxr import Usd, UsdGeom
 
-    root = stage.GetPrimAtPath(ROCKS_PATH)
+    root = stage.GetPrimAtPath(COLLIDERS_PATH)
     cache = UsdGeom.XformCache()
     parts: dict[str, list[Any]] = {}
     mats, keys, rows = [], [], []
-    friction = 0.9
+    friction = float(ROCK_PHYSICS.dynamic_friction)
     for prim in Usd.PrimRange(root) if root else ():
         if not prim.IsInstance():
             continue  # the Merged scope and the merged meshes: merged_rocks
@@ -106,10 +120,7 @@ def rock_instances(stage: Any) -> tuple[dict[str, list[Any]], NDArray[np.float64
                     parts[key].append((np.asarray(mesh.GetPointsAttr().Get(), np.float32),
                                        np.asarray(mesh.GetFaceVertexIndicesAttr().Get(),
                                                   np.int32)))
-                    mat, _ = UsdShade.MaterialBindingAPI(child).ComputeBoundMaterial("physics")
-                    if mat and mat.GetPrim().HasAPI(UsdPhysics.MaterialAPI):
-                        api = UsdPhysics.MaterialAPI(mat.GetPrim())
-                        friction = float(api.GetDynamicFrictionAttr().Get())
+                    friction = _friction(child)
         keys.append(key)
         rows.append(int(prim.GetName().rsplit("_", 1)[1]))
         mats.append(np.asarray(cache.GetLocalToWorldTransform(prim)))
