@@ -31,12 +31,12 @@ from marsscene.env.terminate import FailureJudge, compute_terminated, compute_tr
 from marsscene.errors import ConfigError
 from marsscene.rover.config import RoverConfig
 
-__all__ = ["RESET_OPTIONS", "NavEpisode"]
+__all__ = ["MOVING_CMD", "RESET_OPTIONS", "NavEpisode"]
 
 #: The keys ``reset(options=...)`` takes.
 RESET_OPTIONS = ("world", "start", "yaw", "goal")
 #: A commanded speed (m/s) or yaw rate (rad/s) above this counts as motion (the stuck clock).
-_MOVING = 0.05
+MOVING_CMD = 0.05
 
 
 class NavEpisode:
@@ -59,10 +59,12 @@ class NavEpisode:
         self.task, self.obs_config, self.reward_config = task, observations, reward
         self.rover, self.lidar_shape = rover, observations.lidar_shape
         self.steps_total = task.episode_steps(control_hz)
+        self.control_hz = float(control_hz)
         self.rng: np.random.Generator | None = None
         self.world: LoadedWorld | None = None
         self.start_xy_m = self.goal_xy_m = np.zeros(2)
         self.steps_done, self.last_action = 0, np.zeros(2)
+        self.last_distance_m = 0.0  # the goal distance at the last step (the progress term)
         self._failure: FailureJudge | None = None
 
     # ---- the start -----------------------------------------------------------------------
@@ -91,7 +93,9 @@ class NavEpisode:
         start, _, goal = self._place(world, options)
         self.world, self.start_xy_m, self.goal_xy_m = world, start, goal
         self.steps_done, self.last_action = 0, np.zeros(2)
-        self._failure = FailureJudge(self.task, world.sim.heightfield.bounds_xy_m, start, goal)
+        self.last_distance_m = float(np.hypot(*(goal - start)))
+        self._failure = FailureJudge(self.task, world.sim.heightfield.bounds_xy_m, start, goal,
+                                     control_hz=self.control_hz)
         return np.random.default_rng(self.rng.integers(2**63))
 
     def _place(self, world: LoadedWorld, opts: dict[str, Any], tries: int = 20
@@ -111,7 +115,7 @@ class NavEpisode:
             yaw = float(opts.get("yaw", yaw))
             world.sim.settle_s = task.start_settle_s
             world.sim.reset(xy_m=(float(start[0]), float(start[1])), yaw_rad=yaw)
-            if up_z(world.sim.pose()[1]) > level and not world.collided():
+            if float(up_z(world.sim.pose()[1])) > level and not world.collided():
                 return start, yaw, goal
         where = "the given start" if given else f"{tries} drawn starts"
         raise ConfigError(f"the rover does not stand level and clear of rocks at {where}")
@@ -124,12 +128,14 @@ class NavEpisode:
         assert self.world is not None and self._failure is not None, "begin() before step()"
         self.steps_done += 1
         ag, dg = self._goals(obs)
-        moving = abs(v_m_s) > _MOVING or abs(omega_rad_s) > _MOVING
+        moving = abs(v_m_s) > MOVING_CMD or abs(omega_rad_s) > MOVING_CMD
         reached = bool(goal_reached(ag, dg, self.task.goal_tolerance_m))
         reason = "goal" if reached else self._failure(obs, moving)
+        distance = float(np.linalg.norm(ag.astype(np.float64) - self.goal_xy_m, axis=-1))
         terms = step_terms(action, self.last_action, collided=self.world.collided(),
                            strayed=reason == "strayed", steps_total=self.steps_total,
-                           cfg=self.reward_config)
+                           cfg=self.reward_config, progress_m=self.last_distance_m - distance)
+        self.last_distance_m = distance
         info = self.info(obs, terms, reason)
         reward = sum(info["reward_terms"].values())  # = compute_reward(ag, dg, info)
         self.last_action = action

@@ -11,7 +11,7 @@ import numpy as np
 from marsscene.env.observe import HeightScanner, ObsConfig
 from marsscene.env.task import NavTask, TaskMap
 from marsscene.rover.config import CameraConfig, RoverConfig, RunConfig
-from marsscene.sim.rover_sim import PREFIX, RoverSim
+from marsscene.sim.rover_sim import RoverSim
 from marsscene.sim.world import scene_obstacles
 
 __all__ = ["LoadedWorld"]
@@ -30,7 +30,7 @@ class LoadedWorld:
                         if obs.height_scan is not None else None)
         m = self.sim.model
         self.chassis = np.zeros(m.ngeom, bool)  # per geom id: what it is
-        self.chassis[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, PREFIX + "chassis")] = True
+        self.chassis[self.sim.chassis_geom] = True
         self.wheel = np.zeros(m.ngeom, bool)
         self.wheel[np.asarray(self.sim.wheel_geoms)] = True
         self.rock = (m.geom_bodyid == 0) & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene._validate import check_range
+from marsscene.env import taskmath
 from marsscene.errors import ConfigError
 from marsscene.rover.config import LidarConfig
 from marsscene.rover.geometry import body_twist_from_wheels
@@ -145,23 +146,18 @@ class ObsConfig:
 
 def observation_vector(obs: Any, rover: Any, goal_xy_m: NDArray[np.float64], source: str,
                        last_action: NDArray[np.float64]) -> NDArray[np.float32]:
-    """The ``observation`` vector of an :class:`~marsscene.sim.control.Observation`."""
+    """The ``observation`` vector of an :class:`~marsscene.sim.control.Observation`
+    (:func:`marsscene.env.taskmath.observation_vector` of one rover)."""
     if source == "truth":
         xy, yaw = obs.gt_xyz_m[:2], obs.gt_yaw_rad
     else:
         xy, yaw = obs.odom_xyz_m[:2], obs.odom_yaw_rad
-    dx, dy = goal_xy_m[0] - xy[0], goal_xy_m[1] - xy[1]
-    c, s = math.cos(yaw), math.sin(yaw)
-    gx, gy = c * dx + s * dy, -s * dx + c * dy
-    dist = math.hypot(gx, gy)
-    bearing = math.atan2(gy, gx)
-    v, w = body_twist_from_wheels(obs.wheel_rates_rad_s, obs.steer_rad, rover)
+    twist = body_twist_from_wheels(obs.wheel_rates_rad_s, obs.steer_rad, rover)
     acc = obs.accel_m_s2 if obs.accel_m_s2 is not None else np.array([0.0, 0.0, MARS_GRAVITY_M_S2])
     gyr = obs.gyro_rad_s if obs.gyro_rad_s is not None else np.zeros(3)
-    roll = math.atan2(acc[1], acc[2])
-    pitch = math.atan2(-acc[0], math.hypot(acc[1], acc[2]))
-    return np.array([gx, gy, dist, math.sin(bearing), math.cos(bearing), v, w, roll, pitch,
-                     *acc, *gyr, *last_action], dtype=np.float32)
+    f64 = lambda v: np.asarray(v, dtype=np.float64)  # noqa: E731
+    return taskmath.observation_vector(f64(xy), f64(yaw), f64(goal_xy_m), f64(twist), f64(acc),
+                                       f64(gyr), f64(last_action))
 
 
 #: Finest grid of the rock-augmented terrain of a :class:`HeightScanner` (m), and its size cap.
@@ -205,18 +201,14 @@ class HeightScanner:
     """Samples a :class:`HeightScan` of one world (its terrain with the rocks on it)."""
 
     def __init__(self, scan: HeightScan, heightfield: Any, obstacles: Any) -> None:
-        n = scan.points
-        u = (np.arange(n) - (n - 1) / 2.0) * scan.resolution_m
-        # rows: x forward (far first), columns: y left (left first) -- an image seen from above
-        self.fwd, self.left = np.meshgrid(u[::-1], u[::-1], indexing="ij")
+        self.fwd, self.left = taskmath.scan_grid_m(scan)
         self.terrain = rock_terrain(heightfield, obstacles)
 
     def __call__(self, xyz_m: NDArray[np.float64], yaw_rad: float) -> NDArray[np.float32]:
-        c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-        x = xyz_m[0] + c * self.fwd - s * self.left
-        y = xyz_m[1] + s * self.fwd + c * self.left
-        z = np.asarray(self.terrain.sample(x, y), dtype=np.float64)
-        return (z - xyz_m[2]).astype(np.float32)
+        t = self.terrain
+        return taskmath.height_scan(t.z_m, np.asarray(t.origin_xy_m), t.cell_size_m,
+                                    np.asarray(xyz_m, dtype=np.float64), np.float64(yaw_rad),
+                                    self.fwd, self.left)
 
 
 def lidar_image(scan: dict[str, Any] | None, shape: tuple[int, int]

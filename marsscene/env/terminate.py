@@ -21,8 +21,6 @@ judged, as the reward's ``stray`` term is not).
 
 from __future__ import annotations
 
-import math
-from collections import deque
 from typing import Any
 
 import numpy as np
@@ -30,21 +28,15 @@ from numpy.typing import NDArray
 
 from marsscene.env.reward import goal_reached, info_field
 from marsscene.env.task import NavTask
+from marsscene.env.taskmath import FAILURES, StuckClock, failure_code, up_z
 
 __all__ = ["FAILURES", "FailureJudge", "compute_terminated", "compute_truncated", "up_z"]
 
-#: The reasons an episode ends without the goal, in the order they are judged.
-FAILURES = ("tipped", "left_world", "strayed", "stuck")
-
-
-def up_z(q_wxyz: Any) -> float:
-    """The z component of the body's up axis in the world (the cosine of its tilt)."""
-    _, x, y, _ = q_wxyz
-    return float(1.0 - 2.0 * (x * x + y * y))
 
 
 class FailureJudge:
-    """The failures of one episode, judged step by step (it keeps the stuck clock).
+    """The failures of one episode, judged step by step (it keeps the stuck clock;
+    :func:`marsscene.env.taskmath.failure_code` of one rover).
 
     Parameters
     ----------
@@ -54,39 +46,28 @@ class FailureJudge:
         The terrain's ``x0, y0, x1, y1``.
     start_xy_m, goal_xy_m : ndarray (2,)
         The ends of the corridor.
+    control_hz : float
+        Steps per second (the stuck clock counts ``task.stuck_s`` of them).
     """
 
     def __init__(self, task: NavTask, bounds_xy_m: tuple[float, float, float, float],
-                 start_xy_m: NDArray[np.float64], goal_xy_m: NDArray[np.float64]) -> None:
-        self.task, self.bounds_xy_m = task, bounds_xy_m
-        self.start_xy_m, self.goal_xy_m = start_xy_m, goal_xy_m
-        self._track: deque[tuple[float, float, float]] = deque()
+                 start_xy_m: NDArray[np.float64], goal_xy_m: NDArray[np.float64], *,
+                 control_hz: float) -> None:
+        self.task, self.bounds_xy_m = task, np.asarray(bounds_xy_m, dtype=np.float64)
+        self.start_xy_m = np.asarray(start_xy_m, dtype=np.float64)
+        self.goal_xy_m = np.asarray(goal_xy_m, dtype=np.float64)
+        self._stuck = StuckClock(self.start_xy_m, (), round(task.stuck_s * control_hz),
+                                 task.stuck_m)
 
     def __call__(self, obs: Any, moving: bool) -> str:
         """The failure at this step's observation (``""``: none); ``moving``: motion was
         commanded (a pause restarts the stuck clock)."""
-        task, xy = self.task, obs.gt_xyz_m[:2]
-        if up_z(obs.gt_quat_wxyz) < math.cos(math.radians(task.max_tilt_deg)):
-            return "tipped"
-        x0, y0, x1, y1 = self.bounds_xy_m
-        if min(xy[0] - x0, x1 - xy[0], xy[1] - y0, y1 - xy[1]) < task.edge_m:
-            return "left_world"
-        start, seg = self.start_xy_m, self.goal_xy_m - self.start_xy_m
-        s = np.clip(np.dot(xy - start, seg) / max(np.dot(seg, seg), 1e-9), 0.0, 1.0)
-        if math.hypot(*(xy - start - s * seg)) > task.max_stray_m:
-            return "strayed"
-        return "stuck" if self._stuck(obs.t_s, xy, moving) else ""
-
-    def _stuck(self, t_s: float, xy: NDArray[np.float64], moving: bool) -> bool:
-        task = self.task
-        if not moving:
-            self._track.clear()
-            return False
-        self._track.append((t_s, float(xy[0]), float(xy[1])))
-        while t_s - self._track[0][0] > task.stuck_s + 1e-9:
-            self._track.popleft()
-        t0, x0, y0 = self._track[0]
-        return t_s - t0 >= task.stuck_s - 1e-9 and math.hypot(xy[0] - x0, xy[1] - y0) < task.stuck_m
+        xy = np.asarray(obs.gt_xyz_m[:2], dtype=np.float64)
+        stuck = self._stuck(xy, np.asarray(moving))
+        code = int(failure_code(np.asarray(obs.gt_quat_wxyz, dtype=np.float64), xy,
+                                self.bounds_xy_m, self.start_xy_m, self.goal_xy_m, stuck,
+                                self.task))
+        return FAILURES[code - 1] if code else ""
 
 
 def compute_terminated(achieved_goal: Any, desired_goal: Any, info: Any, *,

@@ -1,4 +1,5 @@
-"""The Perseverance-class rover's geometry and wheel kinematics (pure numpy, no MuJoCo).
+"""The Perseverance-class rover's geometry and wheel kinematics (no MuJoCo; the kinematics take
+numpy or PyTorch batches).
 
 Layout (``base_link`` frame: x forward, y left, z up, REP-103): six wheels on a rocker-bogie
 suspension with a differential (a joint equality ``rocker_left = -rocker_right``, the role of
@@ -13,8 +14,10 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
+from array_api_compat import array_namespace, device
 from numpy.typing import NDArray
 
 from marsscene.rover.config import RoverConfig
@@ -34,7 +37,7 @@ __all__ = [
 DRIVE_JOINTS = ("drive_fl", "drive_fr", "drive_ml", "drive_mr", "drive_rl", "drive_rr")
 #: Steering joints of the four corner wheels.
 STEER_JOINTS = ("steer_fl", "steer_fr", "steer_rl", "steer_rr")
-_STEERED = np.array([0, 1, 4, 5])  # indices into DRIVE_JOINTS
+_STEERED = [0, 1, 4, 5]  # indices into DRIVE_JOINTS
 
 ROCKER_Y_FRAC = 0.375  # rocker pivot |y| as a fraction of the track
 PIVOT_ABOVE_GROUND_M = 0.65
@@ -65,37 +68,35 @@ def _wheel_xy(cfg: RoverConfig) -> NDArray[np.float64]:
     return np.column_stack([xs, ys]).astype(np.float64)
 
 
-def wheel_commands(
-    v_m_s: float, omega_rad_s: float, cfg: RoverConfig
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def wheel_commands(v_m_s: Any, omega_rad_s: Any, cfg: RoverConfig) -> tuple[Any, Any]:
     """Map ``cmd_vel`` to wheel rates and corner steering angles (no-side-slip kinematics).
 
     Parameters
     ----------
-    v_m_s : float
-        Forward speed of ``base_link`` (in m/s).
-    omega_rad_s : float
+    v_m_s : float or array of shape (...)
+        Forward speed of ``base_link`` (in m/s): a number, or a numpy / PyTorch batch.
+    omega_rad_s : float or array of shape (...)
         Yaw rate (in rad/s), positive counter-clockwise seen from above.
     cfg : RoverConfig
 
     Returns
     -------
-    rates : ndarray of shape (6,)
+    rates : array of shape (..., 6)
         Wheel angular speeds (in rad/s), positive = rolling forward (DRIVE_JOINTS order).
-    steer : ndarray of shape (4,)
+    steer : array of shape (..., 4)
         Steering angles of the corner wheels (in rad), STEER_JOINTS order, within +-pi/2.
     """
-    xy = _wheel_xy(cfg)
-    vx = v_m_s - omega_rad_s * xy[:, 1]
-    vy = omega_rad_s * xy[:, 0]
-    delta = np.arctan2(vy, vx)
-    speed = np.hypot(vx, vy)
-    flip = np.abs(delta) > math.pi / 2 + 1e-12
-    delta = np.where(flip, delta - math.pi * np.sign(delta), delta)
-    speed = np.where(flip, -speed, speed)
-    delta = np.where(speed == 0.0, 0.0, delta)
-    steer = delta[_STEERED]
-    return speed / cfg.wheel_radius_m, steer
+    xp, v, w = _batch(v_m_s, omega_rad_s)
+    xy = xp.asarray(_wheel_xy(cfg), device=device(v))
+    vx = v[..., None] - w[..., None] * xy[:, 1]
+    vy = w[..., None] * xy[:, 0]
+    delta = xp.atan2(vy, vx)
+    speed = xp.hypot(vx, vy)
+    flip = xp.abs(delta) > math.pi / 2 + 1e-12
+    delta = xp.where(flip, delta - math.pi * xp.sign(delta), delta)
+    speed = xp.where(flip, -speed, speed)
+    delta = xp.where(speed == 0.0, xp.zeros_like(delta), delta)
+    return speed / cfg.wheel_radius_m, delta[..., _STEERED]
 
 
 def body_twist_from_wheels(
@@ -110,20 +111,30 @@ def body_twist_from_wheels(
     delta[_STEERED] = steer_rad
     u = cfg.wheel_radius_m * np.asarray(rates_rad_s, dtype=np.float64)
     b = np.concatenate([u * np.cos(delta), u * np.sin(delta)])
-    sol = _odometry_pinv(cfg) @ b
+    sol = _odometry_pinv(cfg) @ b  # one rover: a matrix-vector product (the odometry's bits)
     return float(sol[0]), float(sol[1])
 
 
-def body_twists_from_wheels(
-    rates_rad_s: NDArray[np.float64], steer_rad: NDArray[np.float64], cfg: RoverConfig
-) -> NDArray[np.float64]:
-    """Vectorised :func:`body_twist_from_wheels`: (N, 6) rates, (N, 4) steering -> (N, 2)."""
-    rates = np.asarray(rates_rad_s, dtype=np.float64).reshape(-1, 6)
-    delta = np.zeros_like(rates)
-    delta[:, _STEERED] = np.asarray(steer_rad, dtype=np.float64).reshape(-1, 4)
+def body_twists_from_wheels(rates_rad_s: Any, steer_rad: Any, cfg: RoverConfig) -> Any:
+    """Batched :func:`body_twist_from_wheels`: (..., 6) rates, (..., 4) steering -> (..., 2)
+    ``(v, omega)``; numpy or PyTorch arrays (float64)."""
+    xp = array_namespace(rates_rad_s, steer_rad)
+    rates = xp.astype(rates_rad_s, xp.float64)
+    delta = xp.zeros_like(rates)
+    delta[..., _STEERED] = xp.astype(steer_rad, xp.float64)
     u = cfg.wheel_radius_m * rates
-    b = np.concatenate([u * np.cos(delta), u * np.sin(delta)], axis=1)
-    return np.asarray(b @ _odometry_pinv(cfg).T, dtype=np.float64)
+    b = xp.concat([u * xp.cos(delta), u * xp.sin(delta)], axis=-1)
+    pinv = xp.asarray(_odometry_pinv(cfg), device=device(rates))
+    return b @ pinv.T
+
+
+def _batch(*values: Any) -> tuple[Any, ...]:
+    """The array namespace of ``values`` (numpy for plain numbers) and the values as float64
+    arrays of it."""
+    arrays = [v for v in values if hasattr(v, "__array_namespace__") or hasattr(v, "dtype")]
+    xp = array_namespace(*arrays) if arrays else array_namespace(np.zeros(0))
+    dev = device(arrays[0]) if arrays else None
+    return (xp, *(xp.asarray(v, dtype=xp.float64, device=dev) for v in values))
 
 
 def sensor_mounts(cfg: RoverConfig) -> dict[str, tuple[tuple[float, float, float], float]]:

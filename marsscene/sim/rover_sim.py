@@ -28,7 +28,7 @@ from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.terrain import scene_heightfield
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["PREFIX", "RoverSim", "load_scene_spec"]
+__all__ = ["PREFIX", "RoverSim", "load_scene_spec", "rover_indices"]
 
 PREFIX = "rover/"
 
@@ -64,6 +64,34 @@ def load_scene_spec(
         return mujoco.MjSpec.from_string(culled, assets=assets), xml, (kept, total)
     except (ValueError, OSError) as err:  # mujoco raises ValueError with the parser message
         raise RuntimeSimError(f"{xml}: MuJoCo cannot parse it: {err}") from None
+
+
+def rover_indices(m: Any) -> dict[str, Any]:
+    """Where the rover (attached with :data:`PREFIX`) lives in a compiled model: body, root
+    joint, actuators, joints, wheel geoms, sites, camera and IMU sensor addresses."""
+    name = lambda kind, n: mujoco.mj_name2id(m, kind, PREFIX + n)  # noqa: E731
+    root = name(mujoco.mjtObj.mjOBJ_JOINT, "root")
+    drive_j = [name(mujoco.mjtObj.mjOBJ_JOINT, j) for j in DRIVE_JOINTS]
+    steer_j = [name(mujoco.mjtObj.mjOBJ_JOINT, j) for j in STEER_JOINTS]
+    acc = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, PREFIX + "imu_accel")
+    gyr = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, PREFIX + "imu_gyro")
+    return {
+        "base_id": name(mujoco.mjtObj.mjOBJ_BODY, "base_link"),
+        "qpos_root": int(m.jnt_qposadr[root]),
+        "qvel_root": int(m.jnt_dofadr[root]),
+        "drive_act": np.array([name(mujoco.mjtObj.mjOBJ_ACTUATOR, j) for j in DRIVE_JOINTS]),
+        "steer_act": np.array([name(mujoco.mjtObj.mjOBJ_ACTUATOR, j) for j in STEER_JOINTS]),
+        "drive_dof": np.array([m.jnt_dofadr[j] for j in drive_j]),
+        "steer_qpos": np.array([m.jnt_qposadr[j] for j in steer_j]),
+        "wheel_geoms": np.array([name(mujoco.mjtObj.mjOBJ_GEOM, "wheel_" + j[-2:])
+                                 for j in DRIVE_JOINTS]),
+        "chassis_geom": name(mujoco.mjtObj.mjOBJ_GEOM, "chassis"),
+        "imu_site": name(mujoco.mjtObj.mjOBJ_SITE, "imu"),
+        "lidar_site": name(mujoco.mjtObj.mjOBJ_SITE, "lidar"),
+        "camera_id": name(mujoco.mjtObj.mjOBJ_CAMERA, "navcam"),
+        "_acc_adr": int(m.sensor_adr[acc]),
+        "_gyr_adr": int(m.sensor_adr[gyr]),
+    }
 
 
 class RoverSim:
@@ -161,28 +189,15 @@ class RoverSim:
         return spec
 
     def _ids(self) -> None:
-        m = self.model
-        name = lambda kind, n: mujoco.mj_name2id(m, kind, PREFIX + n)  # noqa: E731
-        self.base_id = name(mujoco.mjtObj.mjOBJ_BODY, "base_link")
-        root = name(mujoco.mjtObj.mjOBJ_JOINT, "root")
-        self.qpos_root = int(m.jnt_qposadr[root])
-        self.qvel_root = int(m.jnt_dofadr[root])
-        self.drive_act = np.array([name(mujoco.mjtObj.mjOBJ_ACTUATOR, j) for j in DRIVE_JOINTS])
-        self.steer_act = np.array([name(mujoco.mjtObj.mjOBJ_ACTUATOR, j) for j in STEER_JOINTS])
-        drive_j = [name(mujoco.mjtObj.mjOBJ_JOINT, j) for j in DRIVE_JOINTS]
-        steer_j = [name(mujoco.mjtObj.mjOBJ_JOINT, j) for j in STEER_JOINTS]
-        self.drive_dof = np.array([m.jnt_dofadr[j] for j in drive_j])
-        self.steer_qpos = np.array([m.jnt_qposadr[j] for j in steer_j])
-        self.wheel_geoms = np.array(
-            [name(mujoco.mjtObj.mjOBJ_GEOM, "wheel_" + j[-2:]) for j in DRIVE_JOINTS]
-        )
-        self.imu_site = name(mujoco.mjtObj.mjOBJ_SITE, "imu")
-        self.lidar_site = name(mujoco.mjtObj.mjOBJ_SITE, "lidar")
-        self.camera_id = name(mujoco.mjtObj.mjOBJ_CAMERA, "navcam")
-        acc = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, PREFIX + "imu_accel")
-        gyr = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, PREFIX + "imu_gyro")
-        self._acc_adr = int(m.sensor_adr[acc])
-        self._gyr_adr = int(m.sensor_adr[gyr])
+        ix = rover_indices(self.model)
+        self.base_id = ix["base_id"]
+        self.qpos_root, self.qvel_root = ix["qpos_root"], ix["qvel_root"]
+        self.drive_act, self.steer_act = ix["drive_act"], ix["steer_act"]
+        self.drive_dof, self.steer_qpos = ix["drive_dof"], ix["steer_qpos"]
+        self.wheel_geoms, self.chassis_geom = ix["wheel_geoms"], ix["chassis_geom"]
+        self.imu_site, self.lidar_site = ix["imu_site"], ix["lidar_site"]
+        self.camera_id = ix["camera_id"]
+        self._acc_adr, self._gyr_adr = ix["_acc_adr"], ix["_gyr_adr"]
 
     def _spawn_pose(self, xy: tuple[float, float], yaw: float) -> NDArray[np.float64]:
         return spawn_pose(self.heightfield, xy, yaw, self.rover)

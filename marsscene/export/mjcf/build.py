@@ -8,7 +8,13 @@ from typing import Any
 from marsscene._format import fmt
 from marsscene._version import __version__
 from marsscene.export.mjcf.assets import add_assets
-from marsscene.export.mjcf.common import HFIELD_ASSET, REGOLITH_FRICTION, TEXTURE_ASSET, png_bytes
+from marsscene.export.mjcf.common import (
+    HFIELD_ASSET,
+    INTEGRATOR,
+    REGOLITH_FRICTION,
+    TEXTURE_ASSET,
+    png_bytes,
+)
 from marsscene.export.mjcf.hfield import hfield_spec
 from marsscene.export.mjcf.lighting import add_lighting
 from marsscene.export.mjcf.rocks import add_rocks
@@ -23,7 +29,7 @@ def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
     ET.SubElement(
         root, "option", timestep="0.002", gravity=fmt((0.0, 0.0, -MARS_GRAVITY_M_S2)),
-        integrator="implicitfast",
+        integrator=INTEGRATOR,
     )
     size_info = ET.SubElement(root, "custom")
     ET.SubElement(size_info, "text", name="marsscene",

@@ -8,12 +8,14 @@ from typing import Any
 from marsscene._format import fmt
 from marsscene._layout import MJCF_HFIELD_ASSET, MJCF_TEXTURE_ASSET
 
-__all__ = ["HFIELD_ASSET", "REGOLITH_FRICTION", "TEXTURE_ASSET", "fmt", "png_bytes"]
+__all__ = ["HFIELD_ASSET", "INTEGRATOR", "REGOLITH_FRICTION", "TEXTURE_ASSET", "fmt", "png_bytes"]
 
 #: Regolith friction (sliding, torsional, rolling). Sliding 0.8 ~ tan(38 deg), within the
 #: 30-40 deg internal friction angles measured for Martian soils (Sullivan et al. 2011,
 #: doi:10.1029/2010JE003625).
 REGOLITH_FRICTION = (0.8, 0.02, 0.002)
+#: MuJoCo's integrator of every scene (stable with stiff contacts at a 2-10 ms step).
+INTEGRATOR = "implicitfast"
 HFIELD_ASSET = MJCF_HFIELD_ASSET
 TEXTURE_ASSET = MJCF_TEXTURE_ASSET
 

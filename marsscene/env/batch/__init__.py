@@ -1,0 +1,25 @@
+"""Batched navigation on a GPU: thousands of rovers stepped together by MuJoCo Warp
+(``pip install "marsscene[gpu]"``), the task of :mod:`marsscene.env` computed on the device.
+
+- :class:`BatchNavEnv`: N rovers on W worlds; arrays (PyTorch, or numpy on Warp's CPU device)
+  in and out.
+- :class:`WorldBatch`: the worlds as arrays, built once from scene folders or a
+  :class:`~marsscene.env.worlds.WorldSampler` and saved as one ``.npz``.
+- :class:`RslRlVecEnv`: the interface rsl-rl's runners train (``rsl-rl-lib``).
+- :class:`BatchVectorEnv`: Gymnasium's vector API.
+
+Docs: ``docs/gym.md`` (the batched environment); figures: ``docs/results/gym.md``.
+"""
+
+from __future__ import annotations
+
+from marsscene._lazy import lazy_attributes
+
+__all__ = ["BatchNavEnv", "BatchVectorEnv", "RslRlVecEnv", "WorldBatch"]
+
+__getattr__ = lazy_attributes(__name__, {
+    "BatchNavEnv": "marsscene.env.batch.env",
+    "BatchVectorEnv": "marsscene.env.batch.adapters",
+    "RslRlVecEnv": "marsscene.env.batch.adapters",
+    "WorldBatch": "marsscene.env.batch.worlds",
+})

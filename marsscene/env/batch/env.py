@@ -1,0 +1,287 @@
+"""``BatchNavEnv``: thousands of rovers navigating to goals, stepped together by MuJoCo Warp.
+
+The task is :class:`~marsscene.env.nav.RoverNavEnv`'s, computed by the same functions
+(:mod:`marsscene.env.taskmath`) on (N,) batches that stay on the device: the observation
+(``observation`` vector and height scan), the reward terms, the failures and the time limit.
+Each rover is on one of W worlds (:class:`~.worlds.WorldBatch`; a tile of the shared
+heightfield, :mod:`.model`) and is reset on its own when its episode ends, to an episode drawn
+from the batch's pool: a start, heading and goal drawn as the CPU environment draws them, the
+rover settled there once for ``task.start_settle_s`` when the environment is made (a start where
+it leans over ``task.start_max_tilt_deg`` is replaced by another of its world).
+
+Differences from the CPU environment, by design: the sensors are noise-free (the IMU and wheel
+encoders MuJoCo Warp computes; ``ObsConfig.noise_profile`` must be ``"none"``), the pose is the
+ground truth (``pose_source="truth"``), rocks are relief of the terrain (a wheel "collides"
+with a rock where it touches ground raised by one), and there is no camera or LiDAR.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from marsscene.env import taskmath
+from marsscene.env.batch.backend import Backend
+from marsscene.env.batch.judge import judge
+from marsscene.env.batch.model import tiled_model
+from marsscene.env.batch.pool import settle_pool
+from marsscene.env.batch.worlds import WorldBatch
+from marsscene.env.episode import MOVING_CMD
+from marsscene.env.observe import ObsConfig
+from marsscene.env.reward import RewardConfig
+from marsscene.env.task import NavTask
+from marsscene.errors import ConfigError
+from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RoverConfig
+from marsscene.rover.geometry import body_twists_from_wheels, wheel_commands
+
+__all__ = ["BatchNavEnv"]
+
+#: Ground raised this much by a rock (m) counts as the rock (the ``collision`` term).
+ROCK_CONTACT_M = 0.02
+
+
+class BatchNavEnv:
+    """N rovers on W worlds, one MuJoCo Warp batch; arrays in, arrays out.
+
+    Parameters
+    ----------
+    worlds : WorldBatch, path, WorldSampler, folder or list of folders
+        A batch (or its ``.npz``), or worlds to build one from (``pool`` episodes each).
+    num_envs : int
+        Rovers N.
+    task, observations, reward, rover, control_hz, physics_hz
+        As :class:`~marsscene.env.nav.RoverNavEnv`'s (observations: height scan only).
+    device : str, optional
+        Warp device (default: ``cuda:0`` where there is a GPU, else ``cpu``).
+    library : {"torch", "numpy"}, optional
+        Arrays returned (default: PyTorch where installed).
+    seed : int
+        Seed of the episode draws.
+    post_m : float, optional
+        Post spacing of the physics heightfield (rocks as relief); default: the worlds' own.
+    nconmax, njmax : int
+        Contacts and constraint rows allocated per world (MuJoCo Warp).
+    """
+
+    def __init__(self, worlds: Any, *, num_envs: int = 1024, task: NavTask | None = None,
+                 observations: ObsConfig | None = None, reward: RewardConfig | None = None,
+                 rover: RoverConfig | None = None, control_hz: float = 5.0,
+                 physics_hz: float = 100.0, device: str | None = None,
+                 library: str | None = None, seed: int = 0, pool: int = 256,
+                 post_m: float | None = None, nconmax: int = 48,
+                 njmax: int = 192) -> None:
+        import mujoco_warp as mjw
+        import warp as wp
+
+        self.task = task if task is not None else NavTask()
+        self.obs_config = (observations if observations is not None
+                           else ObsConfig(noise_profile="none"))
+        self.reward_config = reward if reward is not None else RewardConfig()
+        self.rover = rover if rover is not None else RoverConfig()
+        _check(self.obs_config, num_envs, control_hz, physics_hz)
+        self.num_envs, self.control_hz = int(num_envs), float(control_hz)
+        self.substeps = round(physics_hz / control_hz)
+        self.steps_total = self.task.episode_steps(control_hz)
+        self.batch = _batch(worlds, self.task, pool, seed)
+        terrains = self.batch.rock_terrains()
+        bare = [self.batch.heightfield(w) for w in range(self.batch.count)]
+        tiled = tiled_model(terrains, bare, rover=self.rover, physics_hz=physics_hz,
+                            post_m=post_m if post_m is not None else self.batch.cell_m)
+        self.mj_model = tiled.model
+        self.ids: dict[str, Any] = {  # index lists: numpy and PyTorch take them
+            k: [int(i) for i in v] if isinstance(v, np.ndarray) else v
+            for k, v in tiled.ids.items()}
+        wp.init()
+        self.bk = bk = Backend(device or ("cuda:0" if wp.is_cuda_available() else "cpu"),
+                               library, seed)
+        self.device, self.xp = bk.device, bk.xp
+        data = mujoco.MjData(self.mj_model)  # (not forwarded: the rover at qpos0 is in the ground)
+        with wp.ScopedDevice(self.device):
+            self.mjw_model = mjw.put_model(self.mj_model)
+            self.mjw_data = mjw.put_data(self.mj_model, data, nworld=self.num_envs,
+                                         nconmax=nconmax, njmax=njmax)
+        self._mjw, self._graph = mjw, None
+        self._v = {k: bk.view(getattr(self.mjw_data, k)) for k in
+                   ("qpos", "qvel", "ctrl", "sensordata", "nacon")}
+        con = self.mjw_data.contact
+        self._con = {k: bk.view(getattr(con, k)) for k in ("geom", "worldid", "pos")}
+        self._reset_mask = wp.zeros(self.num_envs, dtype=bool, device=self.device)
+        self._task_arrays(terrains, tiled.offsets_xy_m)
+        with bk.on_stream():
+            self._pool = settle_pool(self, terrains, data, nconmax, njmax)
+            self._capture()
+            self.reset()
+
+    # ---- set-up ----------------------------------------------------------------------------
+    def _task_arrays(self, terrains: list[Any], offsets: np.ndarray) -> None:
+        bk, xp, n = self.bk, self.xp, self.num_envs
+        scan = self.obs_config.height_scan
+        fwd, left = taskmath.scan_grid_m(scan) if scan is not None else (np.zeros((0, 0)),) * 2
+        self._fwd, self._left = bk.asarray(fwd), bk.asarray(left)
+        grids = np.stack([t.z_m for t in terrains])
+        self._grids = bk.asarray(grids)
+        self._grid_origins = bk.asarray(np.array([t.origin_xy_m for t in terrains], float))
+        self._cell_m = float(terrains[0].cell_size_m)
+        bare = [self.batch.heightfield(w).sample(*np.meshgrid(
+            t.origin_xy_m[0] + np.arange(t.z_m.shape[1]) * t.cell_size_m,
+            t.origin_xy_m[1] + np.arange(t.z_m.shape[0]) * t.cell_size_m))
+            for w, t in enumerate(terrains)]
+        self._rock_cells = bk.asarray((grids - np.stack(bare)) > ROCK_CONTACT_M, xp.float32)
+        self._offsets = bk.asarray(offsets)
+        self._bounds = bk.asarray(self.batch.bounds_xy_m)
+        self.world = xp.zeros(n, dtype=xp.int64, device=_dev(self._offsets))
+        zeros2 = xp.zeros((n, 2), dtype=xp.float64, device=_dev(self._offsets))
+        self.start_xy_m, self.goal_xy_m, self.last_action = zeros2, zeros2 * 1, zeros2 * 1
+        self.steps_done = xp.zeros(n, dtype=xp.int64, device=_dev(self._offsets))
+        self.last_distance_m = xp.zeros(n, dtype=xp.float64, device=_dev(self._offsets))
+        self._stuck = taskmath.StuckClock(self._offsets, (n,), round(self.task.stuck_s *
+                                          self.control_hz), self.task.stuck_m)
+        self.episodes = xp.zeros(2, dtype=xp.int64, device=_dev(self._offsets))  # ended, won
+        self._wheels = [int(g) for g in self.ids["wheel_geoms"]]
+
+    # ---- episodes --------------------------------------------------------------------------
+    def reset(self) -> dict[str, Any]:
+        """Start a new episode on every rover; the observations."""
+        with self.bk.on_stream():
+            self._restart(self.xp.ones(self.num_envs, dtype=self.xp.bool,
+                                       device=_dev(self._offsets)))
+            return self.observe()
+
+    def _restart(self, done: Any) -> None:
+        """Put the rovers in ``done`` (N,) bool at a start drawn from the pool."""
+        xp, bk, pool = self.xp, self.bk, self._pool
+        bk.view(self._reset_mask)[...] = done
+        self._mjw.reset_data(self.mjw_model, self.mjw_data, reset=self._reset_mask)
+        pick = bk.randint(pool["qpos"].shape[0], self.num_envs)
+        col = done[:, None]
+        for key in ("qpos", "qvel", "sensordata"):
+            self._v[key][...] = xp.where(col, pool[key][pick], self._v[key])
+        self._v["ctrl"][...] = xp.where(col, self._v["ctrl"] * 0, self._v["ctrl"])
+        self.world = xp.where(done, pool["world"][pick], self.world)
+        self.start_xy_m = xp.where(col, pool["start"][pick], self.start_xy_m)
+        self.goal_xy_m = xp.where(col, pool["goal"][pick], self.goal_xy_m)
+        self.last_action = xp.where(col, self.last_action * 0, self.last_action)
+        self.steps_done = xp.where(done, self.steps_done * 0, self.steps_done)
+        gap = self.goal_xy_m - self.start_xy_m
+        self.last_distance_m = xp.where(done, xp.hypot(gap[:, 0], gap[:, 1]),
+                                        self.last_distance_m)
+        self._stuck.restart(done)
+
+    # ---- stepping --------------------------------------------------------------------------
+    def _capture(self) -> None:
+        """On a GPU, record one control period of physics as a CUDA graph (before the first
+        reset: the warm-up step that compiles the kernels is then forgotten)."""
+        wp, mjw = self.bk.wp, self._mjw
+        if self.device.startswith("cuda"):
+            with wp.ScopedDevice(self.device):
+                mjw.step(self.mjw_model, self.mjw_data)
+                with wp.ScopedCapture() as cap:
+                    for _ in range(self.substeps):
+                        mjw.step(self.mjw_model, self.mjw_data)
+                self._graph = cap.graph
+
+    def _physics(self) -> None:
+        wp, mjw = self.bk.wp, self._mjw
+        with wp.ScopedDevice(self.device):
+            if self._graph is not None:
+                wp.capture_launch(self._graph)
+            else:
+                for _ in range(self.substeps):
+                    mjw.step(self.mjw_model, self.mjw_data)
+
+    def step(self, action: Any) -> tuple[dict[str, Any], Any, Any, Any, dict[str, Any]]:
+        """Apply ``action`` (N, 2) normalised ``[v, omega]`` for one control period; the
+        observations (of the next episode where one ended), reward, terminated, truncated and
+        info (``termination`` code: 0 none, 1 goal, 2 + the index in
+        :data:`~marsscene.env.taskmath.FAILURES`; ``final_observation`` of the rovers reset)."""
+        xp = self.xp
+        with self.bk.on_stream():
+            a = xp.clip(xp.astype(xp.asarray(action), xp.float64), -1.0, 1.0)
+            v, w = a[:, 0] * V_MAX_M_S, a[:, 1] * OMEGA_MAX_RAD_S
+            rates, steer = wheel_commands(v, w, self.rover)
+            ctrl = self._v["ctrl"]
+            ctrl[:, self.ids["drive_act"]] = xp.astype(rates, ctrl.dtype)
+            ctrl[:, self.ids["steer_act"]] = xp.astype(steer, ctrl.dtype)
+            self._physics()
+            self.steps_done = self.steps_done + 1
+            moving = (xp.abs(v) > MOVING_CMD) | (xp.abs(w) > MOVING_CMD)
+            reward, terminated, truncated, code = self._judge(a, moving)
+            final = self.observe()
+            self.last_action = a
+            done = terminated | truncated
+            self.episodes = self.episodes + xp.stack([xp.sum(xp.astype(done, xp.int64)),
+                                                      xp.sum(xp.astype(code == 1, xp.int64))])
+            self._restart(done)
+            obs = self.observe()
+        return obs, reward, terminated, truncated, {"termination": code,
+                                                    "final_observation": final}
+
+    def _state(self) -> dict[str, Any]:
+        ids, q, xp = self.ids, self._v["qpos"], self.xp
+        r = ids["qpos_root"]
+        xyz = xp.astype(q[:, r: r + 3], xp.float64)
+        off = self._offsets[self.world]
+        xyz = xp.concat([xyz[:, :2] - off, xyz[:, 2:]], axis=1)
+        s = self._v["sensordata"]
+        return {"xyz": xyz, "quat": xp.astype(q[:, r + 3: r + 7], xp.float64),
+                "rates": self._v["qvel"][:, ids["drive_dof"]],
+                "steer": q[:, ids["steer_qpos"]],
+                "accel": xp.astype(s[:, ids["_acc_adr"]: ids["_acc_adr"] + 3], xp.float64),
+                "gyro": xp.astype(s[:, ids["_gyr_adr"]: ids["_gyr_adr"] + 3], xp.float64)}
+
+    def observe(self) -> dict[str, Any]:
+        """The observations of the rovers now (the CPU environment's keys)."""
+        xp, st = self.xp, self._state()
+        yaw = taskmath.body_yaw(st["quat"])
+        twist = body_twists_from_wheels(st["rates"], st["steer"], self.rover)
+        out = {"observation": taskmath.observation_vector(
+                   st["xyz"][:, :2], yaw, self.goal_xy_m, twist, st["accel"], st["gyro"],
+                   self.last_action),
+               "achieved_goal": xp.astype(st["xyz"][:, :2], xp.float32),
+               "desired_goal": xp.astype(self.goal_xy_m, xp.float32)}
+        if self.obs_config.height_scan is not None:
+            out["height_scan"] = taskmath.height_scan(
+                self._grids, self._grid_origins, self._cell_m, st["xyz"], yaw, self._fwd,
+                self._left, self.world)
+        return out
+
+    def _judge(self, a: Any, moving: Any) -> tuple[Any, Any, Any, Any]:
+        return judge(self, a, moving)
+
+    @property
+    def success_rate(self) -> float:
+        """Goals reached over episodes ended so far (host read)."""
+        ended, won = (int(v) for v in self.bk.to_numpy(self.episodes))
+        return won / ended if ended else float("nan")
+
+
+def _dev(x: Any) -> Any:
+    from array_api_compat import device
+
+    return device(x)
+
+
+def _check(obs: ObsConfig, num_envs: int, control_hz: float, physics_hz: float) -> None:
+    if obs.camera is not None or obs.lidar is not None:
+        raise ConfigError("the batched environment observes the state and a height scan; "
+                          "drop camera and lidar (RoverNavEnv has them)")
+    if obs.noise_profile != "none" or obs.pose_source != "truth":
+        raise ConfigError("the batched environment's sensors are noise-free and its pose the "
+                          "truth: use ObsConfig(noise_profile='none', pose_source='truth')")
+    if not 1 <= int(num_envs) <= 1_000_000:
+        raise ConfigError(f"num_envs = {num_envs}; give 1 to 1000000 rovers")
+    ratio = physics_hz / control_hz
+    if control_hz <= 0 or abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+        raise ConfigError(f"physics_hz = {physics_hz:g} is not a whole multiple of "
+                          f"control_hz = {control_hz:g}")
+
+
+def _batch(worlds: Any, task: NavTask, pool: int, seed: int) -> WorldBatch:
+    if isinstance(worlds, WorldBatch):
+        return worlds
+    if isinstance(worlds, str | Path) and str(worlds).endswith(".npz"):
+        return WorldBatch.load(worlds)
+    return WorldBatch.build(worlds, task=task, pool=pool, seed=seed)

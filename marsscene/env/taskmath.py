@@ -1,0 +1,245 @@
+"""The navigation task's arithmetic, once, for one rover or thousands: numpy or PyTorch arrays
+of any batch shape (the Python array API through ``array_api_compat``).
+
+:class:`~marsscene.env.nav.RoverNavEnv` (MuJoCo on a CPU core) calls these functions on arrays
+of one rover; :class:`~marsscene.env.batch.BatchNavEnv` (MuJoCo Warp) on (N,) batches, PyTorch
+tensors on the GPU. Each takes the state the task reads -- the ``base_link`` position and yaw,
+the wheels, the IMU, the goal -- and returns arrays of the same batch shape:
+
+- :func:`observation_vector`: the 17 values of ``observation`` (layout in :mod:`.observe`);
+- :func:`scan_heights`: a height scan sampled from one terrain grid, or from a stack of them;
+- :func:`goal_terms` / :func:`step_terms`: the reward terms (:mod:`.reward`);
+- :func:`failure_code` and :class:`StuckClock`: why an episode ends (:mod:`.terminate`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from array_api_compat import array_namespace
+
+__all__ = ["FAILURES", "StuckClock", "bearing_rad", "body_yaw", "failure_code", "goal_in_body",
+           "goal_terms", "height_scan", "observation_vector", "scan_grid_m", "scan_heights",
+           "step_terms", "up_z"]
+
+#: The reasons an episode ends without the goal, in the order they are judged
+#: (:func:`failure_code` returns 1 + the index; 0: none).
+FAILURES = ("tipped", "left_world", "strayed", "stuck")
+
+
+def up_z(q_wxyz: Any) -> Any:
+    """The z component of the body's up axis in the world (the cosine of its tilt);
+    ``q_wxyz`` (..., 4)."""
+    x, y = q_wxyz[..., 1], q_wxyz[..., 2]
+    return 1.0 - 2.0 * (x * x + y * y)
+
+
+def body_yaw(q_wxyz: Any) -> Any:
+    """Heading (rad, counter-clockwise from east) of (..., 4) quaternions (w, x, y, z)."""
+    xp = array_namespace(q_wxyz)
+    w, x, y, z = (q_wxyz[..., i] for i in range(4))
+    return xp.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def goal_in_body(xy_m: Any, yaw_rad: Any, goal_xy_m: Any) -> Any:
+    """The goal in the body frame: (..., 5) of x forward, y left (m), distance (m), and the sine
+    and cosine of its bearing."""
+    xp = array_namespace(xy_m, goal_xy_m)
+    dx, dy = goal_xy_m[..., 0] - xy_m[..., 0], goal_xy_m[..., 1] - xy_m[..., 1]
+    c, s = xp.cos(yaw_rad), xp.sin(yaw_rad)
+    gx, gy = c * dx + s * dy, -s * dx + c * dy
+    bearing = xp.atan2(gy, gx)
+    return xp.stack([gx, gy, xp.hypot(gx, gy), xp.sin(bearing), xp.cos(bearing)], axis=-1)
+
+
+def observation_vector(xy_m: Any, yaw_rad: Any, goal_xy_m: Any, twist: Any, accel_m_s2: Any,
+                       gyro_rad_s: Any, last_action: Any) -> Any:
+    """The ``observation`` vector, (..., 17) float32: the goal in the body frame, the body twist
+    ``(v, omega)`` from the wheels, roll and pitch from the accelerometer, the IMU sample and the
+    last (normalised) action."""
+    xp = array_namespace(xy_m, accel_m_s2)
+    ax, ay, az = accel_m_s2[..., 0], accel_m_s2[..., 1], accel_m_s2[..., 2]
+    roll = xp.atan2(ay, az)
+    pitch = xp.atan2(-ax, xp.hypot(ay, az))
+    parts = [goal_in_body(xy_m, yaw_rad, goal_xy_m), twist, roll[..., None], pitch[..., None],
+             accel_m_s2, gyro_rad_s, last_action]
+    return xp.astype(xp.concat([xp.astype(p, xp.float64) for p in parts], axis=-1), xp.float32)
+
+
+def scan_grid_m(scan: Any) -> tuple[Any, Any]:
+    """The (forward, left) offsets (m) of a :class:`~marsscene.env.observe.HeightScan`'s
+    points, each (n, n) numpy float64: rows run forward (far first), columns left (left first),
+    an image seen from above."""
+    import numpy as np
+
+    n = scan.points
+    u = (np.arange(n) - (n - 1) / 2.0) * scan.resolution_m
+    fwd, left = np.meshgrid(u[::-1], u[::-1], indexing="ij")
+    return fwd, left
+
+
+def height_scan(grid_z_m: Any, origin_xy_m: Any, cell_m: float, xyz_m: Any, yaw_rad: Any,
+                fwd_m: Any, left_m: Any, world: Any = None) -> Any:
+    """Height scans (..., n, n) float32: the terrain under the points ``fwd_m``, ``left_m``
+    (n, n) around each rover in its heading frame, relative to its ``base_link`` height
+    (``xyz_m`` (..., 3)); the grids as :func:`scan_heights` takes them."""
+    xp = array_namespace(xyz_m)
+    c, s = xp.cos(yaw_rad)[..., None, None], xp.sin(yaw_rad)[..., None, None]
+    x0, y0 = xyz_m[..., 0, None, None], xyz_m[..., 1, None, None]
+    x = x0 + c * fwd_m - s * left_m
+    y = y0 + s * fwd_m + c * left_m
+    z = scan_heights(grid_z_m, origin_xy_m, cell_m, x, y, world)
+    return xp.astype(z - xyz_m[..., 2, None, None], xp.float32)
+
+
+def bearing_rad(xy_m: Any, goal_xy_m: Any, yaw_rad: Any) -> Any:
+    """The goal's bearing from the heading (rad, in [-pi, pi))."""
+    xp = array_namespace(xy_m, goal_xy_m)
+    ang = xp.atan2(goal_xy_m[..., 1] - xy_m[..., 1], goal_xy_m[..., 0] - xy_m[..., 0]) - yaw_rad
+    return (ang + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def scan_heights(grid_z_m: Any, origin_xy_m: Any, cell_m: float, x_m: Any, y_m: Any,
+                 world: Any = None) -> Any:
+    """Bilinear heights of a terrain grid at points (clamped to its footprint), float64.
+
+    ``grid_z_m`` (rows, cols) with ``origin_xy_m`` its post (0, 0) and ``world`` None; or a
+    stack (W, rows, cols) with (W, 2) origins and ``world`` (N,) the grid of each of the (N, ...)
+    points. The rule is :meth:`~marsscene.terrain.heightfield.Heightfield.sample`'s.
+    """
+    xp = array_namespace(grid_z_m, x_m)
+    rows, cols = grid_z_m.shape[-2], grid_z_m.shape[-1]
+    if world is None:
+        ox, oy, flat = origin_xy_m[0], origin_xy_m[1], xp.reshape(grid_z_m, (-1,))
+    else:
+        extra = (None,) * (x_m.ndim - 1)
+        ox = origin_xy_m[world, 0][(..., *extra)]
+        oy = origin_xy_m[world, 1][(..., *extra)]
+        flat = xp.reshape(grid_z_m, (grid_z_m.shape[0], -1))
+    r = xp.clip((y_m - oy) / cell_m, 0.0, rows - 1.0)
+    c = xp.clip((x_m - ox) / cell_m, 0.0, cols - 1.0)
+    r0 = xp.clip(xp.astype(xp.floor(r), xp.int64), None, rows - 2)
+    c0 = xp.clip(xp.astype(xp.floor(c), xp.int64), None, cols - 2)
+    fr, fc = r - xp.astype(r0, r.dtype), c - xp.astype(c0, c.dtype)
+    i = r0 * cols + c0
+    if world is None:
+        z = [xp.astype(xp.take(flat, xp.reshape(i + k, (-1,))), xp.float64) for k in
+             (0, 1, cols, cols + 1)]
+        z = [xp.reshape(v, i.shape) for v in z]
+    else:
+        w = world[(..., *((None,) * (i.ndim - 1)))]
+        z = [xp.astype(flat[w, i + k], xp.float64) for k in (0, 1, cols, cols + 1)]
+    return (z[0] * (1 - fc) + z[1] * fc) * (1 - fr) + (z[2] * (1 - fc) + z[3] * fc) * fr
+
+
+def goal_terms(dist_m: Any, bearing_abs_rad: Any, reached: Any, steps_left: Any, *,
+               steps_total: float, cfg: Any) -> dict[str, Any]:
+    """The goal-dependent reward terms (weighted; :mod:`.reward`), from the goal distance, the
+    absolute bearing, whether the goal is reached, and the steps left."""
+    xp = array_namespace(dist_m)
+    zero = xp.zeros_like(dist_m)
+    if cfg.kind == "sparse":
+        return {"goal": xp.where(reached, zero, zero - 1.0)}
+    t = float(steps_total)
+    b, d = bearing_abs_rad, dist_m
+    return {
+        "distance": cfg.distance / (1.0 + 0.11 * d * d) / t,
+        "bearing": cfg.bearing / (1.0 + d) / (1.0 + b) / t,
+        "goal": xp.where(reached, cfg.goal * 2.0 * steps_left / t, zero),
+        "heading_away": xp.where(b > 2.0, cfg.heading_away * b / t, zero),
+    }
+
+
+def step_terms(action: Any, last_action: Any, collided: Any, strayed: Any, *,
+               steps_total: float, cfg: Any, progress_m: Any = None) -> dict[str, Any]:
+    """The goal-free reward terms of a step (weighted); none for a sparse reward. ``action``
+    and ``last_action`` (..., 2) normalised; ``collided``, ``strayed`` (...) bool;
+    ``progress_m`` (...) the goal distance gained this step (the ``progress`` term, where its
+    weight is not 0)."""
+    if cfg.kind == "sparse":
+        return {}
+    xp = array_namespace(action)
+    t = float(steps_total)
+    jump = 3.0 * xp.abs(action - last_action)
+    zero = xp.zeros_like(jump)
+    osc = xp.sum(xp.where(jump > 0.05, jump**2, zero) ** 2, axis=-1)
+    none = xp.zeros_like(osc)
+    terms = {
+        "oscillation": cfg.oscillation * osc / t,
+        "reverse": xp.where(action[..., 0] < 0.0, none + cfg.reverse / t, none),
+        "collision": xp.where(collided, none + cfg.collision / t, none),
+        "stray": xp.where(strayed, none + cfg.stray, none),
+    }
+    if getattr(cfg, "progress", 0.0):
+        terms["progress"] = cfg.progress * progress_m
+    return terms
+
+
+def failure_code(q_wxyz: Any, xy_m: Any, bounds_xy_m: Any, start_xy_m: Any, goal_xy_m: Any,
+                 stuck: Any, task: Any) -> Any:
+    """Why each episode fails at this step: 0 none, else 1 + the index in :data:`FAILURES` of the
+    first failure judged. ``bounds_xy_m`` (..., 4) is ``x0, y0, x1, y1`` of each terrain."""
+    xp = array_namespace(xy_m)
+    x, y = xy_m[..., 0], xy_m[..., 1]
+    margin = xp.min(xp.stack([x - bounds_xy_m[..., 0], bounds_xy_m[..., 2] - x,
+                              y - bounds_xy_m[..., 1], bounds_xy_m[..., 3] - y]), axis=0)
+    seg = goal_xy_m - start_xy_m
+    rel = xy_m - start_xy_m
+    seg2 = xp.sum(seg * seg, axis=-1)
+    s = xp.clip(xp.sum(rel * seg, axis=-1) / xp.where(seg2 > 1e-9, seg2, seg2 * 0 + 1e-9),
+                0.0, 1.0)
+    off = rel - s[..., None] * seg
+    failed = [up_z(q_wxyz) < math.cos(math.radians(task.max_tilt_deg)),
+              margin < task.edge_m,
+              xp.hypot(off[..., 0], off[..., 1]) > task.max_stray_m,
+              stuck]
+    code = xp.zeros(x.shape, dtype=xp.int64, device=_device(x))
+    for k in range(len(failed), 0, -1):  # the first failure judged wins
+        code = xp.where(failed[k - 1], xp.ones_like(code) * k, code)
+    return code
+
+
+def _device(x: Any) -> Any:
+    from array_api_compat import device
+
+    return device(x)
+
+
+class StuckClock:
+    """Whether rovers commanding motion moved less than ``min_m`` over the last ``window``
+    control steps (the task's ``stuck_s`` at the control rate); a step without commanded motion
+    restarts the clock. Holds the last ``window + 1`` positions of each rover.
+
+    Parameters
+    ----------
+    like : array
+        An array of the backend and device to use.
+    shape : tuple of int
+        The batch shape (``()`` for one rover).
+    window : int
+        Control steps in ``stuck_s``.
+    min_m : float
+        The distance that counts as moving (``stuck_m``).
+    """
+
+    def __init__(self, like: Any, shape: tuple[int, ...], window: int, min_m: float) -> None:
+        xp = self.xp = array_namespace(like)
+        dev = _device(like)
+        self.window, self.min_m, self.head = int(window), float(min_m), 0
+        self.track = xp.zeros((self.window + 1, *shape, 2), dtype=xp.float64, device=dev)
+        self.run = xp.zeros(shape, dtype=xp.int64, device=dev)
+
+    def restart(self, where: Any = True) -> None:
+        """Restart the clock of the rovers in ``where`` (all by default)."""
+        self.run = self.xp.where(where, self.run * 0, self.run)
+
+    def __call__(self, xy_m: Any, moving: Any) -> Any:
+        """Record this step's positions (..., 2); True where a rover is stuck."""
+        xp = self.xp
+        self.run = xp.where(moving, self.run + 1, self.run * 0)
+        self.track[self.head, ...] = xy_m
+        self.head = (self.head + 1) % (self.window + 1)
+        then = self.track[self.head, ...]  # ``window`` steps ago
+        moved = xp.hypot(xy_m[..., 0] - then[..., 0], xy_m[..., 1] - then[..., 1])
+        return (self.run > self.window) & (moved < self.min_m)

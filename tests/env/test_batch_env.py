@@ -1,0 +1,151 @@
+"""The batched MuJoCo Warp environment on Warp's CPU device (no GPU): the CPU environment's
+episode code, given each batched rover's state, gives the same observation and reward; rovers
+reset alone; the same seed gives the same bytes; the vector and world-batch interfaces."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco_warp")
+
+from marsscene.env import NavEpisode, WorldSampler
+from marsscene.env.batch import BatchNavEnv, BatchVectorEnv, WorldBatch
+from marsscene.env.batch.judge import collided
+from marsscene.env.observe import HeightScanner, ObsConfig
+from marsscene.env.reward import RewardConfig
+from marsscene.env.terminate import FailureJudge
+from marsscene.errors import ConfigError
+from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S
+
+N = 3
+
+
+@pytest.fixture(scope="module")
+def batch(tmp_path_factory: pytest.TempPathFactory) -> WorldBatch:
+    cache = tmp_path_factory.mktemp("worlds")
+    return WorldBatch.build(WorldSampler(base="rocks", count=2, cache_dir=str(cache)), pool=4)
+
+
+@pytest.fixture(scope="module")
+def env(batch: WorldBatch) -> BatchNavEnv:
+    return BatchNavEnv(batch, num_envs=N, device="cpu", library="numpy", seed=1,
+                       reward=RewardConfig(progress=0.5))
+
+
+def _cpu_episode(env: BatchNavEnv, i: int, coll: list[bool]) -> NavEpisode:
+    """The CPU environment's episode of rover ``i``, at the batch's start and goal."""
+    ep = NavEpisode(env.task, env.obs_config, env.reward_config, env.rover,
+                    control_hz=env.control_hz)
+    w = int(env.world[i])
+    scanner = HeightScanner(env.obs_config.height_scan, env.batch.heightfield(w),
+                            env.batch.obstacles(w))
+    ep.world = SimpleNamespace(scanner=scanner, collided=lambda: coll[0], lidar=None)
+    ep.start_xy_m, ep.goal_xy_m = env.start_xy_m[i].copy(), env.goal_xy_m[i].copy()
+    ep.last_distance_m = float(np.hypot(*(ep.goal_xy_m - ep.start_xy_m)))
+    ep._failure = FailureJudge(env.task, tuple(env.batch.bounds_xy_m[w]), ep.start_xy_m,
+                               ep.goal_xy_m, control_hz=env.control_hz)
+    return ep
+
+
+def _observation(env: BatchNavEnv, i: int, k: int) -> Any:
+    """Rover ``i``'s state as the CPU session's Observation holds it (noise-free)."""
+    st = {key: np.asarray(v[i]) for key, v in env._state().items()}
+    w, x, y, z = st["quat"]
+    return SimpleNamespace(
+        gt_xyz_m=st["xyz"], gt_quat_wxyz=st["quat"],
+        gt_yaw_rad=math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
+        wheel_rates_rad_s=st["rates"].astype(np.float64), steer_rad=st["steer"].astype(
+            np.float64), accel_m_s2=st["accel"], gyro_rad_s=st["gyro"], t_s=k / env.control_hz)
+
+
+def test_cpu_episode_gives_the_same_observation_and_reward(env: BatchNavEnv) -> None:
+    env.bk.seed(7)
+    env.reset()
+    coll = [[False] for _ in range(N)]
+    episodes = [_cpu_episode(env, i, coll[i]) for i in range(N)]
+    rng = np.random.default_rng(0)
+    checked = 0
+    for k in range(1, 6):
+        action = rng.uniform(-1, 1, (N, 2))
+        action[:, 0] = np.abs(action[:, 0])
+        obs, reward, terminated, truncated, _info = env.step(action)
+        assert not (terminated | truncated).any(), "no episode may end in these steps"
+        hit = collided(env)
+        for i in range(N):
+            coll[i][0] = bool(hit[i])
+            a = np.clip(action[i], -1, 1)
+            cpu_obs, cpu_reward, cpu_te, cpu_tr, _cpu_info = episodes[i].step(
+                _observation(env, i, k), a, a[0] * V_MAX_M_S, a[1] * OMEGA_MAX_RAD_S)
+            np.testing.assert_allclose(obs["observation"][i], cpu_obs["observation"],
+                                       rtol=1e-6, atol=1e-6)
+            np.testing.assert_allclose(obs["height_scan"][i], cpu_obs["height_scan"],
+                                       atol=1e-6)
+            np.testing.assert_array_equal(obs["achieved_goal"][i], cpu_obs["achieved_goal"])
+            np.testing.assert_array_equal(obs["desired_goal"][i], cpu_obs["desired_goal"])
+            assert reward[i] == pytest.approx(cpu_reward, rel=1e-12, abs=1e-12)
+            assert (bool(terminated[i]), bool(truncated[i])) == (cpu_te, cpu_tr)
+            checked += 1
+    assert checked == 5 * N
+    assert np.ptp(env.world) >= 0 and float(np.abs(obs["observation"][:, 5]).max()) > 0.05
+
+
+def test_a_rover_reaching_its_goal_is_reset_alone(env: BatchNavEnv) -> None:
+    env.reset()
+    for _ in range(2):
+        env.step(np.tile([0.6, 0.0], (N, 1)))
+    before = env._state()["xyz"].copy()
+    env.goal_xy_m[1] = before[1, :2]  # rover 1 stands on its goal
+    obs, reward, terminated, truncated, info = env.step(np.tile([0.6, 0.0], (N, 1)))
+    assert list(info["termination"]) == [0, 1, 0]
+    assert list(terminated) == [False, True, False] and not truncated.any()
+    assert reward[1] > 9.0  # the goal bonus: 5 x 2 x (time left)
+    assert list(env.steps_done) == [3, 0, 3]
+    assert info["final_observation"]["observation"][1, 2] < env.task.goal_tolerance_m
+    after = env._state()["xyz"]
+    moved = np.hypot(*(after[:, :2] - before[:, :2]).T)
+    assert moved[0] < 0.2 and moved[2] < 0.2  # the others drove on, 0.12 m in a step
+    starts = env._pool["start"]
+    assert np.hypot(*(starts - after[1, :2]).T).min() < 0.3  # rover 1: at a drawn start
+    assert obs["observation"][1, 2] > env.task.distance_m[0] - 0.5
+
+
+def test_same_seed_same_bytes(batch: WorldBatch, env: BatchNavEnv) -> None:
+    runs = []
+    for _ in range(2):
+        e = BatchNavEnv(batch, num_envs=N, device="cpu", library="numpy", seed=4)
+        rng = np.random.default_rng(2)
+        out = [e.step(rng.uniform(-1, 1, (N, 2)))[0]["observation"].tobytes()
+               for _ in range(3)]
+        runs.append(out)
+    assert runs[0] == runs[1]
+
+
+def test_gymnasium_vector_api(env: BatchNavEnv) -> None:
+    vec = BatchVectorEnv(env)
+    obs, _ = vec.reset(seed=3)
+    assert obs["observation"].shape == (N, 17)
+    assert vec.single_observation_space["height_scan"].shape == obs["height_scan"].shape[1:]
+    assert vec.action_space.shape == (N, 2)
+    obs, reward, _terminated, _truncated, info = vec.step(vec.action_space.sample())
+    assert reward.shape == (N,) and "final_obs" in info and info["_final_obs"].shape == (N,)
+
+
+def test_world_batch_round_trip_and_bad_input(batch: WorldBatch, tmp_path: Any) -> None:
+    path = batch.save(tmp_path / "b.npz")
+    back = WorldBatch.load(path)
+    for name in ("posts_z_m", "rock_xy_m", "starts_xy_m", "goals_xy_m", "yaws_rad"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(batch, name))
+    assert back.cell_m == batch.cell_m and back.bounds_xy_m.shape == (2, 4)
+    (tmp_path / "bad.npz").write_bytes(b"not a batch")
+    with pytest.raises(ConfigError, match="not a world batch"):
+        WorldBatch.load(tmp_path / "bad.npz")
+    with pytest.raises(ConfigError, match="camera"):
+        BatchNavEnv(batch, num_envs=1, device="cpu", observations=ObsConfig(camera=(64, 64),
+                                                                            noise_profile="none"))
+    with pytest.raises(ConfigError, match="noise-free"):
+        BatchNavEnv(batch, num_envs=1, device="cpu", observations=ObsConfig())
