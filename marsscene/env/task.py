@@ -19,6 +19,7 @@ from scipy import ndimage
 
 from marsscene._validate import check_range
 from marsscene.errors import ConfigError, RuntimeSimError
+from marsscene.rover.config import GOAL_TOLERANCE_M
 from marsscene.sim.route import traversable_grid
 
 __all__ = ["NavTask", "TaskMap"]
@@ -59,7 +60,7 @@ class NavTask:
     """
 
     distance_m: tuple[float, float] = (5.0, 20.0)
-    goal_tolerance_m: float = 0.5
+    goal_tolerance_m: float = GOAL_TOLERANCE_M
     max_episode_s: float = 150.0
     max_slope_deg: float = 20.0
     max_obstacle_height_m: float = 0.3

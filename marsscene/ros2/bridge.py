@@ -39,6 +39,23 @@ __all__ = ["Bridge", "SessionStats"]
 
 log = logging.getLogger("marsscene")
 
+
+class RateLimitedWarning:
+    """Warnings in the log at most once per ``period_s`` of wall time; the ones held back are
+    counted into the next (bad input on the wire must not flood the server's log)."""
+
+    def __init__(self, period_s: float = 5.0) -> None:
+        self.period_s, self.last, self.held = float(period_s), -math.inf, 0
+
+    def warn(self, fmt: str, *args: Any) -> None:
+        now = time.monotonic()
+        if now - self.last < self.period_s:
+            self.held += 1
+            return
+        more = f" (and {self.held} more in the last {self.period_s:g} s)" if self.held else ""
+        log.warning(fmt + more, *args)
+        self.last, self.held = now, 0
+
 _CONTROL_TOPICS = {"/marsscene/reset": "std_msgs/msg/Empty",
                    "/marsscene/teleport": "geometry_msgs/msg/Pose",
                    "/marsscene/goal": "geometry_msgs/msg/PoseStamped"}
@@ -88,6 +105,7 @@ class Bridge:
         self.sim, self.msgs, self.opts, self.part = sim, messages, opts, part
         self.store = messages.b.store
         self.stats = SessionStats()
+        self.bad_input = RateLimitedWarning()
         sensor = "sensor" if opts.sensor_qos == "best-effort" else "sensor-reliable"
         self.writers: dict[str, RawWriter] = {  # the command is read here, not published
             t.name: part.writer(self.store, t.name, t.msgtype,
@@ -185,12 +203,20 @@ class Bridge:
 
     def _read_commands(self, t_s: float) -> None:
         for raw in self.cmd_reader.take():
-            msg: Any = self.store.deserialize_cdr(raw, self.cmd_type)
+            try:
+                msg: Any = self.store.deserialize_cdr(raw, self.cmd_type)
+            except Exception as err:
+                self.bad_input.warn("%s: a message that is not a %s dropped (%s)",
+                                    self.opts.cmd_vel_topic, self.cmd_type, err)
+                continue
             tw = msg.twist if self.opts.cmd_vel_stamped else msg
             v, w = float(tw.linear.x), float(tw.angular.z)
             if math.isfinite(v) and math.isfinite(w):
                 self.cmd, self.cmd_t_s = (v, w), t_s
                 self.stats.commands += 1
+            else:
+                self.bad_input.warn("%s: a command with linear.x = %r, angular.z = %r "
+                                    "dropped (not finite)", self.opts.cmd_vel_topic, v, w)
 
     def _read_control(self) -> None:
         readers = self.control_readers

@@ -16,20 +16,23 @@ The only importer of ``cyclonedds``. What makes a DDS endpoint a ROS 2 one:
 
 Localhost mode (:func:`cyclone_config`) binds to 127.0.0.1, turns multicast off and discovers
 peers by unicast on 127.0.0.1 only; a ``CYCLONEDDS_URI`` of the user's comes first, ours last
-(later settings win).
+(later settings win), and a user's own choice of the loopback interface is kept.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import threading
+import warnings
+from pathlib import Path
 from typing import Any
 
-from marsscene.errors import RuntimeSimError, missing_dependency
+from marsscene.errors import MarsSceneWarning, RuntimeSimError, missing_dependency
 from marsscene.runs.export.topic_table import QOS_PROFILES, QosProfile
 
 __all__ = ["QOS", "Participant", "RawReader", "RawWriter", "cyclone_config", "dds_topic",
-           "dds_type"]
+           "dds_type", "user_interfaces"]
 
 try:
     from cyclonedds import qos as _qos
@@ -101,24 +104,75 @@ def _field(store: Any, node: int, spec: Any) -> Any:
     return _t.sequence[sub, size] if size else _t.sequence[sub]
 
 
+#: Interface selections of a Cyclone configuration: ``<NetworkInterface name=... address=...>``
+#: (Cyclone 0.10 and later) or ``<NetworkInterfaceAddress>`` (older).
+_IFACE = re.compile(r"<NetworkInterface\b([^>]*)>|<NetworkInterfaceAddress>([^<]*)<", re.I)
+_LOOPBACK = ("lo", "lo0", "loopback", "localhost", "::1")
+
+
+def user_interfaces(uri: str) -> list[str] | None:
+    """The network interfaces a ``CYCLONEDDS_URI`` selects (its inline XML and the files it
+    names; names or addresses, empty: none selected), None where a file cannot be read."""
+    text = []
+    for part in (p.strip() for p in uri.split(",") if p.strip()):
+        if part.startswith("<"):
+            text.append(part)
+            continue
+        path = Path(part[len("file://"):] if part.startswith("file://") else part)
+        try:
+            text.append(path.read_text(encoding="utf-8"))
+        except OSError:
+            return None
+    found = []
+    for attrs, old in _IFACE.findall(" ".join(text)):
+        if old:
+            found.append(old.strip())
+        for key in ("name", "address"):
+            m = re.search(rf'{key}\s*=\s*"([^"]*)"', attrs)
+            if m:
+                found.append(m.group(1))
+    return found
+
+
+def _loopback(iface: str) -> bool:
+    return iface.lower() in _LOOPBACK or iface.startswith("127.")
+
+
 def cyclone_config(localhost: bool, env: dict[str, str] | None = None) -> str | None:
     """The configuration the participant's domain is created with (None: Cyclone's own,
     i.e. ``CYCLONEDDS_URI`` or its defaults).
 
     Localhost: the 127.0.0.1 interface, no multicast, unicast discovery of participants 0..31
-    on 127.0.0.1 and 64 kB UDP messages (loopback's MTU); after a user's ``CYCLONEDDS_URI``.
+    on 127.0.0.1 and 64 kB UDP messages (loopback's MTU), after a user's ``CYCLONEDDS_URI``
+    (later settings win). Where the user's configuration selects the loopback interface itself
+    (``<NetworkInterface name="lo"/>``, as many ROS 2 set-ups do), ours selects none: Cyclone
+    refuses an interface selected twice. Where it selects another interface, the two cannot
+    both hold: localhost mode was asked for (``--localhost``, ``ROS_LOCALHOST_ONLY``,
+    ``ROS_AUTOMATIC_DISCOVERY_RANGE``), so it wins, the user's URI is left out and a
+    :class:`~marsscene.errors.MarsSceneWarning` says so.
     """
     env = dict(os.environ) if env is None else env
     user = env.get("CYCLONEDDS_URI", "").strip()
     if not localhost:
         return None
+    general = ("<AllowMulticast>false</AllowMulticast><MaxMessageSize>65000B</MaxMessageSize>"
+               "</General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
+               "<MaxAutoParticipantIndex>31</MaxAutoParticipantIndex>"
+               '<Peers><Peer Address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>')
     ours = ('<CycloneDDS><Domain Id="any"><General><Interfaces>'
-            '<NetworkInterface address="127.0.0.1"/></Interfaces>'
-            "<AllowMulticast>false</AllowMulticast><MaxMessageSize>65000B</MaxMessageSize>"
-            "</General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
-            "<MaxAutoParticipantIndex>31</MaxAutoParticipantIndex>"
-            '<Peers><Peer Address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>')
-    return f"{user},{ours}" if user else ours
+            '<NetworkInterface address="127.0.0.1"/></Interfaces>' + general)
+    if not user:
+        return ours
+    chosen = user_interfaces(user) or []
+    if chosen and all(_loopback(i) for i in chosen):
+        return f"{user},<CycloneDDS><Domain Id=\"any\"><General>{general}"
+    if chosen:
+        warnings.warn(f"CYCLONEDDS_URI selects {', '.join(chosen)}; localhost mode keeps DDS on "
+                      "127.0.0.1, so that URI is not used (drop --localhost, "
+                      "ROS_LOCALHOST_ONLY and ROS_AUTOMATIC_DISCOVERY_RANGE to use it)",
+                      MarsSceneWarning, stacklevel=2)
+        return ours
+    return f"{user},{ours}"
 
 
 class Participant:

@@ -9,6 +9,7 @@ from typing import Any
 
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError
+from marsscene.rover.config import GOAL_TOLERANCE_M
 from marsscene.runs.export.options import DISTROS, IMAGES
 
 __all__ = ["PACES", "SENSOR_QOS", "Ros2Options", "localhost_from_env"]
@@ -65,7 +66,8 @@ class Ros2Options:
         ``"both"`` (raw and image_transport's compressed topics; each is encoded only while
         someone subscribes), ``"raw"`` or ``"compressed"``.
     goal_tolerance_m : float
-        A goal (``/marsscene/goal``) counts as reached within this distance (ground truth).
+        A goal (``/marsscene/goal``) counts as reached within this distance (ground truth;
+        default :data:`~marsscene.rover.config.GOAL_TOLERANCE_M`, the navigation task's).
     stop_at_goal : bool
         End the session when the goal is reached.
     distro : str
@@ -85,7 +87,7 @@ class Ros2Options:
     realtime_factor: float = 1.0
     sensor_qos: str = "best-effort"
     images: str = "both"
-    goal_tolerance_m: float = 1.0
+    goal_tolerance_m: float = GOAL_TOLERANCE_M
     stop_at_goal: bool = False
     distro: str = "jazzy"
     map_tf: bool = True

@@ -17,8 +17,8 @@ from marsscene.errors import ConfigError
 from marsscene.rover.lidar import LidarConfig
 
 __all__ = [
-    "OMEGA_MAX_RAD_S", "V_MAX_M_S", "CameraConfig", "LidarConfig", "NoiseConfig", "RoverConfig",
-    "RunConfig", "noise_profiles",
+    "GOAL_TOLERANCE_M", "OMEGA_MAX_RAD_S", "V_MAX_M_S", "CameraConfig", "LidarConfig",
+    "NoiseConfig", "RoverConfig", "RunConfig", "noise_profiles",
 ]
 
 _PHYSICS_HZ = 500.0  # scene.xml timestep 0.002 s
@@ -26,6 +26,9 @@ _PHYSICS_HZ = 500.0  # scene.xml timestep 0.002 s
 #: route follower and the environments' actions are held to them.
 V_MAX_M_S = 0.5
 OMEGA_MAX_RAD_S = 0.2
+#: A point goal is reached within this distance of ``base_link`` (m), horizontally: a sixth of
+#: the rover's 3 m length (the navigation task's goal and a live session's ``/marsscene/goal``).
+GOAL_TOLERANCE_M = 0.5
 
 
 def _read_doc(path: str | Path, what: str) -> Any:

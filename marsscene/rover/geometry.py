@@ -116,12 +116,16 @@ def body_twist_from_wheels(
 
 
 def body_twists_from_wheels(rates_rad_s: Any, steer_rad: Any, cfg: RoverConfig) -> Any:
-    """Batched :func:`body_twist_from_wheels`: (..., 6) rates, (..., 4) steering -> (..., 2)
-    ``(v, omega)``; numpy or PyTorch arrays (float64)."""
+    """Batched :func:`body_twist_from_wheels`: (N, 6) rates, (N, 4) steering -> (N, 2)
+    ``(v, omega)`` (any leading shape; one rover's (6,) and (4,) count as N = 1); numpy or
+    PyTorch arrays (float64)."""
     xp = array_namespace(rates_rad_s, steer_rad)
     rates = xp.astype(rates_rad_s, xp.float64)
+    steer = xp.astype(steer_rad, xp.float64)
+    if rates.ndim == 1:
+        rates, steer = rates[None, :], steer[None, :]
     delta = xp.zeros_like(rates)
-    delta[..., _STEERED] = xp.astype(steer_rad, xp.float64)
+    delta[..., _STEERED] = steer
     u = cfg.wheel_radius_m * rates
     b = xp.concat([u * xp.cos(delta), u * xp.sin(delta)], axis=-1)
     pinv = xp.asarray(_odometry_pinv(cfg), device=device(rates))

@@ -81,7 +81,7 @@ def test_batched_kinematics_are_the_scalar_ones() -> None:
         r1, s1 = wheel_commands(float(v[k]), float(w[k]), cfg)
         np.testing.assert_array_equal(rates[k], r1)
         np.testing.assert_array_equal(steer[k], s1)
-        np.testing.assert_allclose(body_twists_from_wheels(rates[k], steer[k], cfg),
+        np.testing.assert_allclose(body_twists_from_wheels(rates[k], steer[k], cfg)[0],
                                    body_twist_from_wheels(r1, s1, cfg), atol=1e-12)
     np.testing.assert_allclose(body_twists_from_wheels(rates, steer, cfg),
                                np.column_stack([v, w]), atol=1e-12)

@@ -13,6 +13,7 @@ pytest.importorskip("mujoco")
 
 import marsscene as ms
 from marsscene.ros2 import Ros2Options
+from marsscene.ros2.bridge import RateLimitedWarning
 from marsscene.ros2.live import _bridge
 from marsscene.sim.mission import prepare_drive
 
@@ -68,6 +69,26 @@ def test_commands_apply_until_the_time_out(bridge):
     assert b(_obs(0.58)) == (0.0, 0.0) and b.stats.commands == 1
 
 
+def test_bad_commands_are_dropped_with_a_rate_limited_warning(bridge, caplog):
+    b = bridge
+    b.bad_input = RateLimitedWarning()  # (the module's bridge warned in the test above)
+    commands = b.stats.commands
+    b.cmd_reader.items.append(_cdr(b, b.msgs.b.twist(0.2, 0.0)))
+    assert b(_obs(10.0)) == (0.2, 0.0)
+    for k in range(30):  # a flood of NaNs and of bytes that are not a Twist
+        b.cmd_reader.items.append(_cdr(b, b.msgs.b.twist(float("nan"), float("inf"))))
+        b.cmd_reader.items.append(b"\x00\x01 not cdr")
+        assert b(_obs(10.0 + 0.01 * (k + 1))) == (0.2, 0.0)  # the last good command stays
+    warned = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert len(warned) == 1 and "not finite" in warned[0] and "nan" in warned[0]
+    b.bad_input.last -= b.bad_input.period_s  # the period has passed
+    b.cmd_reader.items.append(_cdr(b, b.msgs.b.twist(float("nan"), 0.0)))
+    b(_obs(10.4))
+    warned = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert len(warned) == 2 and "59 more" in warned[1]
+    assert b.stats.commands == commands + 1
+
+
 def test_teleport_reset_and_a_refused_pose(bridge, caplog):
     b, sim = bridge, bridge.sim
     sim.advance(50)
@@ -96,5 +117,5 @@ def test_goal_reached_ends_the_session(bridge):
     b.control_readers["/marsscene/goal"].items.append(_cdr(b, goal))
     b(_obs(2.0, (0.0, 0.0)))
     assert b.goal_xy == (10.0, 0.0) and not b.done
-    b(_obs(2.02, (9.5, 0.2)))
+    b(_obs(2.02, (9.7, 0.1)))
     assert b.done and b.stats.goal_reached_t_s == pytest.approx(2.02)
