@@ -11,7 +11,7 @@ import click
 from marsscene.cli._common import dask_options, dask_where, user_errors
 
 
-@click.group(short_help="Benchmark protocols: SLAM (ATE/RPE of baselines and your method).")
+@click.group(short_help="Benchmark protocols: SLAM (ATE/RPE) and visual place recognition.")
 def benchmark() -> None:
     """Benchmark protocols run on generated scenes (see docs/benchmark.md)."""
 

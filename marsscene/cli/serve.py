@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from collections.abc import Iterator
@@ -69,8 +70,10 @@ _ros_options = compose(
 @_sensor_options
 @click.option("--start", nargs=2, type=float, default=None, metavar="X Y",
               help="Start position in m (default: the terrain centre).")
-@click.option("--yaw", type=float, default=0.0, show_default=True,
-              help="Start heading (rad, counter-clockwise from east).")
+@click.option("--yaw-deg", type=click.FloatRange(-360.0, 360.0), default=0.0,
+              show_default=True, help="Start heading (degrees, counter-clockwise from east).")
+@click.option("--yaw", "yaw_rad", type=float, default=None, hidden=True,
+              help="Start heading in radians; replaced by --yaw-deg, to be removed.")
 @click.option("--seconds", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Sim-time limit (default: until Ctrl-C).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
@@ -81,9 +84,9 @@ _ros_options = compose(
               help="Seed of the sensor noise.")
 @click.option("--ros2", "ros2_flag", is_flag=True, hidden=True,
               help="Accepted and ignored (serve always speaks ROS 2); to be removed.")
-def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
-          seconds: float | None, out_dir: Path | None, record: bool, seed: int,
-          ros2_flag: bool, **opts: Any) -> None:
+def serve(scene_dir: Path, start: tuple[float, float] | None, yaw_deg: float,
+          yaw_rad: float | None, seconds: float | None, out_dir: Path | None, record: bool,
+          seed: int, ros2_flag: bool, **opts: Any) -> None:
     """Run the rover live: sensors published, /cmd_vel obeyed, sim time on /clock.
 
     \b
@@ -98,6 +101,11 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw: float,
     if ros2_flag:
         click.echo("marsscene: --ros2 is not needed (serve always speaks ROS 2) and will be "
                    "removed; drop it", err=True)
+    yaw = math.radians(yaw_deg)
+    if yaw_rad is not None:
+        click.echo("marsscene: --yaw (radians) will be removed; use --yaw-deg (degrees, as "
+                   "build --rover-yaw-deg)", err=True)
+        yaw = yaw_rad
     with user_errors():
         from marsscene.ros2 import serve as serve_live  # MissingDependencyError: one line
 

@@ -23,3 +23,13 @@ def test_bad_topic_and_missing_scene_are_one_line_errors(runner, tmp_path):
     assert res.exit_code == 1 and "is not a built scene" in res.output
     res = runner.invoke(main, ["serve", str(tmp_path / "nowhere")])
     assert res.exit_code == 2
+
+
+def test_the_start_heading_is_in_degrees_as_build_takes_it(runner, tmp_path):
+    (tmp_path / "scene").mkdir()
+    assert "--yaw-deg" in runner.invoke(main, ["serve", "--help"]).output
+    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--yaw-deg", "400"])
+    assert res.exit_code == 2 and "--yaw-deg" in res.output  # out of -360..360
+    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--yaw", "1.0",
+                               "--localhost"])
+    assert "use --yaw-deg" in res.output and "is not a built scene" in res.output
