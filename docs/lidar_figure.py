@@ -1,7 +1,7 @@
 """Figure for docs/lidar.md: KISS-ICP's trajectory against the ground truth of a run.
 
 Usage: ``python docs/lidar_figure.py RUN_DIR OUT.png [EST.tum]`` (runs ``kiss_icp_pipeline``
-on ``RUN_DIR/bag`` unless an estimate is given; needs ``pip install 'marsscene[bench]'
+on ``RUN_DIR/bag`` unless an estimate is given; needs ``pip install -e '.[bench]'
 matplotlib``). Panels: the SE(3)-aligned paths, the aligned error per axis, and the error of
 the estimate anchored at the first pose (how the odometry drifts from the start: a method
 that stands still while the rover drives shows a ramp).
