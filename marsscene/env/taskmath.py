@@ -17,7 +17,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from array_api_compat import array_namespace
+import numpy as np
+from array_api_compat import device
+
+from marsscene._xp import clip, namespace
 
 __all__ = ["FAILURES", "StuckClock", "bearing_rad", "body_yaw", "failure_code", "goal_in_body",
            "goal_terms", "height_scan", "observation_vector", "scan_grid_m", "scan_heights",
@@ -37,7 +40,7 @@ def up_z(q_wxyz: Any) -> Any:
 
 def body_yaw(q_wxyz: Any) -> Any:
     """Heading (rad, counter-clockwise from east) of (..., 4) quaternions (w, x, y, z)."""
-    xp = array_namespace(q_wxyz)
+    xp = namespace(q_wxyz)
     w, x, y, z = (q_wxyz[..., i] for i in range(4))
     return xp.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
@@ -45,7 +48,7 @@ def body_yaw(q_wxyz: Any) -> Any:
 def goal_in_body(xy_m: Any, yaw_rad: Any, goal_xy_m: Any) -> Any:
     """The goal in the body frame: (..., 5) of x forward, y left (m), distance (m), and the sine
     and cosine of its bearing."""
-    xp = array_namespace(xy_m, goal_xy_m)
+    xp = namespace(xy_m, goal_xy_m)
     dx, dy = goal_xy_m[..., 0] - xy_m[..., 0], goal_xy_m[..., 1] - xy_m[..., 1]
     c, s = xp.cos(yaw_rad), xp.sin(yaw_rad)
     gx, gy = c * dx + s * dy, -s * dx + c * dy
@@ -58,7 +61,7 @@ def observation_vector(xy_m: Any, yaw_rad: Any, goal_xy_m: Any, twist: Any, acce
     """The ``observation`` vector, (..., 17) float32: the goal in the body frame, the body twist
     ``(v, omega)`` from the wheels, roll and pitch from the accelerometer, the IMU sample and the
     last (normalised) action."""
-    xp = array_namespace(xy_m, accel_m_s2)
+    xp = namespace(xy_m, accel_m_s2)
     ax, ay, az = accel_m_s2[..., 0], accel_m_s2[..., 1], accel_m_s2[..., 2]
     roll = xp.atan2(ay, az)
     pitch = xp.atan2(-ax, xp.hypot(ay, az))
@@ -71,8 +74,6 @@ def scan_grid_m(scan: Any) -> tuple[Any, Any]:
     """The (forward, left) offsets (m) of a :class:`~marsscene.env.observe.HeightScan`'s
     points, each (n, n) numpy float64: rows run forward (far first), columns left (left first),
     an image seen from above."""
-    import numpy as np
-
     n = scan.points
     u = (np.arange(n) - (n - 1) / 2.0) * scan.resolution_m
     fwd, left = np.meshgrid(u[::-1], u[::-1], indexing="ij")
@@ -84,7 +85,7 @@ def height_scan(grid_z_m: Any, origin_xy_m: Any, cell_m: float, xyz_m: Any, yaw_
     """Height scans (..., n, n) float32: the terrain under the points ``fwd_m``, ``left_m``
     (n, n) around each rover in its heading frame, relative to its ``base_link`` height
     (``xyz_m`` (..., 3)); the grids as :func:`scan_heights` takes them."""
-    xp = array_namespace(xyz_m)
+    xp = namespace(xyz_m)
     c, s = xp.cos(yaw_rad)[..., None, None], xp.sin(yaw_rad)[..., None, None]
     x0, y0 = xyz_m[..., 0, None, None], xyz_m[..., 1, None, None]
     x = x0 + c * fwd_m - s * left_m
@@ -95,7 +96,7 @@ def height_scan(grid_z_m: Any, origin_xy_m: Any, cell_m: float, xyz_m: Any, yaw_
 
 def bearing_rad(xy_m: Any, goal_xy_m: Any, yaw_rad: Any) -> Any:
     """The goal's bearing from the heading (rad, in [-pi, pi))."""
-    xp = array_namespace(xy_m, goal_xy_m)
+    xp = namespace(xy_m, goal_xy_m)
     ang = xp.atan2(goal_xy_m[..., 1] - xy_m[..., 1], goal_xy_m[..., 0] - xy_m[..., 0]) - yaw_rad
     return (ang + math.pi) % (2.0 * math.pi) - math.pi
 
@@ -108,7 +109,7 @@ def scan_heights(grid_z_m: Any, origin_xy_m: Any, cell_m: float, x_m: Any, y_m: 
     stack (W, rows, cols) with (W, 2) origins and ``world`` (N,) the grid of each of the (N, ...)
     points. The rule is :meth:`~marsscene.terrain.heightfield.Heightfield.sample`'s.
     """
-    xp = array_namespace(grid_z_m, x_m)
+    xp = namespace(grid_z_m, x_m)
     rows, cols = grid_z_m.shape[-2], grid_z_m.shape[-1]
     if world is None:
         ox, oy, flat = origin_xy_m[0], origin_xy_m[1], xp.reshape(grid_z_m, (-1,))
@@ -117,19 +118,15 @@ def scan_heights(grid_z_m: Any, origin_xy_m: Any, cell_m: float, x_m: Any, y_m: 
         ox = origin_xy_m[world, 0][(..., *extra)]
         oy = origin_xy_m[world, 1][(..., *extra)]
         flat = xp.reshape(grid_z_m, (grid_z_m.shape[0], -1))
-    r = xp.clip((y_m - oy) / cell_m, 0.0, rows - 1.0)
-    c = xp.clip((x_m - ox) / cell_m, 0.0, cols - 1.0)
-    r0 = xp.clip(xp.astype(xp.floor(r), xp.int64), None, rows - 2)
-    c0 = xp.clip(xp.astype(xp.floor(c), xp.int64), None, cols - 2)
+    r = clip(xp, (y_m - oy) / cell_m, 0.0, rows - 1.0)
+    c = clip(xp, (x_m - ox) / cell_m, 0.0, cols - 1.0)
+    r0 = clip(xp, xp.astype(xp.floor(r), xp.int64), None, rows - 2)
+    c0 = clip(xp, xp.astype(xp.floor(c), xp.int64), None, cols - 2)
     fr, fc = r - xp.astype(r0, r.dtype), c - xp.astype(c0, c.dtype)
     i = r0 * cols + c0
-    if world is None:
-        z = [xp.astype(xp.take(flat, xp.reshape(i + k, (-1,))), xp.float64) for k in
-             (0, 1, cols, cols + 1)]
-        z = [xp.reshape(v, i.shape) for v in z]
-    else:
-        w = world[(..., *((None,) * (i.ndim - 1)))]
-        z = [xp.astype(flat[w, i + k], xp.float64) for k in (0, 1, cols, cols + 1)]
+    at = (lambda k: flat[i + k]) if world is None else (
+        lambda k: flat[world[(..., *((None,) * (i.ndim - 1)))], i + k])
+    z = [xp.astype(at(k), xp.float64) for k in (0, 1, cols, cols + 1)]
     return (z[0] * (1 - fc) + z[1] * fc) * (1 - fr) + (z[2] * (1 - fc) + z[3] * fc) * fr
 
 
@@ -137,7 +134,7 @@ def goal_terms(dist_m: Any, bearing_abs_rad: Any, reached: Any, steps_left: Any,
                steps_total: float, cfg: Any) -> dict[str, Any]:
     """The goal-dependent reward terms (weighted; :mod:`.reward`), from the goal distance, the
     absolute bearing, whether the goal is reached, and the steps left."""
-    xp = array_namespace(dist_m)
+    xp = namespace(dist_m)
     zero = xp.zeros_like(dist_m)
     if cfg.kind == "sparse":
         return {"goal": xp.where(reached, zero, zero - 1.0)}
@@ -159,7 +156,7 @@ def step_terms(action: Any, last_action: Any, collided: Any, strayed: Any, *,
     weight is not 0)."""
     if cfg.kind == "sparse":
         return {}
-    xp = array_namespace(action)
+    xp = namespace(action)
     t = float(steps_total)
     jump = 3.0 * xp.abs(action - last_action)
     zero = xp.zeros_like(jump)
@@ -180,30 +177,23 @@ def failure_code(q_wxyz: Any, xy_m: Any, bounds_xy_m: Any, start_xy_m: Any, goal
                  stuck: Any, task: Any) -> Any:
     """Why each episode fails at this step: 0 none, else 1 + the index in :data:`FAILURES` of the
     first failure judged. ``bounds_xy_m`` (..., 4) is ``x0, y0, x1, y1`` of each terrain."""
-    xp = array_namespace(xy_m)
+    xp = namespace(xy_m)
     x, y = xy_m[..., 0], xy_m[..., 1]
-    margin = xp.min(xp.stack([x - bounds_xy_m[..., 0], bounds_xy_m[..., 2] - x,
-                              y - bounds_xy_m[..., 1], bounds_xy_m[..., 3] - y]), axis=0)
+    margin = xp.minimum(xp.minimum(x - bounds_xy_m[..., 0], bounds_xy_m[..., 2] - x),
+                        xp.minimum(y - bounds_xy_m[..., 1], bounds_xy_m[..., 3] - y))
     seg = goal_xy_m - start_xy_m
     rel = xy_m - start_xy_m
     seg2 = xp.sum(seg * seg, axis=-1)
-    s = xp.clip(xp.sum(rel * seg, axis=-1) / xp.where(seg2 > 1e-9, seg2, seg2 * 0 + 1e-9),
-                0.0, 1.0)
+    s = clip(xp, xp.sum(rel * seg, axis=-1) / clip(xp, seg2, 1e-9, None), 0.0, 1.0)
     off = rel - s[..., None] * seg
     failed = [up_z(q_wxyz) < math.cos(math.radians(task.max_tilt_deg)),
               margin < task.edge_m,
               xp.hypot(off[..., 0], off[..., 1]) > task.max_stray_m,
               stuck]
-    code = xp.zeros(x.shape, dtype=xp.int64, device=_device(x))
+    code = xp.zeros(x.shape, dtype=xp.int64, device=device(x))
     for k in range(len(failed), 0, -1):  # the first failure judged wins
         code = xp.where(failed[k - 1], xp.ones_like(code) * k, code)
     return code
-
-
-def _device(x: Any) -> Any:
-    from array_api_compat import device
-
-    return device(x)
 
 
 class StuckClock:
@@ -224,8 +214,8 @@ class StuckClock:
     """
 
     def __init__(self, like: Any, shape: tuple[int, ...], window: int, min_m: float) -> None:
-        xp = self.xp = array_namespace(like)
-        dev = _device(like)
+        xp = self.xp = namespace(like)
+        dev = device(like)
         self.window, self.min_m, self.head = int(window), float(min_m), 0
         self.track = xp.zeros((self.window + 1, *shape, 2), dtype=xp.float64, device=dev)
         self.run = xp.zeros(shape, dtype=xp.int64, device=dev)

@@ -17,9 +17,10 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-from array_api_compat import array_namespace, device
+from array_api_compat import device
 from numpy.typing import NDArray
 
+from marsscene._xp import namespace
 from marsscene.rover.config import RoverConfig
 
 __all__ = [
@@ -87,7 +88,8 @@ def wheel_commands(v_m_s: Any, omega_rad_s: Any, cfg: RoverConfig) -> tuple[Any,
         Steering angles of the corner wheels (in rad), STEER_JOINTS order, within +-pi/2.
     """
     xp, v, w = _batch(v_m_s, omega_rad_s)
-    xy = xp.asarray(_wheel_xy(cfg), device=device(v))
+    xy = _wheel_xy(cfg) if isinstance(v, np.ndarray) else xp.asarray(_wheel_xy(cfg),
+                                                                       device=device(v))
     vx = v[..., None] - w[..., None] * xy[:, 1]
     vy = w[..., None] * xy[:, 0]
     delta = xp.atan2(vy, vx)
@@ -119,7 +121,7 @@ def body_twists_from_wheels(rates_rad_s: Any, steer_rad: Any, cfg: RoverConfig) 
     """Batched :func:`body_twist_from_wheels`: (N, 6) rates, (N, 4) steering -> (N, 2)
     ``(v, omega)`` (any leading shape; one rover's (6,) and (4,) count as N = 1); numpy or
     PyTorch arrays (float64)."""
-    xp = array_namespace(rates_rad_s, steer_rad)
+    xp = namespace(rates_rad_s, steer_rad)
     rates = xp.astype(rates_rad_s, xp.float64)
     steer = xp.astype(steer_rad, xp.float64)
     if rates.ndim == 1:
@@ -136,9 +138,10 @@ def _batch(*values: Any) -> tuple[Any, ...]:
     """The array namespace of ``values`` (numpy for plain numbers) and the values as float64
     arrays of it."""
     arrays = [v for v in values if hasattr(v, "__array_namespace__") or hasattr(v, "dtype")]
-    xp = array_namespace(*arrays) if arrays else array_namespace(np.zeros(0))
-    dev = device(arrays[0]) if arrays else None
-    return (xp, *(xp.asarray(v, dtype=xp.float64, device=dev) for v in values))
+    if not arrays or all(isinstance(v, np.ndarray | np.generic) for v in arrays):
+        return (namespace(np.zeros(0)), *(np.asarray(v, dtype=np.float64) for v in values))
+    xp = namespace(*arrays)
+    return (xp, *(xp.asarray(v, dtype=xp.float64, device=device(arrays[0])) for v in values))
 
 
 def sensor_mounts(cfg: RoverConfig) -> dict[str, tuple[tuple[float, float, float], float]]:

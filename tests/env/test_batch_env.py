@@ -91,7 +91,7 @@ def test_cpu_episode_gives_the_same_observation_and_reward(env: BatchNavEnv) -> 
             assert (bool(terminated[i]), bool(truncated[i])) == (cpu_te, cpu_tr)
             checked += 1
     assert checked == 5 * N
-    assert np.ptp(env.world) >= 0 and float(np.abs(obs["observation"][:, 5]).max()) > 0.05
+    assert float(np.abs(obs["observation"][:, 5]).max()) > 0.05  # the rovers drove
 
 
 def test_a_rover_reaching_its_goal_is_reset_alone(env: BatchNavEnv) -> None:

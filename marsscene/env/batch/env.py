@@ -22,6 +22,7 @@ from typing import Any
 
 import mujoco
 import numpy as np
+from array_api_compat import device
 
 from marsscene.env import taskmath
 from marsscene.env.batch.backend import Backend
@@ -132,14 +133,14 @@ class BatchNavEnv:
         self._rock_cells = bk.asarray((grids - np.stack(bare)) > ROCK_CONTACT_M, xp.float32)
         self._offsets = bk.asarray(offsets)
         self._bounds = bk.asarray(self.batch.bounds_xy_m)
-        self.world = xp.zeros(n, dtype=xp.int64, device=_dev(self._offsets))
-        zeros2 = xp.zeros((n, 2), dtype=xp.float64, device=_dev(self._offsets))
+        self.world = xp.zeros(n, dtype=xp.int64, device=device(self._offsets))
+        zeros2 = xp.zeros((n, 2), dtype=xp.float64, device=device(self._offsets))
         self.start_xy_m, self.goal_xy_m, self.last_action = zeros2, zeros2 * 1, zeros2 * 1
-        self.steps_done = xp.zeros(n, dtype=xp.int64, device=_dev(self._offsets))
-        self.last_distance_m = xp.zeros(n, dtype=xp.float64, device=_dev(self._offsets))
+        self.steps_done = xp.zeros(n, dtype=xp.int64, device=device(self._offsets))
+        self.last_distance_m = xp.zeros(n, dtype=xp.float64, device=device(self._offsets))
         self._stuck = taskmath.StuckClock(self._offsets, (n,), round(self.task.stuck_s *
                                           self.control_hz), self.task.stuck_m)
-        self.episodes = xp.zeros(2, dtype=xp.int64, device=_dev(self._offsets))  # ended, won
+        self.episodes = xp.zeros(2, dtype=xp.int64, device=device(self._offsets))  # ended, won
         self._wheels = [int(g) for g in self.ids["wheel_geoms"]]
 
     # ---- episodes --------------------------------------------------------------------------
@@ -147,7 +148,7 @@ class BatchNavEnv:
         """Start a new episode on every rover; the observations."""
         with self.bk.on_stream():
             self._restart(self.xp.ones(self.num_envs, dtype=self.xp.bool,
-                                       device=_dev(self._offsets)))
+                                       device=device(self._offsets)))
             return self.observe()
 
     def _restart(self, done: Any) -> None:
@@ -256,12 +257,6 @@ class BatchNavEnv:
         """Goals reached over episodes ended so far (host read)."""
         ended, won = (int(v) for v in self.bk.to_numpy(self.episodes))
         return won / ended if ended else float("nan")
-
-
-def _dev(x: Any) -> Any:
-    from array_api_compat import device
-
-    return device(x)
 
 
 def _check(obs: ObsConfig, num_envs: int, control_hz: float, physics_hz: float) -> None:
