@@ -14,7 +14,12 @@ topic:
    as fast as it goes and paced to real time, and the LiDAR alone: real-time factor, messages
    published and received per topic against the sensor rates, write seconds per topic;
 3. **latency** from a ``/cmd_vel`` message to motion on ``/rover/odom`` (``|v| >= v_cmd / 2``),
-   wall clock, with every sensor on and real-time pacing.
+   wall clock, with every sensor on and real-time pacing;
+4. **lockstep** (``pace="lockstep"``): control steps a second a client drives when it sends a
+   command, then waits for ``/clock`` to say the step's samples are out (the peer's
+   ``lockstep`` mode, taking odometry and LiDAR), with the LiDAR alone and with the camera too.
+
+``python perf/bench_ros2.py lockstep`` runs part 4 alone.
 """
 
 from __future__ import annotations
@@ -184,8 +189,30 @@ def latency(label: str, scene: Path, config: Any, domain: int) -> None:
           "control step and the wheel odometry reads >= 0.2 m/s one step later)")
 
 
+def lockstep(label: str, scene: Path, config: Any, domain: int) -> None:
+    from marsscene.ros2 import Ros2Options, serve
+
+    steps, dt = int(50 * SECONDS), 1.0 / 50.0
+    peer = subprocess.Popen([sys.executable, PEER, "lockstep", str(domain), str(steps),
+                             str(dt), "0.4", "0.05"], stdout=subprocess.PIPE, text=True)
+    try:
+        res = serve(scene, ros=Ros2Options(domain_id=domain, localhost=True, pace="lockstep"),
+                    config=config, seconds=steps * dt)
+        got = json.loads(peer.communicate(timeout=600)[0])
+    finally:
+        peer.kill()
+    sent = res.stats["messages"]
+    print(f"\nlockstep, {label}: {steps} control steps of {1e3 * dt:.0f} ms in "
+          f"{got['wall_s']:.1f} s = {steps / got['wall_s']:.0f} steps/s "
+          f"({steps * dt / got['wall_s']:.2f}x real time); the client took "
+          f"{got['counts']['lidar']} of {sent.get('/rover/lidar/points', 0)} clouds and "
+          f"{got['counts']['odom']} of {sent.get('/rover/odom', 0)} odometry messages")
+
+
 def main() -> None:
     import marsscene as ms
+
+    only_lockstep = sys.argv[1:] == ["lockstep"]
 
     with tempfile.TemporaryDirectory(prefix="marsscene-bench-ros2-") as tmp:
         scene = Path(tmp) / "scene"
@@ -194,14 +221,18 @@ def main() -> None:
                                         "craters": {"enabled": False},
                                         "rocks": {"enabled": False}})
         ms.write_scene(ms.build_scene(cfg, seed=3), scene, formats=("mjcf",))
-        write_times()
         full = ms.RunConfig(camera=ms.CameraConfig(), lidar=ms.LidarConfig())
+        lidar = ms.RunConfig(lidar=ms.LidarConfig())
+        lockstep("LiDAR os1-128 only", scene, lidar, 98)
+        lockstep("camera 640x480 + LiDAR os1-128", scene, full, 99)
+        if only_lockstep:
+            return
+        write_times()
         session("camera 640x480 + LiDAR os1-128, every topic subscribed", scene, 91, full,
                 "max", ALL)
         session("camera 640x480 + LiDAR os1-128, every topic subscribed", scene, 92, full,
                 "realtime", ALL)
         session("camera 640x480 + LiDAR os1-128, no subscriber", scene, 95, full, "max", {})
-        lidar = ms.RunConfig(lidar=ms.LidarConfig())
         lidar_topics = {t: v for t, v in ALL.items() if "rgb" not in t and "depth" not in t}
         session("LiDAR os1-128 only, every topic subscribed", scene, 94, lidar, "max",
                 lidar_topics)

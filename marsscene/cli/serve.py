@@ -45,7 +45,11 @@ _ros_options = compose(
                  show_default=True,
                  help="Stop after this many sim seconds without a command (0: never)."),
     click.option("--pace", type=click.Choice(PACES), default=_R.pace, show_default=True,
-                 help="Follow the wall clock, or run as fast as it goes."),
+                 help="Follow the wall clock, run as fast as it goes, or advance only when "
+                 "a command comes (lockstep)."),
+    click.option("--lockstep-steps", type=click.IntRange(min=1), default=_R.lockstep_steps,
+                 show_default=True, help="Control steps each command drives with --pace "
+                 "lockstep."),
     click.option("--rtf", type=click.FloatRange(min=0, min_open=True),
                  default=_R.realtime_factor, show_default=True,
                  help="Sim seconds per wall second with --pace realtime."),
@@ -114,6 +118,7 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw_deg: float,
             domain_id=opts["domain_id"], localhost=opts["localhost"],
             cmd_vel_topic=opts["cmd_vel_topic"], cmd_vel_stamped=opts["cmd_vel_stamped"],
             cmd_timeout_s=opts["cmd_timeout"], pace=opts["pace"], realtime_factor=opts["rtf"],
+            lockstep_steps=opts["lockstep_steps"],
             sensor_qos=opts["sensor_qos"], images=opts["images"],
             stop_at_goal=opts["stop_at_goal"], distro=opts["ros_distro"], map_tf=opts["map_tf"])
         options = ms.DriveOptions(start_xy_m=start, start_yaw_rad=yaw)

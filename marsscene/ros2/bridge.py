@@ -27,6 +27,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections import deque
 from typing import Any
 
 from marsscene.errors import RuntimeSimError
@@ -56,6 +57,10 @@ class RateLimitedWarning:
         log.warning(fmt + more, *args)
         self.last, self.held = now, 0
 
+#: How often a lockstep session looks for the next command while it waits, and how often it
+#: says ``/clock`` again (a best-effort topic) meanwhile (wall seconds).
+_POLL_S = 0.0005
+_CLOCK_AGAIN_S = 0.1
 _CONTROL_TOPICS = {"/marsscene/reset": "std_msgs/msg/Empty",
                    "/marsscene/teleport": "geometry_msgs/msg/Pose",
                    "/marsscene/goal": "geometry_msgs/msg/PoseStamped"}
@@ -106,7 +111,9 @@ class Bridge:
         self.store = messages.b.store
         self.stats = SessionStats()
         self.bad_input = RateLimitedWarning()
-        sensor = "sensor" if opts.sensor_qos == "best-effort" else "sensor-reliable"
+        self.lockstep = opts.pace == "lockstep"
+        sensor = ("sensor" if opts.sensor_qos == "best-effort" and not self.lockstep
+                  else "sensor-reliable")
         self.writers: dict[str, RawWriter] = {  # the command is read here, not published
             t.name: part.writer(self.store, t.name, t.msgtype,
                                 sensor if t.qos == "sensor" else t.qos)
@@ -123,6 +130,8 @@ class Bridge:
         self.start_pose = (sim.pose()[0][:2].copy(), sim.yaw_rad())
         self.cmd: tuple[float, float] = (0.0, 0.0)
         self.cmd_t_s: float | None = None
+        self.queued: deque[tuple[float, float]] = deque()  # lockstep: commands not yet driven
+        self.steps_left = 0  # lockstep: control steps the command in force still drives
         self.goal_xy: tuple[float, float] | None = None
         self.wall0: float | None = None
         self.wall_start: float | None = None  # perf_counter() at the first control step
@@ -171,16 +180,13 @@ class Bridge:
 
     # ---- the control step (controller) -----------------------------------------------------
     def __call__(self, obs: Any) -> tuple[float, float]:
+        if self.lockstep:
+            return self._lockstep(obs)
         self._pace(obs.t_s)
-        self._read_commands(obs.t_s)
+        for cmd in self._read_commands():
+            self.cmd, self.cmd_t_s = cmd, obs.t_s
         self._read_control()
-        if self.goal_xy is not None and self.stats.goal_reached_t_s is None:
-            d = math.hypot(obs.gt_xyz_m[0] - self.goal_xy[0], obs.gt_xyz_m[1] - self.goal_xy[1])
-            if d <= self.opts.goal_tolerance_m:
-                self.stats.goal_reached_t_s = float(obs.t_s)
-                self._goal_reached(True)
-                log.info("goal reached at %.2f sim s", obs.t_s)
-                self.done = self.opts.stop_at_goal
+        self._check_goal(obs)
         if self.cmd_t_s is None:
             return 0.0, 0.0
         if self.opts.cmd_timeout_s > 0 and obs.t_s - self.cmd_t_s > self.opts.cmd_timeout_s:
@@ -188,6 +194,39 @@ class Bridge:
             self.cmd_t_s = None  # stopped until the next command
             return 0.0, 0.0
         return self.cmd
+
+    def _lockstep(self, obs: Any) -> tuple[float, float]:
+        """Hold sim time until a command comes; drive each for ``lockstep_steps`` control
+        steps. Before waiting, the LiDAR scan being cast goes out and ``/clock`` says that
+        every sample before ``obs.t_s`` is out."""
+        if self.wall0 is None:
+            self.wall_start = self.wall0 = time.perf_counter()
+        if self.steps_left == 0:
+            obs.lidar  # noqa: B018 (reading it hands the scan being cast to the listeners)
+            said = -math.inf
+            while not self.queued and not self.done:
+                if time.perf_counter() - said > _CLOCK_AGAIN_S and self.wanted("/clock"):
+                    self.publish([("/clock", self.msgs.b.clock(obs.t_s))])  # best effort:
+                    said = time.perf_counter()  # said again while waiting
+                self.queued.extend(self._read_commands())
+                self._read_control()
+                self._check_goal(obs)
+                if not self.queued:
+                    time.sleep(_POLL_S)
+            if self.done:
+                return 0.0, 0.0
+            self.cmd, self.steps_left = self.queued.popleft(), self.opts.lockstep_steps
+        self.steps_left -= 1
+        return self.cmd
+
+    def _check_goal(self, obs: Any) -> None:
+        if self.goal_xy is not None and self.stats.goal_reached_t_s is None:
+            d = math.hypot(obs.gt_xyz_m[0] - self.goal_xy[0], obs.gt_xyz_m[1] - self.goal_xy[1])
+            if d <= self.opts.goal_tolerance_m:
+                self.stats.goal_reached_t_s = float(obs.t_s)
+                self._goal_reached(True)
+                log.info("goal reached at %.2f sim s", obs.t_s)
+                self.done = self.opts.stop_at_goal
 
     def _pace(self, t_s: float) -> None:
         if self.wall0 is None:
@@ -201,7 +240,9 @@ class Bridge:
             time.sleep(ahead)
             self.stats.sleep_s += ahead
 
-    def _read_commands(self, t_s: float) -> None:
+    def _read_commands(self) -> list[tuple[float, float]]:
+        """The finite commands waiting, oldest first (bad ones dropped with a warning)."""
+        out = []
         for raw in self.cmd_reader.take():
             try:
                 msg: Any = self.store.deserialize_cdr(raw, self.cmd_type)
@@ -212,11 +253,12 @@ class Bridge:
             tw = msg.twist if self.opts.cmd_vel_stamped else msg
             v, w = float(tw.linear.x), float(tw.angular.z)
             if math.isfinite(v) and math.isfinite(w):
-                self.cmd, self.cmd_t_s = (v, w), t_s
-                self.stats.commands += 1
+                out.append((v, w))
             else:
                 self.bad_input.warn("%s: a command with linear.x = %r, angular.z = %r "
                                     "dropped (not finite)", self.opts.cmd_vel_topic, v, w)
+        self.stats.commands += len(out)
+        return out
 
     def _read_control(self) -> None:
         readers = self.control_readers
@@ -242,6 +284,7 @@ class Bridge:
             log.warning("teleport refused: %s", err)
             return False
         self.cmd, self.cmd_t_s = (0.0, 0.0), None
+        self.steps_left = 0  # lockstep: the commands queued still come, from the new pose
         return True
 
     def _goal_reached(self, reached: bool) -> None:

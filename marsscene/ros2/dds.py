@@ -12,7 +12,11 @@ The only importer of ``cyclonedds``. What makes a DDS endpoint a ROS 2 one:
   CDR bytes, the bag's very bytes, to Cyclone's C writer, and :class:`RawReader` takes raw
   samples for ``rosbags`` to decode;
 * QoS as ROS 2 sets it (:data:`QOS`, built from the topic table's profiles), participant
-  USER_DATA ``enclave=/;`` and the ``ros_discovery_info`` topic (:mod:`.discovery`).
+  USER_DATA ``enclave=/;`` and the ``ros_discovery_info`` topic (:mod:`.discovery`);
+* each endpoint's USER_DATA ``typehash=RIHS01_...;``: its type's description hash (REP 2016,
+  computed by ``rosbags``), which Jazzy's graph reports (``ros2 topic info --verbose``; without
+  it a Jazzy node shows ``INVALID``) and which Fast DDS's and Cyclone's ROS 2 middlewares
+  put on theirs.
 
 Localhost mode (:func:`cyclone_config`) binds to 127.0.0.1, turns multicast off and discovers
 peers by unicast on 127.0.0.1 only; a ``CYCLONEDDS_URI`` of the user's comes first, ours last
@@ -210,14 +214,15 @@ class Participant:
         """A writer of ``topic`` (a ROS topic, ``rt/`` on DDS, unless ``ros_topic`` is false)
         with the QoS profile named ``qos`` (:data:`QOS`)."""
         w = RawWriter(self, dds_type(store, msgtype), dds_topic(topic) if ros_topic else topic,
-                      QOS[qos])
+                      QOS[qos] + _type_hash(store, msgtype))
         w.topic = topic
         self.writers.append(w)
         return w
 
     def reader(self, store: Any, topic: str, msgtype: str, qos: str) -> RawReader:
         """A reader of the ROS topic ``topic`` with the QoS profile named ``qos``."""
-        r = RawReader(self, dds_type(store, msgtype), dds_topic(topic), QOS[qos])
+        r = RawReader(self, dds_type(store, msgtype), dds_topic(topic),
+                      QOS[qos] + _type_hash(store, msgtype))
         r.topic = topic
         self.readers.append(r)
         return r
@@ -225,6 +230,11 @@ class Participant:
     def close(self) -> None:
         """Delete the participant and everything in it (peers see the endpoints go)."""
         self.dp.__del__()  # cyclonedds deletes an entity (and its children) this way
+
+
+def _type_hash(store: Any, msgtype: str) -> Any:
+    """The endpoint USER_DATA that carries the type's RIHS01 hash, as ROS 2 Jazzy writes it."""
+    return _qos.Qos(_P.Userdata(f"typehash={store.hash_rihs01(msgtype)};".encode()))
 
 
 def dds_topic(topic: str) -> str:

@@ -14,8 +14,8 @@ from marsscene.runs.export.options import DISTROS, IMAGES
 
 __all__ = ["PACES", "SENSOR_QOS", "Ros2Options", "localhost_from_env"]
 
-#: How sim time runs: with the wall clock, or as fast as it goes.
-PACES = ("realtime", "max")
+#: How sim time runs: with the wall clock, as fast as it goes, or only when commanded.
+PACES = ("realtime", "max", "lockstep")
 #: The sensor topics' reliability: ROS 2's sensor-data QoS, or reliable.
 SENSOR_QOS = ("best-effort", "reliable")
 
@@ -55,13 +55,20 @@ class Ros2Options:
     cmd_timeout_s : float
         Sim seconds without a command after which the rover stops (0 = never).
     pace : str
-        ``"realtime"`` (sim time follows the wall clock, times ``realtime_factor``) or
-        ``"max"`` (as fast as the simulation and the writers go).
+        ``"realtime"`` (sim time follows the wall clock, times ``realtime_factor``), ``"max"``
+        (as fast as the simulation and the writers go) or ``"lockstep"`` (sim time stands
+        still until a command arrives; each ``cmd_vel`` message drives ``lockstep_steps``
+        control steps, and once they are done and every sample of them is out, ``/clock``
+        reads the time reached: a slow client misses nothing, and the same commands give the
+        same run).
+    lockstep_steps : int
+        Control steps each command drives with ``pace="lockstep"``.
     realtime_factor : float
         Sim seconds per wall second with ``pace="realtime"``.
     sensor_qos : str
         ``"best-effort"`` (ROS 2's sensor-data QoS: depth 5) or ``"reliable"`` for the IMU,
-        camera and LiDAR topics (for subscribers that insist on reliable ones).
+        camera and LiDAR topics (for subscribers that insist on reliable ones); always
+        reliable with ``pace="lockstep"``.
     images : str
         ``"both"`` (raw and image_transport's compressed topics; each is encoded only while
         someone subscribes), ``"raw"`` or ``"compressed"``.
@@ -84,6 +91,7 @@ class Ros2Options:
     cmd_vel_stamped: bool = False
     cmd_timeout_s: float = 0.5
     pace: str = "realtime"
+    lockstep_steps: int = 1
     realtime_factor: float = 1.0
     sensor_qos: str = "best-effort"
     images: str = "both"
@@ -97,6 +105,7 @@ class Ros2Options:
             check_range("ros2.domain_id", self.domain_id, 0, 232)
         check_range("ros2.cmd_timeout_s", self.cmd_timeout_s, 0.0, 1e6)
         check_range("ros2.realtime_factor", self.realtime_factor, 0.0, 1e3, lo_open=True)
+        check_range("ros2.lockstep_steps", self.lockstep_steps, 1, 1_000_000)
         check_range("ros2.goal_tolerance_m", self.goal_tolerance_m, 0.0, 1e6, lo_open=True)
         for name, value, allowed in (("pace", self.pace, PACES),
                                      ("sensor_qos", self.sensor_qos, SENSOR_QOS),

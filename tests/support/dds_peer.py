@@ -12,6 +12,11 @@ loopback only (127.0.0.1, no multicast, unicast discovery). Modes (JSON on stdou
 * ``cmd DOMAIN SECONDS V W [--stamped] [--hz 20]``: publish ``/cmd_vel`` for SECONDS;
 * ``latency DOMAIN V [--repeats 5]``: command ``V`` from rest, wall time until ``/rover/odom``
   reports ``|v| >= V / 2``, then stop and wait until it stops;
+* ``lockstep DOMAIN STEPS DT V W [--sleep-per-scan S]``: drive a lockstep session
+  (``pace="lockstep"``, one control step of DT s a command): send a command, take every
+  sample until ``/clock`` reaches the step's end, sleeping S s after each LiDAR scan (a slow
+  subscriber), STEPS times, then one stop command; counts and the SHA-256 of the odometry and
+  LiDAR payloads, in order;
 * ``goto DOMAIN DX DY [--stop-m 3.0]``: a DDS-only closed loop: drive towards the point ``(DX,
   DY)`` m from the start on ``/rover/odom`` and stop short of the first obstacle that
   ``/rover/lidar/points`` shows ahead in the rover's path (a step of 0.4 m within 1.6 m of the
@@ -253,6 +258,47 @@ def goto(peer: Peer, dx: float, dy: float, stop_m: float, seconds: float) -> dic
             "travelled_m": math.hypot(pose[0] - start[0], pose[1] - start[1])}
 
 
+def lockstep(peer: Peer, steps: int, dt_s: float, v: float, w: float,
+             sleep_per_scan_s: float) -> dict[str, Any]:
+    clock = peer.reader("/clock", "rosgraph_msgs/msg/Clock", depth=1)
+    odom = peer.reader("/rover/odom", "nav_msgs/msg/Odometry", reliable=True)
+    scans = peer.reader("/rover/lidar/points", "sensor_msgs/msg/PointCloud2", reliable=True,
+                        depth=10)
+    cmd = peer.writer("/cmd_vel", "geometry_msgs/msg/Twist")
+    hashes = {"odom": hashlib.sha256(), "lidar": hashlib.sha256()}
+    counts = {"odom": 0, "lidar": 0}
+    now = [-math.inf]
+
+    def pump(until_s: float, limit_s: float = 60.0) -> None:
+        t0 = time.monotonic()
+        while now[0] < until_s - 1e-6:
+            if time.monotonic() - t0 > limit_s:
+                raise SystemExit(f"no /clock of {until_s:.3f} s (last {now[0]:.3f} s)")
+            for raw in take(clock):
+                now[0] = max(now[0], stamp_s(STORE.deserialize_cdr(raw, "rosgraph_msgs/msg/Clock")))
+            for key, reader in (("odom", odom), ("lidar", scans)):
+                for raw in take(reader):
+                    hashes[key].update(raw)
+                    counts[key] += 1
+                    if key == "lidar":
+                        time.sleep(sleep_per_scan_s)
+            time.sleep(0.0005)
+
+    pump(0.0)  # the session waits at its start
+    start, t0 = now[0], time.monotonic()
+    for i in range(steps):
+        send(cmd, twist(v, w))
+        pump(start + (i + 1) * dt_s)
+    wall = time.monotonic() - t0
+    send(cmd, twist(0.0, 0.0))  # the session's last step
+    try:
+        pump(math.inf, limit_s=1.0)  # its samples (the session then ends: no /clock)
+    except SystemExit:
+        pass
+    return {"steps": steps, "wall_s": wall, "counts": counts,
+            "sha256": {k: h.hexdigest() for k, h in hashes.items()}}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="mode", required=True)
@@ -272,6 +318,11 @@ def main() -> None:
     la.add_argument("domain", type=int)
     la.add_argument("v", type=float)
     la.add_argument("--repeats", type=int, default=5)
+    ls = sub.add_parser("lockstep")
+    for name, ty in (("domain", int), ("steps", int), ("dt", float), ("v", float),
+                     ("w", float)):
+        ls.add_argument(name, type=ty)
+    ls.add_argument("--sleep-per-scan", type=float, default=0.0)
     g = sub.add_parser("goto")
     for name, ty in (("domain", int), ("dx", float), ("dy", float)):
         g.add_argument(name, type=ty)
@@ -293,6 +344,8 @@ def main() -> None:
         out = {"sent": n}
     elif args.mode == "latency":
         out = latency(peer, args.v, args.repeats)
+    elif args.mode == "lockstep":
+        out = lockstep(peer, args.steps, args.dt, args.v, args.w, args.sleep_per_scan)
     else:
         out = goto(peer, args.dx, args.dy, args.stop_m, args.seconds)
     sys.stdout.write(json.dumps(out) + "\n")
