@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
+from array_api_compat import is_array_api_obj
 from numpy.typing import ArrayLike, NDArray
+
+from marsscene._xp import namespace
 
 __all__ = ["quat_from_yaw_normal", "quat_to_matrix", "yaw_of_quat"]
 
@@ -67,11 +71,14 @@ def matrix_to_quat(r: ArrayLike) -> NDArray[np.float64]:
     return out.reshape(*m.shape[:-2], 4)
 
 
-def yaw_of_quat(q_wxyz: ArrayLike) -> NDArray[np.float64]:
-    """Heading (rad, counter-clockwise from +x) of quaternions (..., 4)."""
-    q = np.asarray(q_wxyz, dtype=np.float64)
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+def yaw_of_quat(q_wxyz: Any) -> Any:
+    """Heading (rad, counter-clockwise from +x) of quaternions (..., 4): numpy (or anything
+    ``np.asarray`` takes) or PyTorch arrays, returned as the same kind; one quaternion (4,)
+    gives a Python float (the C library's ``atan2``, as the simulators have always used)."""
+    q = q_wxyz if is_array_api_obj(q_wxyz) else np.asarray(q_wxyz, dtype=np.float64)
+    atan2 = math.atan2 if isinstance(q, np.ndarray) and q.shape == (4,) else namespace(q).atan2
+    w, x, y, z = (q[..., i] for i in range(4))
+    return atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 def quat_from_yaw_normal(yaw_rad: float, normal: ArrayLike) -> NDArray[np.float64]:

@@ -6,7 +6,9 @@ Usage::
     python perf/bench_batch_env.py pack OUT.npz [--folders OUT.tar]   # 16 worlds, goals 20-50 m
     python perf/bench_batch_env.py agree OUT.npz [--posts 0.25,0.125,0.1] [--device cpu]
     python perf/bench_batch_env.py run OUT.npz [--envs 1,1024,4096,16384] [--folders DIR]
+    python perf/bench_batch_env.py repro OUT.npz [--envs 4096] [--variants cylinder/100/50/det]
     python perf/bench_batch_env.py sim2sim POLICY.npz --folders DIR [--episodes 50]
+    python perf/bench_batch_env.py curve run/curve.csv --out curve.png [--gpu 91.0 --cpu 80]
 
 ``pack`` builds the benchmark's worlds (the three world kinds with rock abundance k = 0.2: 6
 plain, 5 craters, 5 rocks) and draws 256 episodes on each. ``agree`` drives 32 rovers 10 s
@@ -14,8 +16,11 @@ from settled starts in MuJoCo C and MuJoCo Warp on the tiled heightfield at seve
 spacings and prints how far apart they end. ``run`` times environment steps per second at
 5 Hz control (100 Hz physics, height scan, random actions) for each batch size, and, with
 ``--folders`` (the scenes of ``pack --folders``), the CPU environment on one core and on every
-core (one process a core). ``sim2sim`` runs a policy (``examples/train_batch_ppo.py``) in the
-CPU environment (MuJoCo C, mesh rocks) over seeded episodes.
+core (one process a core). ``repro`` makes and drives the same batch twice and compares the
+bytes. ``--variants`` picks the wheels' collision shape, the solver's iteration limits and
+MuJoCo Warp's deterministic mode (``cylinder/100/50/det``). ``sim2sim`` runs a policy
+(``examples/train_batch_ppo.py``) in the CPU environment (MuJoCo C, mesh rocks) over seeded
+episodes.
 """
 
 from __future__ import annotations
@@ -66,7 +71,19 @@ def pack(out: Path, folders: Path | None) -> None:
         print(f"{folders}: the {len(paths)} scene folders")
 
 
-def agree(batch_path: Path, posts: list[float], device: str) -> None:
+def _variant(spec: str) -> tuple[object, object]:
+    """``WHEELS/ITERATIONS/LS_ITERATIONS[/det]`` -> (RoverConfig, WarpPhysics)."""
+    from marsscene.env.batch import WarpPhysics
+    from marsscene.rover.config import RoverConfig
+
+    wheels, it, ls, *det = spec.split("/")
+    return (RoverConfig(wheel_collision=wheels),
+            WarpPhysics(iterations=int(it), ls_iterations=int(ls), deterministic=bool(det)))
+
+
+def agree(batch_path: Path, posts: list[float], variants: list[str], device: str) -> None:
+    """The CPU environment's physics (cylinder wheels, MuJoCo's solver defaults) in MuJoCo C
+    against each variant in MuJoCo Warp, at each post spacing."""
     import mujoco
     import mujoco_warp as mjw
     import warp as wp
@@ -80,70 +97,60 @@ def agree(batch_path: Path, posts: list[float], device: str) -> None:
     b = WorldBatch.load(batch_path)
     terr = b.rock_terrains()
     bare = [b.heightfield(w) for w in range(b.count)]
-    rover, n = RoverConfig(), 32
+    n, steps = 32, (300, 1000)
     for post in posts:
-        t = tiled_model(terr, bare, rover=rover, physics_hz=100.0, post_m=post)
-        m, ids = t.model, t.ids
+        ref_model = tiled_model(terr, bare, rover=RoverConfig(), physics_hz=100.0, post_m=post)
+        m, ids = ref_model.model, ref_model.ids
         qs = np.tile(m.qpos0, (n, 1))
         for k in range(n):
             w, p = k % b.count, k // b.count
-            pose = spawn_pose(terr[w], tuple(b.starts_xy_m[w, p]), float(b.yaws_rad[w, p]), rover)
-            pose[:2] += t.offsets_xy_m[w]
+            pose = spawn_pose(terr[w], tuple(b.starts_xy_m[w, p]), float(b.yaws_rad[w, p]),
+                              RoverConfig())
+            pose[:2] += ref_model.offsets_xy_m[w]
             qs[k, :7] = pose
-        rates, steer = wheel_commands(0.5, 0.05, rover)
+        rates, steer = wheel_commands(0.5, 0.05, RoverConfig())
         ctrl = np.zeros(m.nu)
         ctrl[ids["drive_act"]], ctrl[ids["steer_act"]] = rates, steer
         ref = []
         for k in range(n):
             d = mujoco.MjData(m)
             d.qpos[:] = qs[k]
-            mujoco.mj_step(m, d, nstep=300)
+            mujoco.mj_step(m, d, nstep=steps[0])
             d.ctrl[:] = ctrl
-            mujoco.mj_step(m, d, nstep=1000)
+            mujoco.mj_step(m, d, nstep=steps[1])
             ref.append(d.qpos[:2].copy())
-        with wp.ScopedDevice(device):
-            mw = mjw.put_model(m)
-            dw = mjw.put_data(m, mujoco.MjData(m), nworld=n, nconmax=96, njmax=512)
-            wp.copy(dw.qpos, wp.array(qs, dtype=float))
-            for _ in range(300):
-                mjw.step(mw, dw)
-            wp.copy(dw.ctrl, wp.array(np.tile(ctrl, (n, 1)), dtype=float))
-            for _ in range(1000):
-                mjw.step(mw, dw)
-            got = dw.qpos.numpy()[:, :2]
-        err = np.linalg.norm(got - np.array(ref), axis=1)
-        print(f"posts {post:.3f} m: MuJoCo Warp vs C after 3 s settling + 10 s driving, "
-              f"{n} starts: median {np.median(err):.3f} m, 90th percentile "
-              f"{np.percentile(err, 90):.2f} m, {int((err > 0.5).sum())} over 0.5 m", flush=True)
+        for spec in variants:
+            rover, physics = _variant(spec)
+            mv = tiled_model(terr, bare, rover=rover, physics_hz=100.0, post_m=post,
+                             physics=physics).model
+            with wp.ScopedDevice(device):
+                mw = mjw.put_model(mv)
+                dw = mjw.put_data(mv, mujoco.MjData(mv), nworld=n, nconmax=96, njmax=512)
+                wp.copy(dw.qpos, wp.array(qs, dtype=float))
+                for _ in range(steps[0]):
+                    mjw.step(mw, dw)
+                wp.copy(dw.ctrl, wp.array(np.tile(ctrl, (n, 1)), dtype=float))
+                for _ in range(steps[1]):
+                    mjw.step(mw, dw)
+                got = dw.qpos.numpy()[:, :2]
+            err = np.linalg.norm(got - np.array(ref), axis=1)
+            print(f"posts {post:.3f} m, {spec}: MuJoCo Warp vs C after 3 s settling + 10 s "
+                  f"driving, {n} starts: median {np.median(err):.3f} m, 90th percentile "
+                  f"{np.percentile(err, 90):.2f} m, {int((err > 0.5).sum())} over 0.5 m",
+                  flush=True)
 
 
-def run(batch_path: Path, envs: list[int], folders: Path | None, steps: int) -> None:
+def run(batch_path: Path, envs: list[int], variants: list[str], folders: Path | None,
+        steps: int) -> None:
     import torch
 
-    from marsscene.env.batch import BatchNavEnv
 
     print(f"GPU: {torch.cuda.get_device_name()}; CPU cores: {os.cpu_count()}", flush=True)
-    for n in envs:
-        t0 = time.perf_counter()
-        env = BatchNavEnv(batch_path, num_envs=n, seed=0)
-        made = time.perf_counter() - t0
-        gen = torch.Generator(device=env.bk.tdevice).manual_seed(0)
-        actions = torch.rand((steps + 3, n, 2), generator=gen, device=env.bk.tdevice) * 2 - 1
-        for a in actions[:3]:
-            env.step(a)
-        torch.cuda.synchronize()
-        t0 = time.perf_counter()
-        for a in actions[3:]:
-            env.step(a)
-        torch.cuda.synchronize()
-        dt = time.perf_counter() - t0
-        physics = n * steps * env.substeps / dt
-        print(f"N = {n:6d}: {n * steps / dt:12,.0f} env steps/s ({physics:14,.0f} physics "
-              f"steps/s; made in {made:.1f} s; {env.success_rate:.3f} of "
-              f"{int(env.bk.to_numpy(env.episodes)[0])} random episodes reached the goal)",
-              flush=True)
-        del env
-        torch.cuda.empty_cache()
+    for spec in variants:
+        print(f"-- wheels/iterations/line-search iterations[/deterministic]: {spec}")
+        rover, physics = _variant(spec)
+        for n in envs:
+            _run_one(batch_path, n, rover, physics, steps)
     if folders is not None:
         cores = os.cpu_count() or 1
         one = _cpu_rate(str(folders))
@@ -151,6 +158,85 @@ def run(batch_path: Path, envs: list[int], folders: Path | None, steps: int) -> 
             every = sum(pool.map(_cpu_rate, [str(folders)] * cores))
         print(f"CPU environment (MuJoCo C, mesh rocks): {one:,.0f} env steps/s on one core, "
               f"{every:,.0f} on {cores} cores (one process a core)", flush=True)
+
+
+def _run_one(batch_path: Path, n: int, rover: object, physics: object, steps: int) -> None:
+    import torch
+
+    from marsscene.env.batch import BatchNavEnv
+
+    t0 = time.perf_counter()
+    env = BatchNavEnv(batch_path, num_envs=n, seed=0, rover=rover, physics=physics)
+    made = time.perf_counter() - t0
+    gen = torch.Generator(device=env.bk.tdevice).manual_seed(0)
+    actions = torch.rand((steps + 3, n, 2), generator=gen, device=env.bk.tdevice) * 2 - 1
+    for a in actions[:3]:
+        env.step(a)
+    torch.cuda.synchronize()
+    t0 = time.perf_counter()
+    for a in actions[3:]:
+        env.step(a)
+    torch.cuda.synchronize()
+    dt = time.perf_counter() - t0
+    per_s = n * steps * env.substeps / dt
+    print(f"N = {n:6d}: {n * steps / dt:12,.0f} env steps/s ({per_s:14,.0f} physics "
+          f"steps/s; made in {made:.1f} s; {env.success_rate:.3f} of "
+          f"{int(env.bk.to_numpy(env.episodes)[0])} random episodes reached the goal)",
+          flush=True)
+    del env
+    torch.cuda.empty_cache()
+
+
+def repro(batch_path: Path, n: int, variants: list[str], steps: int) -> None:
+    """Two batches made and driven alike (same seed, same actions): how far apart they end."""
+    import torch
+
+    from marsscene.env.batch import BatchNavEnv
+
+    for spec in variants:
+        rover, physics = _variant(spec)
+        ends, times = [], []
+        for _ in range(2):
+            env = BatchNavEnv(batch_path, num_envs=n, seed=0, rover=rover, physics=physics)
+            gen = torch.Generator(device=env.bk.tdevice).manual_seed(0)
+            torch.cuda.synchronize()
+            t0 = time.perf_counter()
+            for _ in range(steps):
+                env.step(torch.rand((n, 2), generator=gen, device=env.bk.tdevice) * 2 - 1)
+            torch.cuda.synchronize()
+            times.append(time.perf_counter() - t0)
+            ends.append(env.bk.to_numpy(env._v["qpos"]).copy())
+            del env
+        gap = np.linalg.norm(ends[0][:, :2] - ends[1][:, :2], axis=1)
+        print(f"{spec}: {n} rovers, {steps} steps twice: {ends[0].tobytes() == ends[1].tobytes()}"
+              f" identical bytes; {int((gap > 0).sum())} rovers apart, median "
+              f"{np.median(gap):.3f} m, max {gap.max():.2f} m; {n * steps / min(times):,.0f} "
+              "env steps/s", flush=True)
+
+
+def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None) -> None:
+    """The learning curve of ``train_batch_ppo.py`` (success of the episodes ended in each
+    iteration against wall time), with the trained policy's GPU and CPU success beside it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = np.genfromtxt(csv_path, delimiter=",", names=True)
+    fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
+    ax.plot(rows["wall_s"] / 60.0, 100.0 * np.nan_to_num(rows["success"]), lw=1.2,
+            label="episodes ended in each PPO iteration (GPU batch)")
+    for value, style, what in ((gpu, "--", "trained policy, GPU batch"),
+                               (cpu, ":", "trained policy, CPU env (mesh rocks)")):
+        if value is not None:
+            ax.axhline(value, ls=style, color="k", lw=1.0, label=f"{what}: {value:.1f} %")
+    ax.set(xlabel="wall time (min)", ylabel="reached the goal (%)", ylim=(0, 100),
+           xlim=(0, max(rows["wall_s"]) / 60.0))
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out)
+    print(f"{out}: {len(rows)} iterations")
 
 
 def _cpu_env(folders: str, observations: object = None) -> object:
@@ -200,21 +286,31 @@ def sim2sim(policy_path: Path, folders: Path, episodes: int) -> None:
 
 def main(argv: list[str]) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=["pack", "agree", "run", "sim2sim"])
+    ap.add_argument("what", choices=["pack", "agree", "run", "repro", "sim2sim", "curve"])
     ap.add_argument("path", type=Path)
     ap.add_argument("--folders", type=Path)
     ap.add_argument("--posts", default="0.25,0.125,0.1")
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--envs", default="1,1024,4096,16384")
+    ap.add_argument("--variants", default="sphere/100/50",
+                    help="WHEELS/ITERATIONS/LS_ITERATIONS[/det], comma-separated")
     ap.add_argument("--steps", type=int, default=50)
     ap.add_argument("--episodes", type=int, default=50)
+    ap.add_argument("--out", type=Path, default=Path("curve.png"))
+    ap.add_argument("--gpu", type=float, help="curve: the policy's GPU success (%%)")
+    ap.add_argument("--cpu", type=float, help="curve: the policy's CPU success (%%)")
     a = ap.parse_args(argv)
     if a.what == "pack":
         pack(a.path, a.folders)
     elif a.what == "agree":
-        agree(a.path, [float(p) for p in a.posts.split(",")], a.device)
+        agree(a.path, [float(p) for p in a.posts.split(",")], a.variants.split(","), a.device)
     elif a.what == "run":
-        run(a.path, [int(n) for n in a.envs.split(",")], a.folders, a.steps)
+        run(a.path, [int(n) for n in a.envs.split(",")], a.variants.split(","), a.folders,
+            a.steps)
+    elif a.what == "curve":
+        curve(a.path, a.out, a.gpu, a.cpu)
+    elif a.what == "repro":
+        repro(a.path, int(a.envs.split(",")[0]), a.variants.split(","), a.steps)
     else:
         sim2sim(a.path, a.folders, a.episodes)
 

@@ -164,8 +164,8 @@ class NavEpisode:
                 **extra}
 
     def observe(self, obs: Any) -> dict[str, np.ndarray]:
-        """The observation dict: the vector, the goals, and the scan, camera and LiDAR of the
-        loaded world sampled now."""
+        """The observation dict: the vector, the goals, the height scan, and the camera frame
+        and LiDAR scan the session took at ``obs``."""
         world = self.world
         assert world is not None
         ag, dg = self._goals(obs)
@@ -176,13 +176,12 @@ class NavEpisode:
         if world.scanner is not None:
             out["height_scan"] = world.scanner(obs.gt_xyz_m, obs.gt_yaw_rad)
         if self.obs_config.camera is not None:
-            rgb, depth = world.sim.render(world.renderer)
-            out["rgb"] = rgb
-            if self.obs_config.depth and depth is not None:
-                out["depth"] = np.nan_to_num(depth, nan=0.0, posinf=0.0).astype(np.float32)
-        if world.lidar is not None and self.lidar_shape is not None:
-            out["lidar_range"], out["lidar_mask"] = lidar_image(world.scan_lidar(),
-                                                                self.lidar_shape)
+            out["rgb"] = obs.camera.rgb
+            if self.obs_config.depth and obs.camera.depth_m is not None:
+                out["depth"] = np.nan_to_num(obs.camera.depth_m, nan=0.0,
+                                             posinf=0.0).astype(np.float32)
+        if self.lidar_shape is not None:
+            out["lidar_range"], out["lidar_mask"] = lidar_image(obs.lidar, self.lidar_shape)
         return out
 
     # ---- goal relabelling ------------------------------------------------------------------

@@ -1,5 +1,6 @@
-"""A world loaded for episodes: its simulator, free ground, height scanner and sensors, kept
-compiled between episodes (building them costs about a second; the camera's scene more)."""
+"""A world loaded for episodes: its simulator, free ground and height scanner, and the camera
+and LiDAR its episodes' sessions built, kept between episodes (building them costs about a
+second; the camera's scene more)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import numpy as np
 
 from marsscene.env.observe import HeightScanner, ObsConfig
 from marsscene.env.task import NavTask, TaskMap
-from marsscene.rover.config import CameraConfig, RoverConfig, RunConfig
+from marsscene.rover.config import RoverConfig, RunConfig
 from marsscene.sim.rover_sim import RoverSim
 from marsscene.sim.world import scene_obstacles
 
@@ -34,7 +35,7 @@ class LoadedWorld:
         self.wheel = np.zeros(m.ngeom, bool)
         self.wheel[np.asarray(self.sim.wheel_geoms)] = True
         self.rock = (m.geom_bodyid == 0) & (m.geom_type != mujoco.mjtGeom.mjGEOM_HFIELD)
-        self.renderer: Any = None
+        self.renderer: Any = None  # the sessions' camera and LiDAR, kept between episodes
         self.lidar: Any = None
 
     def collided(self) -> bool:
@@ -47,39 +48,12 @@ class LoadedWorld:
 
     # ---- sensors ---------------------------------------------------------------------------
     def camera(self, size: tuple[int, int]) -> Any:
-        """The navcam renderer, ``size`` (width, height) px, built at the first call."""
+        """The navcam renderer: the observed camera's (kept from the episodes' sessions), or one
+        of ``size`` (width, height) px for ``render()``, built at the first call."""
         if self.renderer is None:
-            from marsscene.sensors.camera import MastCamera
-
-            cam = CameraConfig(width_px=size[0], height_px=size[1],
-                               rate_hz=self.sim.run.control_hz, depth=self.obs.depth,
-                               shadows=self.obs.shadows, texture_px=1024)
-            self.renderer = MastCamera(self.sim, config=cam)
+            self.renderer = self.sim.make_renderer(config=self.obs.camera_config(
+                self.sim.run.control_hz, size))
         return self.renderer
-
-    def restart_sensors(self, *, lidar_rng: np.random.Generator,
-                        camera_rng: np.random.Generator) -> None:
-        """Start an episode's observed sensors (built at the first episode) with these noise
-        streams."""
-        lidar = self.obs.lidar_config()
-        if lidar is not None:
-            if self.lidar is None:
-                from marsscene.sensors.camera_world import read_rock_catalog
-                from marsscene.sensors.lidar import Lidar
-
-                self.lidar = Lidar(lidar, rng=lidar_rng,
-                                   rocks=read_rock_catalog(self.sim.scene_dir))
-            self.lidar.rng = lidar_rng
-        if self.obs.camera is not None:
-            self.camera(self.obs.camera).restart(self.sim, rng=camera_rng)
-
-    def scan_lidar(self) -> dict[str, Any]:
-        """A LiDAR scan from the rover's pose now."""
-        sim = self.sim
-        scan: dict[str, Any] = self.lidar.scan(sim.model, sim.data, sim.lidar_site,
-                                               sim.heightfield,
-                                               twist=sim.site_twist(sim.lidar_site))
-        return scan
 
     def close(self) -> None:
         if self.renderer is not None:

@@ -34,7 +34,7 @@ from marsscene.env.task import NavTask
 from marsscene.env.worlds import WorldSampler, world_paths
 from marsscene.errors import ConfigError
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, NoiseConfig, RoverConfig, RunConfig
-from marsscene.sim.session import DriveSession
+from marsscene.sim.session import DriveSession, SessionOptions
 
 __all__ = ["CONTROL_HZ", "RoverNavEnv"]
 
@@ -44,6 +44,8 @@ CONTROL_HZ = 5.0
 PHYSICS_HZ = 100.0
 #: :meth:`RoverNavEnv.render`'s image size (width, height) px without a camera observation.
 _RENDER_PX = (256, 192)
+#: The environment's sessions sample the camera and LiDAR at each observation.
+_SENSORS_AT_OBSERVE = SessionOptions(sensors_at_observe=True)
 
 
 class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
@@ -89,7 +91,9 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.n_worlds, self._path = world_paths(self.worlds)
         self.run = RunConfig(control_hz=control_hz, imu_hz=2 * control_hz,
                              physics_hz=physics_hz,
-                             noise=NoiseConfig(profile=self.obs_config.noise_profile))
+                             noise=NoiseConfig(profile=self.obs_config.noise_profile),
+                             camera=self.obs_config.camera_config(control_hz),
+                             lidar=self.obs_config.lidar_config())
         self.control_hz = float(control_hz)
         self.episode = NavEpisode(self.task, self.obs_config, self.reward_config, self.rover,
                                   control_hz=self.control_hz)
@@ -133,12 +137,12 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.episode.seed(seed)
         index = self.episode.draw_world(self.n_worlds, opts)
         world = self._load(index)
-        if self._session is not None:
-            self._session.close(release=False)
+        self._end_session()
         noise = self.episode.begin(world, opts)
-        lidar_rng, camera_rng = noise.spawn(2)  # the sensors' own streams, fixed per episode
-        self._session = DriveSession(world.sim, rng=noise)
-        world.restart_sensors(lidar_rng=lidar_rng, camera_rng=camera_rng)
+        self._session = DriveSession(world.sim, rng=noise, renderer=world.renderer,
+                                     lidar=world.lidar, options=_SENSORS_AT_OBSERVE)
+        world.renderer = self._session.renderer or world.renderer  # kept for the next episode
+        world.lidar = self._session.lidar
         self._world = world
         obs = self._session.observe()
         return self.episode.observe(obs), self.episode.info(obs, {}, "", world_index=index)
@@ -175,10 +179,14 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         rgb, _ = self._world.sim.render(renderer)
         return rgb
 
-    def close(self) -> None:
+    def _end_session(self) -> None:
+        """Close the episode's session, keeping its camera and LiDAR with their world."""
         if self._session is not None:
             self._session.close(release=False)
             self._session = None
+
+    def close(self) -> None:
+        self._end_session()
         for world in self._loaded.values():
             world.close()
         self._loaded.clear()

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from marsscene._validate import check_range
 from marsscene.env import taskmath
 from marsscene.errors import ConfigError
-from marsscene.rover.config import LidarConfig
+from marsscene.rover.config import CameraConfig, LidarConfig
 from marsscene.rover.geometry import body_twist_from_wheels
 from marsscene.units import MARS_GRAVITY_M_S2
 
@@ -107,6 +107,16 @@ class ObsConfig:
             object.__setattr__(self, "camera", (w, h))
         if self.depth and self.camera is None:
             raise ConfigError("depth = true needs camera = (width, height)")
+
+    def camera_config(self, control_hz: float, size: tuple[int, int] | None = None
+                      ) -> CameraConfig | None:
+        """The observed camera's configuration, a frame each control step (None: no camera;
+        ``size`` gives one for rendering without observing it)."""
+        size = size if self.camera is None else self.camera
+        if size is None:
+            return None
+        return CameraConfig(width_px=size[0], height_px=size[1], rate_hz=control_hz,
+                            depth=self.depth, shadows=self.shadows, texture_px=1024)
 
     def lidar_config(self) -> LidarConfig | None:
         """The observed LiDAR's configuration (None: no LiDAR)."""

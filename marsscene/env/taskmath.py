@@ -22,7 +22,7 @@ from array_api_compat import device
 
 from marsscene._xp import clip, namespace
 
-__all__ = ["FAILURES", "StuckClock", "bearing_rad", "body_yaw", "failure_code", "goal_in_body",
+__all__ = ["FAILURES", "StuckClock", "bearing_rad", "failure_code", "goal_in_body",
            "goal_terms", "height_scan", "observation_vector", "scan_grid_m", "scan_heights",
            "step_terms", "up_z"]
 
@@ -36,13 +36,6 @@ def up_z(q_wxyz: Any) -> Any:
     ``q_wxyz`` (..., 4)."""
     x, y = q_wxyz[..., 1], q_wxyz[..., 2]
     return 1.0 - 2.0 * (x * x + y * y)
-
-
-def body_yaw(q_wxyz: Any) -> Any:
-    """Heading (rad, counter-clockwise from east) of (..., 4) quaternions (w, x, y, z)."""
-    xp = namespace(q_wxyz)
-    w, x, y, z = (q_wxyz[..., i] for i in range(4))
-    return xp.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 def goal_in_body(xy_m: Any, yaw_rad: Any, goal_xy_m: Any) -> Any:

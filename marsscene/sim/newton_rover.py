@@ -24,7 +24,6 @@ merged ones, optionally only the rocks within ``rocks_within_m`` of the rover.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -37,6 +36,7 @@ from marsscene.export.usd.rock_colliders import COLLIDERS_PATH
 from marsscene.export.usd.rock_colliders_read import merged_rocks, rock_instances
 from marsscene.rover.config import RoverConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
+from marsscene.transforms import yaw_of_quat
 
 __all__ = ["NewtonRover", "rock_instances"]
 
@@ -220,8 +220,8 @@ class NewtonRover:
         return q[:3].copy(), np.array([q[6], q[3], q[4], q[5]])
 
     def yaw_rad(self) -> float:
-        w, x, y, z = self.pose()[1]
-        return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        """Heading of ``base_link`` (rad, counter-clockwise from +x)."""
+        return float(yaw_of_quat(self.pose()[1]))
 
     def joint_positions(self, names: tuple[str, ...]) -> NDArray[np.float64]:
         """Joint coordinates (rad) of single-DOF joints by name (e.g. ``"rocker_left"``)."""

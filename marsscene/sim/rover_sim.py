@@ -27,6 +27,7 @@ from marsscene.sim.corridor import cull_scene_xml
 from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.terrain import scene_heightfield
 from marsscene.terrain.heightfield import Heightfield
+from marsscene.transforms import yaw_of_quat
 
 __all__ = ["PREFIX", "RoverSim", "load_scene_spec", "rover_indices"]
 
@@ -254,14 +255,16 @@ class RoverSim:
         gid = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "terrain_outer")
         return scene_heightfield(self.model, "terrain_outer") if gid >= 0 else None
 
-    def make_renderer(self, *, rng: np.random.Generator | None = None) -> Any:
+    def make_renderer(self, *, rng: np.random.Generator | None = None,
+                      config: Any = None) -> Any:
         """An offscreen mast-camera renderer (:class:`marsscene.sensors.camera.MastCamera`).
 
-        ``rng`` draws sensor noise when ``CameraConfig.sensor_noise`` is on.
+        ``rng`` draws sensor noise when ``CameraConfig.sensor_noise`` is on; ``config`` (a
+        ``CameraConfig``) replaces the run's camera.
         """
         from marsscene.sensors.camera import MastCamera
 
-        return MastCamera(self, rng=rng)
+        return MastCamera(self, rng=rng, config=config)
 
     def render(self, renderer: Any) -> tuple[NDArray[np.uint8], NDArray[np.float32] | None]:
         """RGB (H, W, 3) uint8 and depth (H, W) float32 in m (None if depth is off)."""
@@ -315,8 +318,8 @@ class RoverSim:
         return q[:3].copy(), q[3:7].copy()
 
     def yaw_rad(self) -> float:
-        w, x, y, z = self.pose()[1]
-        return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        """Ground-truth heading of ``base_link`` (rad, counter-clockwise from +x)."""
+        return float(yaw_of_quat(self.data.qpos[self.qpos_root + 3: self.qpos_root + 7]))
 
     def site_twist(self, site_id: int) -> NDArray[np.float64]:
         """A site's angular and linear velocity (rad/s, m/s; world frame), ``(wx, wy, wz, vx,

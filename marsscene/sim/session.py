@@ -62,12 +62,16 @@ class SessionOptions:
         Objects that receive every sample as the run writer does.
     jpeg_cache : JpegCache, optional
         Also JPEG-encode every colour frame into this cache (for a bag written right after).
+    sensors_at_observe : bool
+        Take the camera frame and the LiDAR scan when :meth:`DriveSession.observe` is called
+        (an environment's observation at each control step) instead of at their own rates.
     """
 
     keep_sensors: bool = False
     lidar_files: bool = True
     listeners: tuple[Any, ...] = ()
     jpeg_cache: Any = None
+    sensors_at_observe: bool = False
 
 
 class DriveSession:
@@ -97,12 +101,13 @@ class DriveSession:
         run = sim.run
         opts = options if options is not None else SessionOptions()
         self.sim, self.rng, self.keep = sim, rng, opts.keep_sensors
+        self.at_observe = opts.sensors_at_observe
         self.periods = {"control": _period(sim, run.control_hz), "imu": _period(sim, run.imu_hz)}
         self.renderer = None
         self.trigger_m = run.camera.trigger_distance_m if run.camera is not None else None
         self.next_frame_m = 0.0
         if run.camera is not None:
-            if self.trigger_m is None:
+            if self.trigger_m is None and not self.at_observe:
                 self.periods["camera"] = _period(sim, run.camera.rate_hz)
             if renderer is None:
                 self.renderer = sim.make_renderer(rng=rng.spawn(1)[0])
@@ -111,7 +116,8 @@ class DriveSession:
                 renderer.restart(sim, rng=rng.spawn(1)[0])
         self.lidar = lidar
         if run.lidar is not None:  # its own stream: LiDAR noise never moves IMU/wheel noise
-            self.periods["lidar"] = _period(sim, run.lidar.spec.rate_hz)
+            if not self.at_observe:
+                self.periods["lidar"] = _period(sim, run.lidar.spec.rate_hz)
             if lidar is None:
                 self.lidar = Lidar(run.lidar, rng=rng.spawn(1)[0],
                                    rocks=read_rock_catalog(Path(sim.scene_dir)))
@@ -149,8 +155,11 @@ class DriveSession:
     def observe(self) -> Observation:
         """Read the encoders, integrate the odometry to now, and the observation of this step.
 
-        Call once per control tick (after :meth:`advance` returned True, or at the start)."""
+        Call once per control tick (after :meth:`advance` returned True, or at the start).
+        With ``sensors_at_observe`` the camera and LiDAR are sampled now."""
         sim = self.sim
+        if self.at_observe:
+            self._sample_now(self.k * sim.dt_physics_s)
         pos, quat = sim.pose()
         rates, steer = measure_wheels(sim.wheel_rates(), sim.steer_angles(), sim.run.noise,
                                       rng=self.rng)
@@ -192,9 +201,9 @@ class DriveSession:
             k, t = self.k, self.k * sim.dt_physics_s
             if k % periods["imu"] == 0:
                 self._sample_imu(t)
-            if self.lidar is not None and k % periods["lidar"] == 0:
+            if "lidar" in periods and k % periods["lidar"] == 0:
                 self._start_scan(t)
-            if self.renderer is not None and self._camera_due(k):
+            if self.renderer is not None and not self.at_observe and self._camera_due(k):
                 self._frame_at(t)
             if t >= self._next_report:
                 self.writer.flush()
@@ -232,6 +241,13 @@ class DriveSession:
         if self._lidar_pool is None:
             self._lidar_pool = ThreadPoolExecutor(1, thread_name_prefix="marsscene-lidar")
         self._pending = (t, self._lidar_pool.submit(cast))
+
+    def _sample_now(self, t: float) -> None:
+        """The camera frame and the LiDAR scan of this instant (``sensors_at_observe``)."""
+        if self.renderer is not None:
+            self._frame_at(t)
+        if self.lidar is not None:
+            self._start_scan(t)
 
     def collect_scan(self) -> None:
         """Wait for the scan on the helper thread (if any) and hand it to the sinks."""

@@ -14,13 +14,13 @@ import pytest
 pytest.importorskip("mujoco_warp")
 
 from marsscene.env import NavEpisode, WorldSampler
-from marsscene.env.batch import BatchNavEnv, BatchVectorEnv, WorldBatch
+from marsscene.env.batch import BatchNavEnv, BatchVectorEnv, WarpPhysics, WorldBatch
 from marsscene.env.batch.judge import collided
 from marsscene.env.observe import HeightScanner, ObsConfig
 from marsscene.env.reward import RewardConfig
 from marsscene.env.terminate import FailureJudge
 from marsscene.errors import ConfigError
-from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S
+from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RoverConfig
 
 N = 3
 
@@ -149,3 +149,22 @@ def test_world_batch_round_trip_and_bad_input(batch: WorldBatch, tmp_path: Any) 
                                                                             noise_profile="none"))
     with pytest.raises(ConfigError, match="noise-free"):
         BatchNavEnv(batch, num_envs=1, device="cpu", observations=ObsConfig())
+
+
+def test_physics_settings_reach_mujoco_warp(batch: WorldBatch, env: BatchNavEnv) -> None:
+    import mujoco
+    import mujoco_warp as mjw
+
+    wheels = env.mj_model.geom_type[env.ids["wheel_geoms"]]
+    assert (wheels == mujoco.mjtGeom.mjGEOM_SPHERE).all()  # the batch's default rover
+    assert env.mj_model.opt.iterations == 100 and env.mjw_model.opt.deterministic == 0
+    e = BatchNavEnv(batch, num_envs=1, device="cpu", library="numpy", seed=0,
+                    rover=RoverConfig(wheel_collision="cylinder"),
+                    physics=WarpPhysics(iterations=20, ls_iterations=10, deterministic=True))
+    wheels = e.mj_model.geom_type[e.ids["wheel_geoms"]]
+    assert (wheels == mujoco.mjtGeom.mjGEOM_CYLINDER).all()
+    assert (e.mj_model.opt.iterations, e.mj_model.opt.ls_iterations) == (20, 10)
+    assert e.mjw_model.opt.deterministic == int(mjw.DeterminismType.ALL)
+    for bad in ({"iterations": 0}, {"njmax": -1}, {"post_m": 0.0}):
+        with pytest.raises(ConfigError, match="WarpPhysics"):
+            WarpPhysics(**bad)  # type: ignore[arg-type]

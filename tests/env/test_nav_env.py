@@ -68,6 +68,25 @@ def test_same_seed_same_observations_and_trajectory(nav_world):
     assert first[-1]["lidar_mask"].sum() > 1000  # the VLP-16 sees the ground
 
 
+def test_the_sensors_are_the_sessions_sampled_at_each_observation(nav_world):
+    env = _env(nav_world, observations=me.ObsConfig(lidar="vlp16", camera=(32, 24)))
+    try:
+        env.reset(seed=2)
+        world, session = env._world, env._session
+        lidar, camera = session.lidar, session.renderer
+        for _ in range(3):
+            obs, *_ = env.step(np.array([0.5, 0.1], np.float32))
+            stamp = session.k * world.sim.dt_physics_s
+            assert session.latest_scan()["t"] == stamp and session._frame.t_s == stamp
+            assert np.array_equal(obs["rgb"], session._frame.rgb)
+        assert session.n_lidar == session.n_cam == 4  # the reset's and each step's, no more
+        env.reset(seed=3)  # the next episode's session keeps the world's camera and LiDAR
+        assert env._session.lidar is lidar is world.lidar
+        assert env._session.renderer is camera is world.renderer
+    finally:
+        env.close()
+
+
 def test_a_vector_env_of_two_equals_two_single_envs(nav_world):
     vec = gym.vector.SyncVectorEnv([lambda: _env(nav_world) for _ in range(2)])
     singles = [_env(nav_world) for _ in range(2)]

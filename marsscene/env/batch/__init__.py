@@ -7,6 +7,7 @@
   :class:`~marsscene.env.worlds.WorldSampler` and saved as one ``.npz``.
 - :class:`RslRlVecEnv`: the interface rsl-rl's runners train (``rsl-rl-lib``).
 - :class:`BatchVectorEnv`: Gymnasium's vector API.
+- :class:`WarpPhysics`: heightfield posts, solver limits and determinism of MuJoCo Warp.
 
 Docs: ``docs/gym.md`` (the batched environment); figures: ``docs/results/gym.md``.
 """
@@ -15,11 +16,12 @@ from __future__ import annotations
 
 from marsscene._lazy import lazy_attributes
 
-__all__ = ["BatchNavEnv", "BatchVectorEnv", "RslRlVecEnv", "WorldBatch"]
+__all__ = ["BatchNavEnv", "BatchVectorEnv", "RslRlVecEnv", "WarpPhysics", "WorldBatch"]
 
 __getattr__ = lazy_attributes(__name__, {
     "BatchNavEnv": "marsscene.env.batch.env",
     "BatchVectorEnv": "marsscene.env.batch.adapters",
     "RslRlVecEnv": "marsscene.env.batch.adapters",
+    "WarpPhysics": "marsscene.env.batch.model",
     "WorldBatch": "marsscene.env.batch.worlds",
 })

@@ -27,7 +27,7 @@ from array_api_compat import device
 from marsscene.env import taskmath
 from marsscene.env.batch.backend import Backend
 from marsscene.env.batch.judge import judge
-from marsscene.env.batch.model import tiled_model
+from marsscene.env.batch.model import WarpPhysics, tiled_model
 from marsscene.env.batch.pool import settle_pool
 from marsscene.env.batch.worlds import WorldBatch
 from marsscene.env.episode import MOVING_CMD
@@ -37,11 +37,16 @@ from marsscene.env.task import NavTask
 from marsscene.errors import ConfigError
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RoverConfig
 from marsscene.rover.geometry import body_twists_from_wheels, wheel_commands
+from marsscene.transforms import yaw_of_quat
 
 __all__ = ["BatchNavEnv"]
 
 #: Ground raised this much by a rock (m) counts as the rock (the ``collision`` term).
 ROCK_CONTACT_M = 0.02
+#: The batch's rover unless one is given: sphere wheels. MuJoCo Warp collides a sphere with
+#: the heightfield's prisms 2.5 times as fast as a cylinder, and ends nearer MuJoCo C's
+#: cylinder wheels at the 90th percentile (``docs/results/gym.md``).
+BATCH_ROVER = RoverConfig(wheel_collision="sphere")
 
 
 class BatchNavEnv:
@@ -53,18 +58,18 @@ class BatchNavEnv:
         A batch (or its ``.npz``), or worlds to build one from (``pool`` episodes each).
     num_envs : int
         Rovers N.
-    task, observations, reward, rover, control_hz, physics_hz
+    task, observations, reward, control_hz, physics_hz
         As :class:`~marsscene.env.nav.RoverNavEnv`'s (observations: height scan only).
+    rover : RoverConfig, optional
+        Default: :data:`BATCH_ROVER` (sphere wheels; the CPU environment's have cylinders).
     device : str, optional
         Warp device (default: ``cuda:0`` where there is a GPU, else ``cpu``).
     library : {"torch", "numpy"}, optional
         Arrays returned (default: PyTorch where installed).
     seed : int
         Seed of the episode draws.
-    post_m : float, optional
-        Post spacing of the physics heightfield (rocks as relief); default: the worlds' own.
-    nconmax, njmax : int
-        Contacts and constraint rows allocated per world (MuJoCo Warp).
+    physics : WarpPhysics, optional
+        Heightfield posts, solver limits, buffers and determinism of MuJoCo Warp.
     """
 
     def __init__(self, worlds: Any, *, num_envs: int = 1024, task: NavTask | None = None,
@@ -72,8 +77,7 @@ class BatchNavEnv:
                  rover: RoverConfig | None = None, control_hz: float = 5.0,
                  physics_hz: float = 100.0, device: str | None = None,
                  library: str | None = None, seed: int = 0, pool: int = 256,
-                 post_m: float | None = None, nconmax: int = 48,
-                 njmax: int = 192) -> None:
+                 physics: WarpPhysics | None = None) -> None:
         import mujoco_warp as mjw
         import warp as wp
 
@@ -81,7 +85,7 @@ class BatchNavEnv:
         self.obs_config = (observations if observations is not None
                            else ObsConfig(noise_profile="none"))
         self.reward_config = reward if reward is not None else RewardConfig()
-        self.rover = rover if rover is not None else RoverConfig()
+        self.rover = rover if rover is not None else BATCH_ROVER
         _check(self.obs_config, num_envs, control_hz, physics_hz)
         self.num_envs, self.control_hz = int(num_envs), float(control_hz)
         self.substeps = round(physics_hz / control_hz)
@@ -89,8 +93,10 @@ class BatchNavEnv:
         self.batch = _batch(worlds, self.task, pool, seed)
         terrains = self.batch.rock_terrains()
         bare = [self.batch.heightfield(w) for w in range(self.batch.count)]
+        self.physics = ph = physics if physics is not None else WarpPhysics()
         tiled = tiled_model(terrains, bare, rover=self.rover, physics_hz=physics_hz,
-                            post_m=post_m if post_m is not None else self.batch.cell_m)
+                            post_m=ph.post_m if ph.post_m is not None else self.batch.cell_m,
+                            physics=ph)
         self.mj_model = tiled.model
         self.ids: dict[str, Any] = {  # index lists: numpy and PyTorch take them
             k: [int(i) for i in v] if isinstance(v, np.ndarray) else v
@@ -102,8 +108,10 @@ class BatchNavEnv:
         data = mujoco.MjData(self.mj_model)  # (not forwarded: the rover at qpos0 is in the ground)
         with wp.ScopedDevice(self.device):
             self.mjw_model = mjw.put_model(self.mj_model)
+            if ph.deterministic:
+                self.mjw_model.opt.deterministic = int(mjw.DeterminismType.ALL)
             self.mjw_data = mjw.put_data(self.mj_model, data, nworld=self.num_envs,
-                                         nconmax=nconmax, njmax=njmax)
+                                         nconmax=ph.nconmax, njmax=ph.njmax)
         self._mjw, self._graph = mjw, None
         self._v = {k: bk.view(getattr(self.mjw_data, k)) for k in
                    ("qpos", "qvel", "ctrl", "sensordata", "nacon")}
@@ -112,7 +120,7 @@ class BatchNavEnv:
         self._reset_mask = wp.zeros(self.num_envs, dtype=bool, device=self.device)
         self._task_arrays(terrains, tiled.offsets_xy_m)
         with bk.on_stream():
-            self._pool = settle_pool(self, terrains, data, nconmax, njmax)
+            self._pool = settle_pool(self, terrains, data, ph.nconmax, ph.njmax)
             self._capture()
             self.reset()
 
@@ -236,7 +244,7 @@ class BatchNavEnv:
     def observe(self) -> dict[str, Any]:
         """The observations of the rovers now (the CPU environment's keys)."""
         xp, st = self.xp, self._state()
-        yaw = taskmath.body_yaw(st["quat"])
+        yaw = yaw_of_quat(st["quat"])
         twist = body_twists_from_wheels(st["rates"], st["steer"], self.rover)
         out = {"observation": taskmath.observation_vector(
                    st["xyz"][:, :2], yaw, self.goal_xy_m, twist, st["accel"], st["gyro"],

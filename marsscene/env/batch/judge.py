@@ -14,6 +14,7 @@ from typing import Any
 from array_api_compat import array_namespace, device
 
 from marsscene.env import taskmath
+from marsscene.transforms import yaw_of_quat
 
 __all__ = ["GOAL", "collided", "judge"]
 
@@ -61,7 +62,7 @@ def judge(env: Any, action: Any, moving: Any) -> tuple[Any, Any, Any, Any]:
                     xp.where(fail > 0, fail + GOAL, fail * 0))
     terminated = code > 0
     left = env.steps_total - env.steps_done
-    bearing = xp.abs(taskmath.bearing_rad(ag, goal, taskmath.body_yaw(st["quat"])))
+    bearing = xp.abs(taskmath.bearing_rad(ag, goal, yaw_of_quat(st["quat"])))
     dist = _norm(ag - goal)  # the terms take the goal unrounded, as the CPU's info does
     terms = taskmath.goal_terms(dist, bearing, dist < task.goal_tolerance_m, left,
                                 steps_total=env.steps_total, cfg=cfg)

@@ -38,7 +38,43 @@ from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.rover_sim import PREFIX, rover_indices
 from marsscene.units import MARS_GRAVITY_M_S2
 
-__all__ = ["TiledModel", "tiled_model"]
+__all__ = ["TiledModel", "WarpPhysics", "tiled_model"]
+
+
+@dataclass(frozen=True)
+class WarpPhysics:
+    """How MuJoCo Warp steps a batch.
+
+    Attributes
+    ----------
+    post_m : float, optional
+        Post spacing of the heightfield (rocks as relief); default: the worlds' own.
+    iterations, ls_iterations : int
+        The constraint solver's iteration and line-search limits (MuJoCo's defaults: 100 and
+        50). A batch steps until its slowest world converges or the limit is reached.
+    nconmax, njmax : int
+        Contacts and constraint rows allocated per world.
+    deterministic : bool
+        MuJoCo Warp's deterministic mode (sorted contacts, canonical constraint rows,
+        order-invariant sums): the same seed gives the same bytes on a GPU too, at a cost.
+    """
+
+    post_m: float | None = None
+    iterations: int = 100
+    ls_iterations: int = 50
+    nconmax: int = 48
+    njmax: int = 192
+    deterministic: bool = False
+
+    def __post_init__(self) -> None:
+        from marsscene.errors import ConfigError
+
+        for name in ("iterations", "ls_iterations", "nconmax", "njmax"):
+            if int(getattr(self, name)) < 1:
+                raise ConfigError(f"WarpPhysics.{name} must be at least 1, "
+                                  f"got {getattr(self, name)}")
+        if self.post_m is not None and not self.post_m > 0:
+            raise ConfigError(f"WarpPhysics.post_m must be positive, got {self.post_m}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,9 +115,12 @@ def _tile(terrain: Any, bare: Any, post_m: float) -> NDArray[np.float64]:
 
 
 def tiled_model(terrains: list[Any], bare: list[Any], *, rover: RoverConfig,
-                physics_hz: float, post_m: float, gap_m: float = 2.0) -> TiledModel:
+                physics_hz: float, post_m: float, gap_m: float = 2.0,
+                physics: WarpPhysics | None = None) -> TiledModel:
     """Compile the rover on the tiles of ``terrains`` (rock terrains, one per world, of one
-    size; ``bare`` the same without rocks), sampled at ``post_m``."""
+    size; ``bare`` the same without rocks), sampled at ``post_m``, with the solver limits of
+    ``physics``."""
+    physics = physics if physics is not None else WarpPhysics()
     tiles = [_tile(t, b, post_m) for t, b in zip(terrains, bare, strict=True)]
     rows, cols = tiles[0].shape
     per_row = math.ceil(math.sqrt(len(tiles)))
@@ -102,6 +141,8 @@ def tiled_model(terrains: list[Any], bare: list[Any], *, rover: RoverConfig,
     spec.option.timestep = 1.0 / float(physics_hz)
     spec.option.gravity = [0.0, 0.0, -MARS_GRAVITY_M_S2]
     spec.option.integrator = getattr(mujoco.mjtIntegrator, "mjINT_" + INTEGRATOR.upper())
+    spec.option.iterations = int(physics.iterations)
+    spec.option.ls_iterations = int(physics.ls_iterations)
     rx, ry = (z.shape[1] - 1) * post_m / 2.0, (z.shape[0] - 1) * post_m / 2.0
     hfield = spec.add_hfield(name="terrain", size=[rx, ry, max(hi - lo, 1e-3), 1.0],
                              nrow=z.shape[0], ncol=z.shape[1])
