@@ -13,7 +13,7 @@ The only importer of ``cyclonedds``. What makes a DDS endpoint a ROS 2 one:
   samples for ``rosbags`` to decode;
 * QoS as ROS 2 sets it (:data:`QOS`, built from the topic table's profiles), participant
   USER_DATA ``enclave=/;`` and the ``ros_discovery_info`` topic (:mod:`.discovery`);
-* each endpoint's USER_DATA ``typehash=RIHS01_...;``: its type's description hash (REP 2016,
+* each endpoint's USER_DATA ``typehash=RIHS01_...;``: its type's description hash (REP-2016,
   computed by ``rosbags``), which Jazzy's graph reports (``ros2 topic info --verbose``; without
   it a Jazzy node shows ``INVALID``) and which Fast DDS's and Cyclone's ROS 2 middlewares
   put on theirs.

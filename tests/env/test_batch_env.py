@@ -16,6 +16,7 @@ pytest.importorskip("mujoco_warp")
 from marsscene.env import NavEpisode, WorldSampler
 from marsscene.env.batch import BatchNavEnv, BatchVectorEnv, WarpPhysics, WorldBatch
 from marsscene.env.batch.judge import collided
+from marsscene.env.batch.model import tiled_model, warp_model
 from marsscene.env.observe import HeightScanner, ObsConfig
 from marsscene.env.reward import RewardConfig
 from marsscene.env.terminate import FailureJudge
@@ -154,17 +155,22 @@ def test_world_batch_round_trip_and_bad_input(batch: WorldBatch, tmp_path: Any) 
 def test_physics_settings_reach_mujoco_warp(batch: WorldBatch, env: BatchNavEnv) -> None:
     import mujoco
     import mujoco_warp as mjw
+    import warp as wp
 
     wheels = env.mj_model.geom_type[env.ids["wheel_geoms"]]
     assert (wheels == mujoco.mjtGeom.mjGEOM_SPHERE).all()  # the batch's default rover
     assert env.mj_model.opt.iterations == 100 and env.mjw_model.opt.deterministic == 0
-    e = BatchNavEnv(batch, num_envs=1, device="cpu", library="numpy", seed=0,
-                    rover=RoverConfig(wheel_collision="cylinder"),
-                    physics=WarpPhysics(iterations=20, ls_iterations=10, deterministic=True))
-    wheels = e.mj_model.geom_type[e.ids["wheel_geoms"]]
+    physics = WarpPhysics(iterations=20, ls_iterations=10, deterministic=True)
+    terrains = batch.rock_terrains()
+    tiled = tiled_model(terrains, [batch.heightfield(w) for w in range(batch.count)],
+                        rover=RoverConfig(wheel_collision="cylinder"), physics_hz=100.0,
+                        post_m=batch.cell_m, physics=physics)
+    wheels = tiled.model.geom_type[tiled.ids["wheel_geoms"]]
     assert (wheels == mujoco.mjtGeom.mjGEOM_CYLINDER).all()
-    assert (e.mj_model.opt.iterations, e.mj_model.opt.ls_iterations) == (20, 10)
-    assert e.mjw_model.opt.deterministic == int(mjw.DeterminismType.ALL)
+    assert (tiled.model.opt.iterations, tiled.model.opt.ls_iterations) == (20, 10)
+    with wp.ScopedDevice("cpu"):
+        assert warp_model(tiled.model, physics).opt.deterministic == int(
+            mjw.DeterminismType.ALL)
     for bad in ({"iterations": 0}, {"njmax": -1}, {"post_m": 0.0}):
         with pytest.raises(ConfigError, match="WarpPhysics"):
             WarpPhysics(**bad)  # type: ignore[arg-type]

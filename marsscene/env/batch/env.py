@@ -27,7 +27,7 @@ from array_api_compat import device
 from marsscene.env import taskmath
 from marsscene.env.batch.backend import Backend
 from marsscene.env.batch.judge import judge
-from marsscene.env.batch.model import WarpPhysics, tiled_model
+from marsscene.env.batch.model import WarpPhysics, tiled_model, warp_model
 from marsscene.env.batch.pool import settle_pool
 from marsscene.env.batch.worlds import WorldBatch
 from marsscene.env.episode import MOVING_CMD
@@ -107,9 +107,7 @@ class BatchNavEnv:
         self.device, self.xp = bk.device, bk.xp
         data = mujoco.MjData(self.mj_model)  # (not forwarded: the rover at qpos0 is in the ground)
         with wp.ScopedDevice(self.device):
-            self.mjw_model = mjw.put_model(self.mj_model)
-            if ph.deterministic:
-                self.mjw_model.opt.deterministic = int(mjw.DeterminismType.ALL)
+            self.mjw_model = warp_model(self.mj_model, ph)
             self.mjw_data = mjw.put_data(self.mj_model, data, nworld=self.num_envs,
                                          nconmax=ph.nconmax, njmax=ph.njmax)
         self._mjw, self._graph = mjw, None

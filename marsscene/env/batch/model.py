@@ -38,7 +38,7 @@ from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.rover_sim import PREFIX, rover_indices
 from marsscene.units import MARS_GRAVITY_M_S2
 
-__all__ = ["TiledModel", "WarpPhysics", "tiled_model"]
+__all__ = ["TiledModel", "WarpPhysics", "tiled_model", "warp_model"]
 
 
 @dataclass(frozen=True)
@@ -154,3 +154,14 @@ def tiled_model(terrains: list[Any], bare: list[Any], *, rover: RoverConfig,
     spec.attach(rover_spec, prefix=PREFIX, frame=spec.worldbody.add_frame())
     model = spec.compile()
     return TiledModel(model=model, offsets_xy_m=offsets, ids=rover_indices(model))
+
+
+def warp_model(model: Any, physics: WarpPhysics) -> Any:
+    """MuJoCo Warp's copy of ``model`` (on the current Warp device), in deterministic mode where
+    ``physics`` asks for it."""
+    import mujoco_warp as mjw
+
+    out = mjw.put_model(model)
+    if physics.deterministic:
+        out.opt.deterministic = int(mjw.DeterminismType.ALL)
+    return out
