@@ -14,7 +14,7 @@ from marsscene.cli._progress import DriveMeter, ProgressBar
 from marsscene.cli.bag import BAG_OPTION_NAMES, bag_options, bag_options_of, echo_bag
 from marsscene.cli.options_run import RUN_OPTION_NAMES, run_config, run_options
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RunConfig
-from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES
+from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES, DATASET_IMAGES_HELP
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
 
@@ -123,8 +123,7 @@ Examples:
               help="With --bag / --dataset: replace existing RUN_DIR/bag and dataset folders.")
 @click.option("--dataset-images", type=click.Choice(DATASET_IMAGES), default="link",
               show_default=True,
-              help="link: dataset folders hard-link the run's PNGs (TUM depth at 1000 per m, "
-              "EuRoC in RGB); convert: TUM depth at 5000 per m and EuRoC mono8 copies.")
+              help=DATASET_IMAGES_HELP)
 @click.option("--keep-lidar-files", is_flag=True,
               help="With --bag and --lidar: keep RUN_DIR/lidar/*.ply beside the bag (by "
               "default the scans are kept once, in the bag).")

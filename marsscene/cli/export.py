@@ -10,6 +10,7 @@ from typing import Any
 import click
 
 from marsscene.cli._common import user_errors
+from marsscene.runs.export.options import DATASET_IMAGES, DATASET_IMAGES_HELP
 
 
 @click.command(name="export", short_help="Write a run folder as a TUM RGB-D or EuRoC dataset.")
@@ -19,11 +20,8 @@ from marsscene.cli._common import user_errors
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               help="Output folder (default: RUN_DIR/tum_rgbd or RUN_DIR/euroc).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output folder.")
-@click.option("--images", type=click.Choice(["link", "convert"]), default="link",
-              show_default=True,
-              help="link: hard links to the run's PNGs (TUM depth at 1000 per m, EuRoC in RGB; "
-              "copies where the file system cannot link); convert: TUM depth at 5000 per m, "
-              "EuRoC mono8.")
+@click.option("--images", type=click.Choice(DATASET_IMAGES), default="link",
+              show_default=True, help=DATASET_IMAGES_HELP)
 def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool,
                images: str) -> None:
     """Export RUN_DIR's camera, IMU and ground truth for SLAM stacks that read folders

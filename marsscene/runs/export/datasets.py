@@ -4,9 +4,10 @@
   ``rgb.txt``, ``depth.txt``, ``groundtruth.txt`` (navcam optical frame in ``map``),
   ``associations.txt`` and an ORB-SLAM3 settings file ``orbslam3_rgbd.yaml``. The depth
   scale (counts per metre) is in ``depth.txt``'s header and the settings'
-  ``RGBD.DepthMapFactor`` (:func:`tum_depth_per_m`): the run's own 1000 when the images are
-  linked (``images="link"``, the default: the folder hard-links the run's PNGs, no second
-  copy), the TUM reference datasets' 5000 when converted (``images="convert"``).
+  ``RGBD.DepthMapFactor`` (:func:`tum_depth_per_m`): the format's 5000 (what Open3D's
+  ``create_from_tum_format`` and most TUM loaders assume; 13.1 m at most, farther is 0), or
+  with ``images="run-depth"`` the run's own 1000, hard-linked, in a folder named for it
+  (``tum_rgbd_depth1000``). The colour images are hard links to the run's PNGs.
 * ``euroc`` (Burri et al. 2016): ``mav0/cam0`` (navcam or stereo left), ``mav0/cam1`` (stereo
   right, when logged), ``mav0/imu0`` (noisy IMU, body = ``base_link``),
   ``mav0/state_groundtruth_estimate0``, each with ``data.csv`` and ``sensor.yaml``, plus
@@ -33,7 +34,7 @@ from marsscene._atomic import replacing_dir
 from marsscene.errors import ExportError, RuntimeSimError
 from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
 from marsscene.runs.export.imu_noise import EUROC_IMU_KEYS, imu_noise_declared, rate_hz
-from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES
+from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES, dataset_folder
 from marsscene.runs.logs import png_bytes
 from marsscene.runs.runlog import CameraStream, RunLog, read_image
 
@@ -42,9 +43,9 @@ __all__ = ["FORMATS", "RUN_DEPTH_PER_M", "TUM_DEPTH_PER_M", "export_dataset",
 
 FORMATS = DATASET_FORMATS
 #: TUM RGB-D reference depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored
-#: as 0); ``images="convert"`` writes it.
+#: as 0); the default.
 TUM_DEPTH_PER_M = 5000
-#: The run folder's depth PNGs: millimetres (max 65.5 m); linked TUM RGB-D depth keeps it.
+#: The run folder's depth PNGs: millimetres (max 65.5 m); ``images="run-depth"`` keeps it.
 RUN_DEPTH_PER_M = 1000
 
 
@@ -57,14 +58,16 @@ def export_dataset(
     progress: Callable[[int, int], None] | None = None,
     images: str = "link",
 ) -> Path:
-    """Write ``RUN_DIR`` as a ``tum-rgbd`` or ``euroc`` folder (default ``RUN_DIR/<format>``).
+    """Write ``RUN_DIR`` as a ``tum-rgbd`` or ``euroc`` folder (default
+    ``RUN_DIR/<format>``, :func:`~marsscene.runs.export.options.dataset_folder`).
 
     Needs camera logs (``euroc`` also uses ``camera/left`` and ``camera/right`` when present);
     a camera-less run raises :class:`~marsscene.errors.RuntimeSimError`, an existing output
     folder :class:`~marsscene.errors.ExportError` unless ``overwrite``. ``progress(done,
-    total)`` is called per image written. ``images``: ``"link"`` hard-links the run's PNGs
-    (TUM depth at 1000 per metre, EuRoC in RGB; copied where the file system cannot link),
-    ``"convert"`` writes TUM depth at 5000 per metre and EuRoC mono8. Returns the folder.
+    total)`` is called per image written. ``images``: ``"link"`` hard-links the run's colour
+    PNGs (copied where the file system cannot link) and writes TUM depth at 5000 per metre;
+    ``"convert"`` also writes EuRoC mono8; ``"run-depth"`` hard-links TUM depth at the run's
+    1000 per metre. Returns the folder.
     """
     if fmt not in FORMATS:
         raise ExportError(f"format = {fmt!r}; expected one of {', '.join(FORMATS)}")
@@ -77,7 +80,7 @@ def export_dataset(
                               f"{fmt}")
     if fmt == "tum-rgbd" and not cams[0].depth_files:
         raise RuntimeSimError(f"{run.path}: the camera logged no depth; tum-rgbd needs RGB-D")
-    final = Path(out_dir) if out_dir is not None else run.path / fmt.replace("-", "_")
+    final = Path(out_dir) if out_dir is not None else run.path / dataset_folder(fmt, images)
     stereo = [c for c in cams[1:] if c.name in ("left", "right")]
     statics = static_transforms(run.rover, {c.name: c.intrinsics for c in stereo})
     pair = sorted(stereo, key=lambda c: c.name)  # left, right
@@ -91,9 +94,9 @@ def export_dataset(
 
     with replacing_dir(final, overwrite=overwrite, create=False) as tmp:
         if fmt == "tum-rgbd":
-            _tum_rgbd(run, cams[0], statics, tmp, tick, link=images == "link")
+            _tum_rgbd(run, cams[0], statics, tmp, tick, link_depth=images == "run-depth")
         else:
-            _euroc(run, used, statics, tmp, tick, link=images == "link")
+            _euroc(run, used, statics, tmp, tick, link=images != "convert")
     return final
 
 
@@ -133,15 +136,15 @@ def _link_or_copy(src: Path, dst: Path) -> None:
 
 def _tum_rgbd(
     run: RunLog, cam: CameraStream, statics: list, out: Path, tick: Callable[[], None], *,
-    link: bool
+    link_depth: bool
 ) -> None:
     (out / "rgb").mkdir(parents=True)
     (out / "depth").mkdir()
     stamps = [f"{t:.6f}" for t in cam.stamps_s]
-    per_m = RUN_DEPTH_PER_M if link else TUM_DEPTH_PER_M
+    per_m = RUN_DEPTH_PER_M if link_depth else TUM_DEPTH_PER_M
     for s, rgb, dep in zip(stamps, cam.rgb_files, cam.depth_files, strict=True):
         _link_or_copy(rgb, out / "rgb" / f"{s}.png")
-        if link:
+        if link_depth:
             _link_or_copy(dep, out / "depth" / f"{s}.png")
         else:
             mm = read_image(dep).astype(np.uint32) * (TUM_DEPTH_PER_M // RUN_DEPTH_PER_M)

@@ -47,10 +47,23 @@ COMPRESSIONS = ("zstd", "zstd_fast", "zstd_small", "lz4", "none")
 DISTROS = ("jazzy", "humble")
 #: Dataset folder formats of :func:`~marsscene.runs.export.datasets.export_dataset`.
 DATASET_FORMATS = ("tum-rgbd", "euroc")
-#: How a dataset folder holds the run's images: hard links to the run's PNGs (one copy on
-#: disk; TUM depth at the run's 1000 per metre, EuRoC in colour) or converted copies (TUM
-#: depth at 5000 per metre, EuRoC mono8).
-DATASET_IMAGES = ("link", "convert")
+#: How a dataset folder holds the run's images. ``link``: hard links to the run's PNGs where
+#: the format takes them as they are (colour images; one copy on disk), TUM RGB-D depth written
+#: at the format's 5000 counts per metre. ``convert``: EuRoC's images as mono8 copies too.
+#: ``run-depth``: TUM RGB-D depth hard-linked at the run's 1000 per metre, a scale TUM readers
+#: do not expect, so the folder says it (:func:`dataset_folder`).
+DATASET_IMAGES = ("link", "convert", "run-depth")
+#: The one-line help of that choice (``marsscene drive --dataset-images``, ``export --images``).
+DATASET_IMAGES_HELP = ("link: hard links to the run's colour PNGs, TUM depth at the format's 5000 "
+                       "per m; convert: EuRoC mono8 copies too; run-depth: TUM depth linked at "
+                       "the run's 1000 per m, in RUN_DIR/tum_rgbd_depth1000.")
+
+
+def dataset_folder(fmt: str, images: str = "link") -> str:
+    """The name of a dataset folder inside its run folder: ``tum_rgbd``, ``euroc``, and
+    ``tum_rgbd_depth1000`` for TUM RGB-D depth kept at the run's scale."""
+    name = fmt.replace("-", "_")
+    return name + "_depth1000" if fmt == "tum-rgbd" and images == "run-depth" else name
 
 
 def _choice(key: str, value: Any, allowed: tuple[str, ...]) -> None:
@@ -157,13 +170,14 @@ class ExportOptions:
         Dataset folders to write (``RUN/tum_rgbd``, ``RUN/euroc``); they need the camera.
     overwrite : bool
         Replace existing export folders (else they are an error, checked before driving).
-    dataset_images : {"link", "convert"}
-        ``link``: the dataset folders hard-link the run's PNGs (one copy of each image on
-        disk; TUM RGB-D depth stays at the run's 1000 counts per metre, declared in
-        ``depth.txt`` and ``orbslam3_rgbd.yaml``; EuRoC images stay RGB, which ORB-SLAM3
-        converts to grey itself); where the file system cannot link, files are copied.
-        ``convert``: converted copies as the formats' reference datasets hold them (TUM depth
-        at 5000 per metre, EuRoC mono8).
+    dataset_images : {"link", "convert", "run-depth"}
+        ``link``: the dataset folders hard-link the run's colour PNGs (one copy on disk; EuRoC
+        images stay RGB, which ORB-SLAM3 converts to grey itself; copied where the file
+        system cannot link) and write TUM RGB-D depth at the format's 5000 counts per metre
+        (13.1 m at most; farther is 0, no return). ``convert``: EuRoC mono8 copies too, as
+        EuRoC's own datasets hold them. ``run-depth``: TUM RGB-D depth hard-linked at the
+        run's 1000 per metre (declared in ``depth.txt`` and ``orbslam3_rgbd.yaml``), in
+        ``RUN/tum_rgbd_depth1000``.
     keep_lidar_files : bool
         With a bag that holds the LiDAR, also keep the run's ``lidar/*.ply`` (by default they
         are removed once the bag is written: the scans are kept once, in the bag, and
@@ -206,7 +220,7 @@ class ExportOptions:
     def folders(self) -> tuple[str, ...]:
         """Names of the folders these exports write inside the run folder."""
         return (*(("bag",) if self.bag is not None else ()),
-                *(fmt.replace("-", "_") for fmt in self.datasets))
+                *(dataset_folder(fmt, self.dataset_images) for fmt in self.datasets))
 
     @classmethod
     def from_dict(cls, mapping: Mapping[str, Any]) -> ExportOptions:

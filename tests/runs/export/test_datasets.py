@@ -33,30 +33,54 @@ def _yaml_matrix(text: str, key: str) -> np.ndarray:
     return np.array([float(v) for v in data.split(",")]).reshape(4, 4)
 
 
-def test_tum_rgbd_links_the_run_or_converts_its_depth(bag_run, tmp_path) -> None:
-    """By default every image is a hard link to the run's PNG (depth at the run's 1000 per
-    metre, declared); ``images="convert"`` writes the TUM reference scale, 5000 per metre."""
-    linked = export_dataset(bag_run, "tum-rgbd", tmp_path / "link")
+def test_tum_rgbd_depth_is_the_formats_unless_asked_and_named(bag_run, tmp_path) -> None:
+    """By default TUM depth is at the format's 5000 per metre (colour hard-linked);
+    ``images="run-depth"`` links the run's 1000-per-metre PNGs, declared, in a folder named so."""
+    out = export_dataset(bag_run, "tum-rgbd", tmp_path / "tum")
     cam = RunLog(bag_run).camera_streams()[0]
-    depth = _table(linked / "depth.txt")
-    for (_, f), src in zip(depth, cam.depth_files, strict=True):
-        assert (linked / f).samefile(src)  # no second copy on disk
-    assert "1000 per metre" in (linked / "depth.txt").read_text()
-    assert "RGBD.DepthMapFactor: 1000.0" in (linked / "orbslam3_rgbd.yaml").read_text()
-    assert tum_depth_per_m(linked) == 1000.0
-    out = export_dataset(bag_run, "tum-rgbd", tmp_path / "tum", images="convert")
     assert tum_depth_per_m(out) == TUM_DEPTH_PER_M == 5000.0
-    for name in ("rgb.txt", "associations.txt", "groundtruth.txt"):  # only the depth differs
-        assert (linked / name).read_text() == (out / name).read_text()
+    assert "5000 per metre" in (out / "depth.txt").read_text()
     for (_, f), src in zip(_table(out / "depth.txt"), cam.depth_files, strict=True):
         tum, mm = read_image(out / f), read_image(src)
         assert tum.dtype == np.uint16
         want = mm.astype(np.int64) * 5
         np.testing.assert_array_equal(tum, np.where(want > 65535, 0, want))  # > 13.1 m: invalid
         assert (mm == 0).any() and (tum[mm == 0] == 0).all()  # the sky: no return stays 0
-    assert "5000 per metre" in (out / "depth.txt").read_text()
+    assert export_dataset(bag_run, "tum-rgbd", tmp_path / "c", images="convert").is_dir()
+    assert (tmp_path / "c" / "depth.txt").read_text() == (out / "depth.txt").read_text()
+    mm_dir = export_dataset(bag_run, "tum-rgbd", images="run-depth")
+    assert mm_dir == bag_run / "tum_rgbd_depth1000"  # a scale TUM readers do not expect: named
+    try:
+        for (_, f), src in zip(_table(mm_dir / "depth.txt"), cam.depth_files, strict=True):
+            assert (mm_dir / f).samefile(src)  # no second copy on disk
+        assert "1000 per metre" in (mm_dir / "depth.txt").read_text()
+        assert "RGBD.DepthMapFactor: 1000.0" in (mm_dir / "orbslam3_rgbd.yaml").read_text()
+        assert tum_depth_per_m(mm_dir) == 1000.0
+        for name in ("rgb.txt", "associations.txt", "groundtruth.txt"):  # only depth differs
+            assert (mm_dir / name).read_text() == (out / name).read_text()
+    finally:
+        shutil.rmtree(mm_dir)
     with pytest.raises(ExportError, match="images = 'copy'"):
         export_dataset(bag_run, "tum-rgbd", tmp_path / "bad", images="copy")
+
+
+def test_open3ds_tum_reader_reads_the_run_depth_right(bag_run, tmp_path) -> None:
+    """Open3D's ``create_from_tum_format`` (its TUM scale, 5000, hard-coded) gives the run's
+    depth in metres, to the run's millimetre (up to the 4 m it truncates at: a Kinect's range;
+    the folder holds depth to the format's 13.1 m)."""
+    o3d = pytest.importorskip("open3d")
+    out = export_dataset(bag_run, "tum-rgbd", tmp_path / "tum")
+    cam = RunLog(bag_run).camera_streams()[0]
+    for (_, c, _, d), src in list(zip(_table(out / "associations.txt"), cam.depth_files,
+                                      strict=True))[:3]:
+        rgbd = o3d.geometry.RGBDImage.create_from_tum_format(
+            o3d.io.read_image(str(out / c)), o3d.io.read_image(str(out / d)), False)
+        got = np.asarray(rgbd.depth, dtype=np.float64)
+        run_m = read_image(src).astype(np.float64) / 1000.0
+        near = (run_m > 0) & (run_m < 4.0)
+        assert near.mean() > 0.2  # the ground near the rover in view
+        np.testing.assert_allclose(got[near], run_m[near], atol=1e-6)
+        assert (got[~near] == 0).all()
 
 
 def test_tum_rgbd_export_equals_the_run(bag_run, tmp_path) -> None:
