@@ -221,9 +221,12 @@ def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None) -> No
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from train_batch_ppo import TRAIN
 
     rows = np.genfromtxt(csv_path, delimiter=",", names=True)
+    rovers = int(rows["env_steps"][0] / rows["iteration"][0] / TRAIN["num_steps_per_env"])
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
+    ax.set_title(f"PPO on BatchNavEnv: {rovers:,} rovers, goals 20-50 m", fontsize=10)
     ax.plot(rows["wall_s"] / 60.0, 100.0 * np.nan_to_num(rows["success"]), lw=1.2,
             label="episodes ended in each PPO iteration (GPU batch)")
     for value, style, what in ((gpu, "--", "trained policy, GPU batch"),
