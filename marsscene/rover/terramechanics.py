@@ -50,7 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from marsscene.errors import ConfigError
 
-__all__ = ["Soil", "WheelForces", "sinkage_for_load", "soils", "wheel_forces"]
+__all__ = ["Soil", "WheelForces", "sinkage_for_load", "soil", "soils", "wheel_forces"]
 
 #: Gauss--Legendre points on each side of the angle of maximum stress.
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(24)
@@ -144,13 +144,12 @@ def soil(name: str) -> Soil:
     return table[name]
 
 
-def _stresses(soil: Soil, r: Any, b: Any, theta1: Any, theta: Any, slip: Any
-              ) -> tuple[Any, Any]:
-    """Normal and shear stress (Pa) at angles ``theta`` (..., m) of wheels with entry angle
-    ``theta1`` (..., 1)."""
+def _stresses(soil: Soil, r: Any, b: Any, angles: tuple[Any, Any, Any], theta: Any,
+              slip: Any) -> tuple[Any, Any]:
+    """Normal and shear stress (Pa) at angles ``theta`` (..., m) of wheels whose exit, maximum
+    stress and entry angles are ``angles`` (each (..., 1))."""
     s = slip
-    tm = (soil.a0 + soil.a1 * s) * theta1
-    t2 = soil.exit_ratio * theta1
+    t2, tm, theta1 = angles
     front = theta >= tm
     mirrored = theta1 - (theta - t2) / np.maximum(tm - t2, 1e-12) * (theta1 - tm)
     local = np.where(front, np.cos(theta), np.cos(mirrored)) - np.cos(theta1)
@@ -175,7 +174,8 @@ def wheel_forces(soil: Soil, radius_m: ArrayLike, width_m: ArrayLike, sinkage_m:
     for lo, hi in ((t2, tm), (tm, theta1)):
         half = 0.5 * (hi - lo)
         theta = lo + half * (_NODES + 1.0)
-        sigma, tau = _stresses(soil, r[..., None], b[..., None], theta1, theta, s[..., None])
+        sigma, tau = _stresses(soil, r[..., None], b[..., None], (t2, tm, theta1), theta,
+                               s[..., None])
         w = half * _WEIGHTS
         total["w"] = total["w"] + np.sum(w * (sigma * np.cos(theta) + tau * np.sin(theta)), -1)
         total["dp"] = total["dp"] + np.sum(w * (tau * np.cos(theta) - sigma * np.sin(theta)),

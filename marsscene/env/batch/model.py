@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene.errors import ConfigError
 from marsscene.export.mjcf.common import INTEGRATOR, REGOLITH_FRICTION
 from marsscene.rover.config import RoverConfig
 from marsscene.sim.rover_model import rover_mjcf
@@ -67,8 +68,6 @@ class WarpPhysics:
     deterministic: bool = False
 
     def __post_init__(self) -> None:
-        from marsscene.errors import ConfigError
-
         for name in ("iterations", "ls_iterations", "nconmax", "njmax"):
             if int(getattr(self, name)) < 1:
                 raise ConfigError(f"WarpPhysics.{name} must be at least 1, "
