@@ -10,18 +10,28 @@ It writes ``run/curve.csv`` (per PPO iteration: wall time, environment steps, th
 episodes ended in it that reached their goal) and ``run/policy.npz``
 (:class:`~marsscene.env.policy.MLPPolicy`), which ``perf/bench_batch_env.py sim2sim`` runs in the
 CPU environment (MuJoCo C, mesh rocks).
+
+The CPU baseline: the same PPO on the CPU environment (:class:`~marsscene.env.RoverNavEnv`, the
+scene folders of ``pack --folders``), N rovers in worker processes, the policy on PyTorch's CPU::
+
+    python examples/train_batch_ppo.py worlds.npz --cpu-envs 60 --workers 15 --folders SCENES
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import multiprocessing as mp
+import os
 import time
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from marsscene.env import HeightScan, NavTask, ObsConfig, RewardConfig
 from marsscene.env.batch import BatchNavEnv, RslRlVecEnv, WarpPhysics
-from marsscene.env.policy import MLPPolicy
+from marsscene.env.policy import MLPPolicy, policy_input
 from marsscene.rover.config import RoverConfig
 
 #: The task of the benchmark: goals 20-50 m away (the CPU example's are 5-20 m). Among rocks of
@@ -50,27 +60,39 @@ TRAIN = {
 
 
 def train(batch: Path, minutes: float, envs: int, out: Path, seed: int,
-          wheels: str = "sphere", iterations: tuple[int, int] = (100, 50)) -> None:
+          wheels: str = "sphere", iterations: tuple[int, int] = (100, 50),
+          folders: Path | None = None, workers: int = 0) -> None:
+    """PPO for ``minutes`` of wall time: on ``envs`` rovers of the GPU batch, or (``folders``)
+    of the CPU environment in ``workers`` processes."""
     from rsl_rl.runners import OnPolicyRunner
 
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    env = BatchNavEnv(batch, num_envs=envs, task=TASK, seed=seed, reward=REWARD,
-                      observations=ObsConfig(height_scan=SCAN, noise_profile="none"),
-                      rover=RoverConfig(wheel_collision=wheels),
-                      physics=WarpPhysics(iterations=iterations[0], ls_iterations=iterations[1]))
-    vec = RslRlVecEnv(env)
-    runner = OnPolicyRunner(vec, {**TRAIN, "seed": seed}, log_dir=None, device=env.device)
-    print(f"environment ready in {time.perf_counter() - t0:.1f} s ({envs} rovers on "
-          f"{env.batch.count} worlds, {env.device})", flush=True)
+    if folders is not None:
+        import torch
+
+        torch.set_num_threads(4)
+        vec: Any = CpuVecEnv(folders, envs, workers, seed, wheels)
+        counts, where = (lambda: vec.episodes.copy()), f"{workers} CPU processes"
+    else:
+        env = BatchNavEnv(batch, num_envs=envs, task=TASK, seed=seed, reward=REWARD,
+                          observations=ObsConfig(height_scan=SCAN, noise_profile="none"),
+                          rover=RoverConfig(wheel_collision=wheels),
+                          physics=WarpPhysics(iterations=iterations[0],
+                                              ls_iterations=iterations[1]))
+        vec = RslRlVecEnv(env)
+        counts, where = (lambda: env.bk.to_numpy(env.episodes)), f"{env.batch.count} worlds"
+    runner = OnPolicyRunner(vec, {**TRAIN, "seed": seed}, log_dir=None, device=str(vec.device))
+    print(f"environment ready in {time.perf_counter() - t0:.1f} s ({envs} rovers on {where}, "
+          f"{vec.device})", flush=True)
     start, rows, it = time.perf_counter(), [], 0
-    last = env.bk.to_numpy(env.episodes)
+    last = counts()
     with open(out / "curve.csv", "w", newline="") as f:
         log = csv.writer(f)
         log.writerow(["iteration", "wall_s", "env_steps", "episodes", "success"])
         while time.perf_counter() - start < minutes * 60.0:
             runner.learn(num_learning_iterations=1, init_at_random_ep_len=it == 0)
-            now = env.bk.to_numpy(env.episodes)
+            now = counts()
             ended, won = (int(v) for v in now - last)
             last, it = now, it + 1
             row = [it, round(time.perf_counter() - start, 2), it * envs * TRAIN[
@@ -85,9 +107,93 @@ def train(batch: Path, minutes: float, envs: int, out: Path, seed: int,
     policy.save(out / "policy.npz")
     print(f"{it} iterations in {time.perf_counter() - start:.0f} s; policy in "
           f"{out / 'policy.npz'}")
+    if folders is not None:
+        vec.close()
+        return
     won, n = evaluate(vec, runner.alg.get_policy())
     print(f"deterministic policy on the GPU batch: {won}/{n} = {won / n:.1%} of first episodes "
           "reached the goal", flush=True)
+
+
+class CpuVecEnv:
+    """``n`` :class:`~marsscene.env.RoverNavEnv` (MuJoCo C, mesh rocks) in ``workers`` processes
+    behind :class:`~marsscene.env.batch.RslRlVecEnv`'s interface: same-step autoreset, the same
+    policy input; ``episodes`` counts the episodes ended and those that reached the goal."""
+
+    def __init__(self, folders: Path, n: int, workers: int, seed: int, wheels: str) -> None:
+        import torch
+
+        if n % workers:
+            raise ValueError(f"{n} rovers do not split evenly over {workers} processes")
+        ctx, k = mp.get_context("spawn"), n // workers
+        self.pipes, self.procs = [], []
+        for w in range(workers):
+            here, there = ctx.Pipe()
+            proc = ctx.Process(target=_cpu_worker, daemon=True,
+                               args=(there, str(folders), k, seed + k * w, wheels))
+            proc.start()
+            self.pipes.append(here)
+            self.procs.append(proc)
+        first = [p.recv() for p in self.pipes]
+        self.num_envs, self.num_actions, self.device = n, 2, "cpu"
+        self.max_episode_length = first[0][1]
+        self.episode_length_buf = torch.zeros(n, dtype=torch.long)  # not passed to the workers
+        self.cfg = {"task": TASK, "reward": REWARD, "wheels": wheels}
+        self._obs = torch.from_numpy(np.concatenate([f[0] for f in first]))
+        self.episodes = np.zeros(2, np.int64)
+
+    def get_observations(self) -> Any:
+        from tensordict import TensorDict
+
+        return TensorDict({"policy": self._obs}, batch_size=[self.num_envs])
+
+    def step(self, actions: Any) -> tuple[Any, Any, Any, dict[str, Any]]:
+        import torch
+
+        for pipe, a in zip(self.pipes, np.array_split(actions.detach().numpy(), len(self.pipes)),
+                           strict=True):
+            pipe.send(a)
+        obs, reward, term, trunc, goal = (np.concatenate(v) for v in
+                                          zip(*(p.recv() for p in self.pipes), strict=True))
+        self._obs = torch.from_numpy(obs)
+        done = term | trunc
+        self.episodes += (int(done.sum()), int(goal.sum()))
+        return (self.get_observations(), torch.from_numpy(reward).float(),
+                torch.from_numpy(done).long(), {"time_outs": torch.from_numpy(trunc)})
+
+    def close(self) -> None:
+        for pipe, proc in zip(self.pipes, self.procs, strict=True):
+            pipe.send(None)
+            proc.join(timeout=10)
+
+
+def _cpu_worker(pipe: Any, folders: str, k: int, seed: int, wheels: str) -> None:
+    from marsscene.env import RoverNavEnv
+
+    paths = sorted(p for p in Path(folders).iterdir() if (p / "mjcf" / "scene.xml").is_file())
+    envs = [RoverNavEnv(paths, task=TASK, reward=REWARD, rover=RoverConfig(wheel_collision=wheels),
+                        observations=ObsConfig(height_scan=SCAN, noise_profile="none"),
+                        max_worlds_loaded=len(paths)) for _ in range(k)]
+    obs = []
+    for i, env in enumerate(envs):
+        for w in range(len(paths)):  # compile every world before the clock starts
+            _reset(env, seed=seed + i, options={"world": w})
+        obs.append(policy_input(_reset(env, seed=seed + i)))
+    pipe.send((np.stack(obs).astype(np.float32), envs[0].steps_total))
+    while (actions := pipe.recv()) is not None:
+        rows = []
+        for env, a in zip(envs, actions, strict=True):
+            o, r, te, tr, info = env.step(a)
+            if te or tr:
+                o = _reset(env)
+            rows.append((policy_input(o), r, te, tr, info["termination"] == "goal"))
+        pipe.send(tuple(np.asarray(v) for v in zip(*rows, strict=True)))
+    for env in envs:
+        env.close()
+
+
+def _reset(env: Any, **kw: Any) -> Any:
+    return env.reset(**kw)[0]
 
 
 def evaluate(vec: RslRlVecEnv, actor: object, max_s: float = 60.0) -> tuple[int, int]:
@@ -120,10 +226,19 @@ def main() -> None:
                     help="the wheels' collision shape (RoverConfig.wheel_collision)")
     ap.add_argument("--iterations", default="100/50",
                     help="solver and line-search iteration limits (WarpPhysics)")
+    ap.add_argument("--cpu-envs", type=int, default=0,
+                    help="train on this many rovers of the CPU environment instead (--folders)")
+    ap.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) - 1),
+                    help="--cpu-envs: worker processes (default: one a core but one)")
+    ap.add_argument("--folders", type=Path, help="--cpu-envs: the scene folders (pack --folders)")
     args = ap.parse_args()
     its = tuple(int(v) for v in args.iterations.split("/"))
-    train(args.batch, args.minutes, args.envs, args.out, args.seed, args.wheels,
-          (its[0], its[1]))
+    cpu = args.cpu_envs > 0
+    if cpu and args.folders is None:
+        ap.error("--cpu-envs needs --folders")
+    train(args.batch, args.minutes, args.cpu_envs if cpu else args.envs, args.out, args.seed,
+          args.wheels, (its[0], its[1]), args.folders if cpu else None,
+          min(args.workers, args.cpu_envs))
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ TOML layout::
     [rocks]     enabled = true, ...
     [lighting]  enabled = true, ...
     [assets]    files = ["habitat.glb"], xy_m = [[x, y]], habitat = true, ...
+    [soil]      enabled = false, ground = "firm_regolith", patches = "drift_sand", ...
     [export]    formats = ["usd", "mjcf"], usd_format = "usda"
 
 Unknown keys and out-of-range values raise :class:`~marsscene.errors.ConfigError` naming the
@@ -33,6 +34,7 @@ from marsscene.export.config import ExportConfig
 from marsscene.lighting.config import LightingConfig
 from marsscene.presets import apply_preset
 from marsscene.rocks.config import RockConfig
+from marsscene.soil.config import SoilConfig
 from marsscene.terrain.config import TerrainConfig
 
 __all__ = ["SceneConfig", "read_config_toml"]
@@ -86,6 +88,8 @@ class SceneConfig:
     """``[export]``: output formats, USD encoding, rock catalogue format."""
     assets: AssetConfig = field(default_factory=AssetConfig)
     """``[assets]``: habitats and user assets (:class:`marsscene.assets.AssetConfig`)."""
+    soil: SoilConfig = field(default_factory=SoilConfig)
+    """``[soil]``: the soil map the wheels meet (:class:`marsscene.soil.SoilConfig`)."""
 
     def __post_init__(self) -> None:
         if self.seed is not None and (

@@ -61,6 +61,8 @@ class Scene:
     lighting : Lighting, optional
     assets : tuple of marsscene.assets.PlacedAsset, optional
         Habitats / landers on levelled pads (``None`` when none are configured).
+    soil : marsscene.soil.SoilMap, optional
+        Which soil lies where (``[soil] enabled``; ``None`` otherwise).
     outer : OuterTerrain, optional
         Level-of-detail scenes only: the coarse terrain over the whole footprint; then
         ``heightfield`` is the full-resolution focus square (:mod:`marsscene.terrain.lod`).
@@ -80,3 +82,4 @@ class Scene:
     lighting: Lighting | None = None
     assets: tuple[Any, ...] | None = None
     outer: OuterTerrain | None = None
+    soil: Any = None

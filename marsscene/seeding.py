@@ -32,6 +32,7 @@ STAGE_IDS: dict[str, int] = {
     "rocks_tile": 12,
     "terrain_detail_lod": 13,
     "albedo": 14,
+    "soil": 15,
 }
 
 

@@ -21,7 +21,7 @@ def test_drive_and_serve_share_the_declarations():
     assert set(RUN_OPTION_NAMES) <= set(d)
     shared = set(RUN_OPTION_NAMES) & set(s)
     assert shared == {"camera", "camera_size", "camera_hz", "stereo", "lidar", "lidar_model",
-                      "noise_profile", "run_config"}
+                      "noise_profile", "run_config", "soil"}
     for name in shared:
         a, b = d[name], s[name]
         assert (a.opts, a.default, a.is_flag, type(a.type)) == (
@@ -36,6 +36,13 @@ def test_run_config_defaults_and_values():
     assert run.lidar.model == "vlp16" and run.camera.exposure == "auto"
     with pytest.raises(ConfigError, match="WIDTHxHEIGHT"):
         run_config({"camera": True, "camera_size": "64"})
+
+
+def test_soil_option_sets_the_run_soil_over_the_config_file(tmp_path):
+    cfg = tmp_path / "run.toml"
+    cfg.write_text('[run]\nsoil = "dry_sand"\n', encoding="utf-8")
+    assert run_config({"run_config": cfg}).soil == "dry_sand"
+    assert run_config({"run_config": cfg, "soil": "rigid"}).soil == "rigid"
 
 
 def test_unknown_values_are_a_programming_error():

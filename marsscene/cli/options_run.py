@@ -26,6 +26,7 @@ from marsscene.rover.config import (
     noise_profiles,
 )
 from marsscene.rover.lidar import lidar_models
+from marsscene.rover.terramechanics import soils
 
 __all__ = ["RUN_OPTION_NAMES", "camera_size", "run_config", "run_option", "run_options"]
 
@@ -78,6 +79,10 @@ _SPECS: dict[str, tuple[tuple[str, ...], dict[str, Any]]] = {
         "keys set in --noise-config / --run-config still win. Default: the config's "
         "profile, else none: a noise-free IMU and exact encoders, an optimistic "
         "odometry (the SLAM benchmark uses ln200s).")),
+    "soil": (("--soil",), dict(
+        type=click.Choice(("rigid", *soils())), default=None,
+        help="Deformable soil under the wheels: slip, sinkage and their forces "
+        "(docs/science/terramechanics.md). Default: the run config's, else rigid contact.")),
 }
 
 #: The click parameters :func:`run_config` reads, in the drive's order.
@@ -138,6 +143,8 @@ def run_config(values: Mapping[str, Any]) -> RunConfig:
         run = dataclasses.replace(run, noise=NoiseConfig.from_toml(v["noise_config"]))
     if v["noise_profile"]:
         run = dataclasses.replace(run, noise=run.noise.with_profile(v["noise_profile"]))
+    if v["soil"]:
+        run = dataclasses.replace(run, soil=v["soil"])
     if v["lidar"] or v["lidar_model"]:
         base = run.lidar if run.lidar is not None else LidarConfig()
         lid = dataclasses.replace(base, model=v["lidar_model"]) if v["lidar_model"] else base

@@ -27,6 +27,7 @@ _sensor_options = compose(
     run_option("stereo", "Also a rectified stereo pair."),
     run_option("lidar", "Spinning 3D LiDAR (default model os1-128)."),
     run_option("lidar_model", "LiDAR model (implies --lidar)."),
+    run_option("soil"),
     run_option("noise_profile", "IMU + wheel-odometry noise profile (default: noise-free)."),
     run_option("run_config", "TOML/JSON run config ([run], [lidar], [camera], [noise])."),
 )

@@ -20,6 +20,7 @@ compute_truncated` need.
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -35,6 +36,7 @@ from marsscene.env.worlds import WorldSampler, world_paths
 from marsscene.errors import ConfigError
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, NoiseConfig, RoverConfig, RunConfig
 from marsscene.sim.session import DriveSession, SessionOptions
+from marsscene.sim.wheel_soil import soil_map_of
 
 __all__ = ["CONTROL_HZ", "RoverNavEnv"]
 
@@ -67,6 +69,10 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     normalized_actions : bool
         Actions in [-1, 1] (scaled to the rover's limits) rather than m/s and rad/s.
     rover : RoverConfig, optional
+    soil : str or sequence of str, optional
+        Deformable soil under the wheels (``RunConfig.soil``): one soil's name, or several, one
+        drawn per episode from the environment's seeded stream (``info["soil"]``). None: rigid
+        ground.
     max_worlds_loaded : int
         Worlds kept compiled in memory (least recently used dropped).
     render_mode : {"rgb_array"}, optional
@@ -79,7 +85,8 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                  observations: ObsConfig | None = None, reward: RewardConfig | None = None,
                  control_hz: float = CONTROL_HZ, physics_hz: float = PHYSICS_HZ,
                  normalized_actions: bool = True, rover: RoverConfig | None = None,
-                 max_worlds_loaded: int = 4, render_mode: str | None = None) -> None:
+                 soil: str | Sequence[str] | None = None, max_worlds_loaded: int = 4,
+                 render_mode: str | None = None) -> None:
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ConfigError(f"render_mode = {render_mode!r}; use None or 'rgb_array'")
         self.task = task if task is not None else NavTask()
@@ -89,8 +96,15 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.worlds = worlds if worlds is not None else WorldSampler(
             base="plain", vary={"rocks.k": [0.05, 0.15]}, count=8)
         self.n_worlds, self._path = world_paths(self.worlds)
+        self.soils = (() if soil is None or soil == "rigid" else
+                      (soil,) if isinstance(soil, str) else tuple(soil))
+        for name in self.soils:
+            soil_map_of(name)  # one-line error for an unknown soil
+        if len(self.soils) > 1 and "rigid" in self.soils:
+            raise ConfigError("soil: 'rigid' cannot be drawn beside deformable soils (use "
+                              "firm_regolith for firm ground)")
         self.run = RunConfig(control_hz=control_hz, imu_hz=2 * control_hz,
-                             physics_hz=physics_hz,
+                             physics_hz=physics_hz, soil=self.soils[0] if self.soils else None,
                              noise=NoiseConfig(profile=self.obs_config.noise_profile),
                              camera=self.obs_config.camera_config(control_hz),
                              lidar=self.obs_config.lidar_config())
@@ -137,6 +151,10 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.episode.seed(seed)
         index = self.episode.draw_world(self.n_worlds, opts)
         world = self._load(index)
+        extra = {}
+        if len(self.soils) > 1:
+            extra["soil"] = self.soils[int(self.np_random.integers(len(self.soils)))]
+            world.sim.wheel_soil.use(soil_map_of(extra["soil"]))
         self._end_session()
         noise = self.episode.begin(world, opts)
         self._session = DriveSession(world.sim, rng=noise, renderer=world.renderer,
@@ -145,7 +163,8 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         world.lidar = self._session.lidar
         self._world = world
         obs = self._session.observe()
-        return self.episode.observe(obs), self.episode.info(obs, {}, "", world_index=index)
+        return self.episode.observe(obs), {
+            **self.episode.info(obs, {}, "", world_index=index), **extra}
 
     def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool,
                                          dict[str, Any]]:

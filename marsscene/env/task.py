@@ -134,15 +134,18 @@ class TaskMap:
         """A start, a start heading and a goal: both free, joined by free ground, at a
         distance in ``task.distance_m``."""
         lo, hi = self.task.distance_m
-        for _ in range(tries):
-            start = self.cells_xy[int(rng.integers(len(self.cells_xy)))]
+        pool = np.arange(len(self.cells_xy))
+        for k in range(2 * tries):
+            if k == tries:  # the free ground is broken up: starts on its largest piece only
+                pool = np.flatnonzero(self.cell_label == np.bincount(self.cell_label).argmax())
+            start = self.cells_xy[pool[int(rng.integers(len(pool)))]]
             d = np.hypot(*(self.cells_xy - start).T)
             ok = (d >= lo) & (d <= hi) & (self.cell_label == self.label_at(start))
             if ok.any():
                 goal = self.cells_xy[rng.choice(np.flatnonzero(ok))]
                 return start.copy(), float(rng.uniform(-math.pi, math.pi)), goal.copy()
         raise RuntimeSimError(f"found no start and goal {lo:g}-{hi:g} m apart on connected "
-                              f"free ground in {tries} tries; lower task.distance_m")
+                              f"free ground in {2 * tries} tries; lower task.distance_m")
 
     def check(self, start: NDArray[np.float64], goal: NDArray[np.float64]) -> None:
         """Refuse a start or a goal given in ``reset(options=...)`` off the free ground."""

@@ -36,8 +36,10 @@ def _write_mjcf(scene: Any, out: Path) -> list[Path]:
 def _write_catalogs(scene: Any, out: Path) -> list[Path]:
     from marsscene.export.catalog_craters import write_crater_catalog
     from marsscene.export.catalog_rocks import write_rock_catalog
+    from marsscene.soil import write_soil_map
 
-    return write_crater_catalog(scene, out) + write_rock_catalog(scene, out)
+    soil = write_soil_map(scene.soil, out) if getattr(scene, "soil", None) is not None else []
+    return write_crater_catalog(scene, out) + write_rock_catalog(scene, out) + soil
 
 
 def _timed(fn: Callable[[Any, Path], list[Path]], scene: Any,

@@ -24,7 +24,9 @@ from marsscene.pipeline.lod import LodWorld
 from marsscene.pipeline.record import BuildRecord
 from marsscene.pipeline.rocks import rock_stage
 from marsscene.pipeline.terrain import TerrainStage, resolve_lod, terrain_stage
-from marsscene.scene import Provenance, Scene
+from marsscene.scene import ModelRef, Provenance, Scene
+from marsscene.seeding import stage_rng
+from marsscene.soil import author_soil_map
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.lod import OuterTerrain, lod_summary, stitch
 
@@ -81,9 +83,18 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     if config.rocks.enabled:
         rocks, prototypes = rock_stage(config, seed, hf, craters, world, outer, placed, rec)
     lighting = lighting_stage(config, terrain.frame, rec) if config.lighting.enabled else None
+    soil = None
+    if config.soil.enabled:
+        with rec.stage("soil"):
+            soil = author_soil_map(config.soil, hf, craters, stage_rng(seed, "soil"))
+            rec.summary["soil_shares"] = {k: round(v, 4) for k, v in soil.shares().items()}
+            rec.models.append(ModelRef("soil", "Wong-Reece rigid wheel on Bekker / Janosi-"
+                                       "Hanamoto soils", "Wong & Reece (1967); Ishigami et al. "
+                                       "(2007), doi:10.1002/rob.20187"))
     return Scene(heightfield=hf, texture_rgb=terrain.texture_rgb, config=config, seed=seed,
                  provenance=_provenance(terrain, rec), craters=craters, rocks=rocks,
-                 rock_prototypes=prototypes, lighting=lighting, assets=placed, outer=outer)
+                 rock_prototypes=prototypes, lighting=lighting, assets=placed, outer=outer,
+                 soil=soil)
 
 
 def _focus_tiles(config: SceneConfig, world: LodWorld, craters: CraterTable | None,

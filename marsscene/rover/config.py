@@ -333,8 +333,16 @@ class RunConfig:
     optimistic odometry; the SLAM benchmark uses ``ln200s``)."""
     physics_hz: float | None = None
     """Physics rate (Hz); None: the scene's (``scene.xml`` timestep 2 ms, 500 Hz)."""
+    soil: str | None = None
+    """Deformable soil under the wheels, by name (``marsscene.rover.terramechanics.soils``:
+    slip, sinkage and their forces, ``docs/science/terramechanics.md``); None: the terrain's
+    rigid contact."""
 
     def __post_init__(self) -> None:
+        if self.soil is not None and self.soil != "rigid":
+            from marsscene.rover.terramechanics import soil
+
+            soil(self.soil)  # one-line error for an unknown name
         if self.physics_hz is None:
             _check_rate("run.control_hz", self.control_hz)
             _check_rate("run.imu_hz", self.imu_hz)
@@ -377,12 +385,14 @@ class RunConfig:
             raise ConfigError(f"{p}: unknown table(s) {unknown}; allowed: run, lidar, camera, "
                               "noise")
         rates = doc.get("run", {})
-        if not isinstance(rates, dict) or set(rates) - {"control_hz", "imu_hz", "physics_hz"}:
-            raise ConfigError(f"{p}: [run] takes control_hz, imu_hz and physics_hz; got "
+        if not isinstance(rates, dict) or set(rates) - {"control_hz", "imu_hz", "physics_hz",
+                                                        "soil"}:
+            raise ConfigError(f"{p}: [run] takes control_hz, imu_hz, physics_hz and soil; got "
                               f"{rates!r}")
         sensors = {
             key: dataclass_from_mapping(kind, doc[key], key)
             for key, kind in (("lidar", LidarConfig), ("camera", CameraConfig),
                               ("noise", NoiseConfig)) if key in doc
         }
-        return cls(**{k: float(v) for k, v in rates.items()}, **sensors)  # type: ignore[arg-type]
+        rates = {k: v if k == "soil" else float(v) for k, v in rates.items()}
+        return cls(**rates, **sensors)  # type: ignore[arg-type]

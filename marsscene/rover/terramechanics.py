@@ -74,7 +74,7 @@ class Soil:
     n : float
         Sinkage exponent (at zero slip).
     n_slip : float
-        Its growth with slip, ``n + n_slip * s`` (slip sinkage: Ding et al. 2011).
+        Its growth with slip, ``n + n_slip * |s|`` (slip sinkage: Ding et al. 2011).
     shear_modulus_m : float
         Shear deformation modulus ``K`` (m).
     a0, a1 : float
@@ -122,11 +122,18 @@ class WheelForces:
         Drawbar pull ``DP``: thrust less motion resistance (negative: the wheel is held back).
     torque_nm : ndarray
         Torque the soil resists the wheel's turning with, ``T``.
+    thrust_n : ndarray
+        The shear stress's share of the drawbar pull, ``r b int tau cos``.
+    resistance_n : ndarray
+        The normal stress's motion (compaction) resistance, ``r b int sigma sin``:
+        ``DP = thrust - resistance``.
     """
 
     load_n: NDArray[np.float64]
     drawbar_n: NDArray[np.float64]
     torque_nm: NDArray[np.float64]
+    thrust_n: NDArray[np.float64]
+    resistance_n: NDArray[np.float64]
 
 
 @cache
@@ -154,23 +161,28 @@ def _stresses(soil: Soil, r: Any, b: Any, angles: tuple[Any, Any, Any], theta: A
     mirrored = theta1 - (theta - t2) / np.maximum(tm - t2, 1e-12) * (theta1 - tm)
     local = np.where(front, np.cos(theta), np.cos(mirrored)) - np.cos(theta1)
     k = soil.k_c / b + soil.k_phi
-    sigma = k * (r * np.maximum(local, 0.0)) ** (soil.n + soil.n_slip * s)
+    sigma = k * (r * np.maximum(local, 0.0)) ** (soil.n + soil.n_slip * np.abs(s))
     j = r * ((theta1 - theta) - (1.0 - s) * (np.sin(theta1) - np.sin(theta)))
-    tau = (soil.cohesion_pa + sigma * math.tan(math.radians(soil.friction_deg))) * (
-        1.0 - np.exp(-np.maximum(j, 0.0) / soil.shear_modulus_m))
+    tau = (soil.cohesion_pa + sigma * math.tan(math.radians(soil.friction_deg))) * np.sign(j) * (
+        1.0 - np.exp(-np.abs(j) / soil.shear_modulus_m))
     return sigma, tau
 
 
 def wheel_forces(soil: Soil, radius_m: ArrayLike, width_m: ArrayLike, sinkage_m: ArrayLike,
                  slip: ArrayLike) -> WheelForces:
-    """Load, drawbar pull and torque of rigid wheels sunk ``sinkage_m`` at ``slip`` (driving:
-    0 <= slip < 1); the inputs broadcast together."""
+    """Load, drawbar pull and torque of rigid wheels sunk ``sinkage_m`` at ``slip``; the inputs
+    broadcast together.
+
+    ``0 <= slip < 1`` drives the wheel; ``-1 <= slip < 0`` brakes it (the wheel turns slower
+    than it travels, ``slip = r omega / v - 1``): the shear displacement ``j`` is then
+    negative and so is the shear stress, which holds the wheel back.
+    """
     r, b, z, s = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
                                        for v in (radius_m, width_m, sinkage_m, slip)))
     theta1 = np.arccos(np.clip(1.0 - z / r, -1.0, 1.0))[..., None]
     tm = (soil.a0 + soil.a1 * s[..., None]) * theta1
     t2 = soil.exit_ratio * theta1
-    total = {"w": 0.0, "dp": 0.0, "t": 0.0}
+    total = {"w": 0.0, "h": 0.0, "r": 0.0, "t": 0.0}
     for lo, hi in ((t2, tm), (tm, theta1)):
         half = 0.5 * (hi - lo)
         theta = lo + half * (_NODES + 1.0)
@@ -178,11 +190,13 @@ def wheel_forces(soil: Soil, radius_m: ArrayLike, width_m: ArrayLike, sinkage_m:
                                s[..., None])
         w = half * _WEIGHTS
         total["w"] = total["w"] + np.sum(w * (sigma * np.cos(theta) + tau * np.sin(theta)), -1)
-        total["dp"] = total["dp"] + np.sum(w * (tau * np.cos(theta) - sigma * np.sin(theta)),
-                                           -1)
+        total["h"] = total["h"] + np.sum(w * tau * np.cos(theta), -1)
+        total["r"] = total["r"] + np.sum(w * sigma * np.sin(theta), -1)
         total["t"] = total["t"] + np.sum(w * tau, -1)
-    return WheelForces(load_n=r * b * total["w"], drawbar_n=r * b * total["dp"],
-                       torque_nm=r * r * b * total["t"])
+    thrust, resistance = r * b * total["h"], r * b * total["r"]
+    return WheelForces(load_n=r * b * total["w"], drawbar_n=thrust - resistance,
+                       torque_nm=r * r * b * total["t"], thrust_n=thrust,
+                       resistance_n=resistance)
 
 
 def sinkage_for_load(soil: Soil, radius_m: ArrayLike, width_m: ArrayLike, load_n: ArrayLike,

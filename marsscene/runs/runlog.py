@@ -187,6 +187,9 @@ class RunLog:
         true = self.path / "imu_true.csv"
         self.imu_true = (read_numeric_csv(true, 7, complete_lines=cut) if true.is_file()
                          else None)
+        soil = self.path / "soil.csv"  # t, slip x6, sinkage_m x6, load_n x6 (runs on soil)
+        self.soil = (read_numeric_csv(soil, 19, complete_lines=cut)[:n] if soil.is_file()
+                     else None)
         bias = self.path / "imu_bias.csv"  # t, gyro bias xyz, accel bias xyz (newer runs)
         self.imu_bias = (read_numeric_csv(bias, 7, complete_lines=cut) if bias.is_file()
                          else None)

@@ -26,6 +26,8 @@ from marsscene.rover.spawn import spawn_pose
 from marsscene.sim.corridor import cull_scene_xml
 from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.terrain import scene_heightfield
+from marsscene.sim.wheel_soil import WheelSoil, soften_terrain, soil_map_of
+from marsscene.soil.map import read_soil_map
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.transforms import yaw_of_quat
 
@@ -120,6 +122,11 @@ class RoverSim:
         Half-width of the corridor (in m).
     settle_s : float
         Maximum settling time after spawning (sim time is reset to 0 afterwards).
+    soil : str, Soil or SoilMap, optional
+        Deformable soil under the wheels (:mod:`marsscene.sim.wheel_soil`): a soil's name
+        (:func:`marsscene.rover.terramechanics.soils`), a ``Soil``, or a map of them. None:
+        the run's (``RunConfig.soil``), else the scene's soil map (``soil/``, built with
+        ``[soil] enabled``), else rigid; ``"rigid"``: the terrain's rigid Coulomb contact.
     """
 
     def __init__(
@@ -134,10 +141,13 @@ class RoverSim:
         settle_s: float = 3.0,
         contact_corridor_xy_m: Any = None,
         contact_corridor_m: float = 15.0,
+        soil: Any = None,
     ) -> None:
         self.rover = rover if rover is not None else RoverConfig()
         self.run = run if run is not None else RunConfig()
         self.scene_dir = Path(scene_dir)
+        choice = soil if soil is not None else self.run.soil
+        self.soil_map = read_soil_map(self.scene_dir) if choice is None else soil_map_of(choice)
         fovy = self.run.camera.fovy_deg if self.run.camera is not None else 60.0
         self.rover_xml = rover_mjcf(self.rover, camera_fovy_deg=fovy)
         self._edit_spec = edit_spec
@@ -171,6 +181,7 @@ class RoverSim:
         self.dt_physics_s = float(self.model.opt.timestep)
         self.substeps = round(1.0 / (self.run.control_hz * self.dt_physics_s))
         self._ids()
+        self.wheel_soil = None if self.soil_map is None else WheelSoil.of(self, self.soil_map)
         self.settle_s = settle_s
         x0, y0, x1, y1 = self.heightfield.bounds_xy_m
         self.start_xy_m = start_xy_m if start_xy_m is not None else ((x0 + x1) / 2, (y0 + y1) / 2)
@@ -187,6 +198,8 @@ class RoverSim:
         spec.attach(rover_spec, prefix=PREFIX, frame=spec.worldbody.add_frame())
         if self._edit_spec is not None:
             self._edit_spec(spec)
+        if self.soil_map is not None:
+            soften_terrain(spec)
         return spec
 
     def _ids(self) -> None:
@@ -212,6 +225,8 @@ class RoverSim:
         """Spawn the rover on the terrain at ``xy_m`` facing ``yaw_rad`` (default: the start
         pose), let it settle (wheels braked), set time to 0."""
         mujoco.mj_resetData(self.model, self.data)
+        if self.wheel_soil is not None:
+            self.wheel_soil.reset()
         xy = xy_m if xy_m is not None else self.start_xy_m
         yaw = self.start_yaw_rad if yaw_rad is None else float(yaw_rad)
         self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy, yaw)
@@ -219,7 +234,7 @@ class RoverSim:
         self.data.ctrl[:] = 0.0
         steps = round(self.settle_s / self.dt_physics_s)
         for i in range(steps):
-            mujoco.mj_step(self.model, self.data)
+            self._step(1)
             if i > 100 and i % 25 == 0:
                 if float(np.abs(self.data.qvel).max()) < 2e-3:
                     break
@@ -231,6 +246,8 @@ class RoverSim:
         settling or resetting the clock (a live session's teleport; :meth:`reset` restarts)."""
         self.data.qpos[self.qpos_root : self.qpos_root + 7] = self._spawn_pose(xy_m, yaw_rad)
         self.data.qvel[:] = 0.0
+        if self.wheel_soil is not None:
+            self.wheel_soil.reset()
         mujoco.mj_forward(self.model, self.data)
 
     # ---- stepping ----------------------------------------------------------------------------
@@ -243,9 +260,17 @@ class RoverSim:
 
     def advance(self, nstep: int) -> None:
         """Advance the physics ``nstep`` steps with the current actuator targets."""
-        mujoco.mj_step(self.model, self.data, nstep=int(nstep))
+        self._step(int(nstep))
         if not np.isfinite(self.data.qpos).all():
             raise RuntimeSimError(f"simulation diverged at t = {self.data.time:.3f} s")
+
+    def _step(self, nstep: int) -> None:
+        if self.wheel_soil is None:
+            mujoco.mj_step(self.model, self.data, nstep=nstep)
+            return
+        for _ in range(nstep):
+            self.wheel_soil.apply()
+            mujoco.mj_step(self.model, self.data)
 
     # ---- camera ------------------------------------------------------------------------------
     @property

@@ -52,6 +52,7 @@ class RunWriter:
         self.poses: dict[str, TumLog] = {}
         self.images = ImageWriter()  # camera PNGs are encoded beside the simulation
         self._made: set[Path] = set()
+        self._soil = getattr(sim, "wheel_soil", None)
         if out is None:
             return
         out.mkdir(parents=True, exist_ok=True)
@@ -63,6 +64,9 @@ class RunWriter:
         self.logs["wheels"] = CsvLog(out / "wheels.csv", [
             "t", *[f"rate_{j[-2:]}" for j in DRIVE_JOINTS],
             *[f"steer_{j[-2:]}" for j in STEER_JOINTS]])
+        if self._soil is not None:
+            self.logs["soil"] = CsvLog(out / "soil.csv", ["t", *[
+                f"{q}_{j[-2:]}" for q in ("slip", "sinkage_m", "load_n") for j in DRIVE_JOINTS]])
         self.logs["imu"] = CsvLog(out / "imu.csv", _IMU_COLUMNS)
         self.logs["imu_true"] = CsvLog(out / "imu_true.csv", _IMU_COLUMNS)
         self.logs["imu_bias"] = CsvLog(out / "imu_bias.csv", _BIAS_COLUMNS)
@@ -92,6 +96,9 @@ class RunWriter:
             self.poses["odom"].row(t, *odom)
             self.logs["cmd"].row(t, (v, w))
             self.logs["wheels"].row(t, (*rates, *steer))
+            if self._soil is not None:
+                ws = self._soil
+                self.logs["soil"].row(t, (*ws.slip, *ws.sinkage_m, *ws.load_n))
 
     def imu(self, t: float, acc: Any, gyr: Any, acc_true: Any, gyr_true: Any,
             bias: Any = None) -> None:
@@ -175,7 +182,10 @@ ODOM_HEADER = "wheel odometry base_link in odom frame (= map at t=0)"
 
 def _meta(sim: Any) -> dict[str, Any]:
     run = sim.run
+    soil_map = getattr(sim, "soil_map", None)
+    soil = {} if soil_map is None else {"soil": [asdict(s) for s in soil_map.soils]}
     return {
+        **soil,
         "rover": asdict(sim.rover),
         "noise": asdict(run.noise),
         "rates_hz": {

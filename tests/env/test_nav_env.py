@@ -206,6 +206,34 @@ def test_stuck_against_a_rock_and_leaving_the_world_end_the_episode(flat_scene, 
         env.close()
 
 
+def test_a_rover_bogged_in_sand_is_stuck_and_soils_are_drawn_per_episode(slope_scene):
+    """Up a 15 deg slope of megaripple sand the wheels spin in place: the episode ends stuck
+    (on rigid ground the same drive climbs); a list of soils is drawn from the seeded stream."""
+    task = me.NavTask(stuck_s=4.0, distance_m=(2.0, 30.0))
+    start = {"start": [-12.0, 0.0], "goal": [12.0, 0.0], "yaw": 0.0}
+    ends = {}
+    for soil in ("rigid", "megaripple_sand"):
+        env = _env(slope_scene, task=task, soil=soil)
+        try:
+            env.reset(seed=0, options=start)
+            for _ in range(40):
+                *_, term, _, info = env.step(np.array([1.0, 0.0], np.float32))
+                if term:
+                    break
+            ends[soil] = (info["termination"], info["distance_m"])
+        finally:
+            env.close()
+    assert ends["megaripple_sand"][0] == "stuck"
+    assert ends["rigid"][0] != "stuck" and ends["rigid"][1] < ends["megaripple_sand"][1] - 2.0
+    env = _env(slope_scene, soil=("firm_regolith", "dry_sand"))
+    try:
+        drawn = [env.reset(seed=s, options=start)[1]["soil"] for s in range(8)]
+        assert set(drawn) == {"firm_regolith", "dry_sand"}
+        assert drawn == [env.reset(seed=s, options=start)[1]["soil"] for s in range(8)]
+    finally:
+        env.close()
+
+
 def test_the_arc_navigator_reaches_a_goal_20_m_away_through_rocks(tmp_path):
     scan = me.HeightScan(size_m=10.0, resolution_m=0.1)
     sampler = me.WorldSampler(base="rocks", count=1, seed=1, cache_dir=str(tmp_path))
@@ -261,6 +289,8 @@ def test_bad_reset_options_are_one_line_errors(nav_world, kwargs, message):
     (lambda w: me.WorldSampler(vary={"rocks.k": [2.0, 3.0]}), "rocks.k"),
     (lambda w: me.RoverNavEnv(w, control_hz=7.0), "divide"),
     (lambda w: me.RoverNavEnv(w.parent), "not a built scene"),
+    (lambda w: me.RoverNavEnv(w, soil=["dry_sand", "quicksand"]), "quicksand"),
+    (lambda w: me.RoverNavEnv(w, soil=["dry_sand", "rigid"]), "rigid"),
 ])
 def test_bad_configs_are_one_line_errors(nav_world, make, message):
     with pytest.raises(ConfigError, match=message) as err:

@@ -34,6 +34,10 @@ def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
     size_info = ET.SubElement(root, "custom")
     ET.SubElement(size_info, "text", name="marsscene",
                   data=f"marsscene {__version__} seed {scene.seed}")
+    if getattr(scene, "soil", None) is not None:  # read by marsscene.sim.rover_sim.RoverSim
+        ET.SubElement(size_info, "text", name="marsscene_soil_map",
+                      data="../soil/soils.json: the soil under the wheels (Wong-Reece "
+                      "parameters by index; soil_map.png beside it, north row first)")
     ET.SubElement(root, "visual")
     asset = ET.SubElement(root, "asset")
     world = ET.SubElement(root, "worldbody")

@@ -129,6 +129,7 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None,
     from marsscene.export.usd.rock_colliders import author_rock_colliders
     from marsscene.export.usd.rocks import author_rocks
     from marsscene.export.usd.rover import author_rover
+    from marsscene.export.usd.soil import author_soil
     from marsscene.export.usd.stage import create_stage
     from marsscene.export.usd.terrain import author_terrain
     from marsscene.export.usd.terrain_lod import author_outer_terrain
@@ -137,7 +138,7 @@ def to_stage(scene: Any, *, stream_to: str | Path | None = None,
     assets: dict[str, Any] = _StreamedAssets(Path(stream_to)) if stream_to is not None else {}
     author_terrain(stage, scene, assets, textures=textures)
     for author in (author_outer_terrain, author_craters, author_rocks, author_rock_colliders,
-                   author_lighting, author_cameras, author_assets, author_rover):
+                   author_lighting, author_cameras, author_assets, author_rover, author_soil):
         author(stage, scene, assets)
     return stage, assets
 

@@ -112,10 +112,12 @@ class MessageBuilder:
         return self.T["geometry_msgs/msg/Twist"](linear=self.vec((v_m_s, 0, 0)),
                                                  angular=self.vec((0, 0, omega_rad_s)))
 
-    def joint_state(self, t_s: float, names: list[str], position: Any, velocity: Any) -> Any:
+    def joint_state(self, t_s: float, names: list[str], position: Any, velocity: Any,
+                    effort: Any = None) -> Any:
         return self.T["sensor_msgs/msg/JointState"](
-            header=self.header(t_s, "base_link"), name=names, position=position,
-            velocity=velocity, effort=np.zeros(0))
+            header=self.header(t_s, "base_link"), name=names,
+            position=np.asarray(position, np.float64), velocity=np.asarray(velocity, np.float64),
+            effort=np.zeros(0) if effort is None else np.asarray(effort, np.float64))
 
     def imu(self, t_s: float, accel_m_s2: Any, gyro_rad_s: Any, gyro_var: float,
             accel_var: float) -> Any:

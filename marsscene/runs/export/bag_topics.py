@@ -61,7 +61,7 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     extra = {c.name: c.intrinsics for c in cams[1:]} if stereo else {}
     statics = static_transforms(run.rover, extra)
     t0 = float(run.gt.timestamps_s[0])
-    bag.register(tt.state_topics(imu_true=run.imu_true is not None))
+    bag.register(tt.state_topics(imu_true=run.imu_true is not None, soil=run.soil is not None))
 
     def tf_static() -> Any:
         return bag.tf_message([bag.tf(t0, s.parent, s.child, s.xyz_m, s.quat_xyzw)
@@ -104,6 +104,10 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
 
     for i, t in enumerate(run.wheels[:, 0]):
         bag.add("/rover/joint_states", t, joints, i, t)
+    if run.soil is not None:  # sinkage, slip and load as position, velocity and effort
+        for row in run.soil:
+            bag.add(tt.WHEEL_SOIL_TOPIC, row[0], bag.joint_state, row[0], list(DRIVE_JOINTS),
+                    row[7:13], row[1:7], row[13:19])
     for row in run.cmd:
         bag.add("/rover/cmd_vel", row[0], cmd, row)
     # per-sample white-noise variance of the simulated profile: density^2 * rate (+ sigma^2)

@@ -67,9 +67,14 @@ class Topic:
         return QOS_PROFILES[self.qos].transient_local
 
 
-def state_topics(*, imu_true: bool = True) -> list[Topic]:
-    """Clock, TF, the URDF, the command, odometry, ground truth, joints and the IMU
-    (``imu_true``: also the noise-free ``/rover/imu``)."""
+#: Per wheel on deformable soil, as a ``JointState`` of the drive joints: position = sinkage
+#: (m), velocity = slip (-1 to 1), effort = the soil's load on the wheel (N).
+WHEEL_SOIL_TOPIC = "/rover/wheel_soil"
+
+
+def state_topics(*, imu_true: bool = True, soil: bool = False) -> list[Topic]:
+    """Clock, TF, the URDF, the command, odometry, ground truth, joints, (``soil``) the
+    wheels' slip and sinkage and the IMU (``imu_true``: also the noise-free ``/rover/imu``)."""
     out = [Topic("/clock", "rosgraph_msgs/msg/Clock", "clock"),
            Topic("/tf", "tf2_msgs/msg/TFMessage", "tf"),
            Topic("/tf_static", "tf2_msgs/msg/TFMessage", "latched"),
@@ -78,6 +83,8 @@ def state_topics(*, imu_true: bool = True) -> list[Topic]:
            Topic("/rover/odom", "nav_msgs/msg/Odometry", "default"),
            Topic("/rover/GT_Trajectory", "nav_msgs/msg/Odometry", "default"),
            Topic("/rover/joint_states", "sensor_msgs/msg/JointState", "default"),
+           *([Topic(WHEEL_SOIL_TOPIC, "sensor_msgs/msg/JointState", "default")] if soil
+             else []),
            Topic("/rover/imu_noisy", "sensor_msgs/msg/Imu")]
     return [*out, Topic("/rover/imu", "sensor_msgs/msg/Imu")] if imu_true else out
 
