@@ -3,6 +3,7 @@ crossing, and the physics' speed with the soil model on against off.
 
 Run::
 
+    python perf/bench_terramechanics.py            # all four, no figures
     python perf/bench_terramechanics.py slope [--out docs/img/slip_slope.png]
     python perf/bench_terramechanics.py ripple
     python perf/bench_terramechanics.py speed
@@ -194,11 +195,15 @@ def soil_map(out: Path | None) -> None:
 
 def main(argv: list[str]) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("what", choices=("slope", "ripple", "speed", "map"))
+    ap.add_argument("what", nargs="?", default="all",
+                    choices=("all", "slope", "ripple", "speed", "map"))
     ap.add_argument("--out", type=Path, default=None, help="slope, map: the figure (PNG)")
     a = ap.parse_args(argv)
-    {"slope": lambda: slope(a.out), "ripple": ripple, "speed": speed,
-     "map": lambda: soil_map(a.out)}[a.what]()
+    runs = {"speed": speed, "ripple": ripple, "slope": lambda: slope(a.out),
+            "map": lambda: soil_map(a.out)}
+    for name, run in runs.items():
+        if a.what in ("all", name):
+            run()
 
 
 if __name__ == "__main__":

@@ -154,7 +154,9 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         extra = {}
         if len(self.soils) > 1:
             extra["soil"] = self.soils[int(self.np_random.integers(len(self.soils)))]
-            world.sim.wheel_soil.use(soil_map_of(extra["soil"]))
+            drawn, wheels = soil_map_of(extra["soil"]), world.sim.wheel_soil
+            assert drawn is not None and wheels is not None  # a deformable soil was asked for
+            wheels.use(drawn)
         self._end_session()
         noise = self.episode.begin(world, opts)
         self._session = DriveSession(world.sim, rng=noise, renderer=world.renderer,

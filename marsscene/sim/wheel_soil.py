@@ -27,11 +27,10 @@ physics step, what the soil does to each wheel (rocks keep their Coulomb frictio
    slip with a lag of :data:`SINK_LAG_S`, at most :data:`SINK_RATE_M_S`, and a lifted wheel
    keeps it.
 
-Forces are applied explicitly, so each is limited to what a damper of ``0.5 m_w / dt`` (``m_w``
-a sixth of the rover's mass) would give at the wheel's slip speed: the step stays stable and a
-wheel at rest feels no force. References: :mod:`marsscene.rover.terramechanics`; Ishigami, G.,
-Miwa, A., Nagatani, K., Yoshida, K. (2007), J. Field Robotics 24(3), 233-250,
-doi:10.1002/rob.20187.
+Forces are applied explicitly: the patch's shear gets a small damping (a tenth of ``m_w / dt``,
+``m_w`` a sixth of the rover's mass) to steady it. References:
+:mod:`marsscene.rover.terramechanics`; Ishigami, G., Miwa, A., Nagatani, K., Yoshida, K.
+(2007), J. Field Robotics 24(3), 233-250, doi:10.1002/rob.20187.
 """
 
 from __future__ import annotations
@@ -57,11 +56,12 @@ SINK_RATE_M_S = 0.05
 LOAD_LAG_S = 0.05
 #: Speeds (m/s) below which slip is not defined (the slip's denominator floor).
 _SPEED_FLOOR_M_S = 1e-3
-#: Below this speed (m/s) of hub and rim, or five time steps' worth of Mars gravity if more
-#: (0.02 m/s at 500 Hz, 0.05 m/s at 100 Hz), the wheel is not rolling: the patch's shear
-#: (static friction) takes over from the Wong--Reece rolling model (linearly from rest).
+#: Below this speed (m/s) of hub and rim, or the time step times :data:`_ROLLING_M_S2` if more
+#: (0.02 m/s at 500 Hz, 0.05 m/s at 100 Hz: slower, the coarser step rocks the rover), the
+#: wheel is not rolling: the patch's shear (static friction) takes over from the Wong--Reece
+#: rolling model (linearly from rest).
 _ROLLING_M_S = 0.02
-_ROLLING_STEPS = 5
+_ROLLING_M_S2 = 5.0
 #: Shear displacement is held within this many shear moduli (99.3 % of the soil's strength).
 _SHEAR_LIMIT = 5.0
 #: The patch's shear damping, as a share of the largest the explicit step stays stable with
@@ -119,7 +119,7 @@ class WheelSoil:
         self._terrain[list(terrain_geoms)] = True
         self._weight_n = mass_kg * float(np.linalg.norm(model.opt.gravity))
         self.use(soil_map)
-        self.rolling_m_s = max(_ROLLING_M_S, _ROLLING_STEPS * float(model.opt.timestep))
+        self.rolling_m_s = max(_ROLLING_M_S, _ROLLING_M_S2 * float(model.opt.timestep))
         self.damping_n_s_m = _DAMPING_RATIO * mass_kg / n / float(model.opt.timestep)
         self._one = np.zeros(n, np.intp)
         self.shear_m = np.zeros((n, 2))
