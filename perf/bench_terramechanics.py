@@ -187,7 +187,7 @@ def soil_map(out: Path | None) -> None:
         ax.plot([], [], "s", color=colours[s.name], label=f"{s.name} ({m.shares()[s.name]:.0%})")
     ax.legend(loc="lower left", fontsize=8)
     ax.set(xlabel="x east (m)", ylabel="y north (m)",
-           title="Default scene (seed 7), [soil] enabled: drift patches and crater floors")
+           title="Default scene (seed 7) with [soil] enabled")
     fig.tight_layout()
     fig.savefig(out)
     print(f"figure: {out}")

@@ -33,7 +33,7 @@ def _on_slope(scene: Path, soil_name: str, slope_deg: float, **kw: object) -> Ro
     return sim
 
 
-def _steady_slip(sim: RoverSim, seconds: float = 6.0) -> float:
+def _steady_slip(sim: RoverSim, seconds: float = 5.0) -> float:
     """Wheel slip ``1 - v / (r omega)`` over the second half of a straight drive."""
     sim.apply(SPEED_M_S, 0.0)
     n = round(seconds * sim.run.control_hz)
@@ -66,10 +66,9 @@ def test_slip_on_a_slope_matches_the_single_wheel_theory(flat_scene: Path, name:
     assert got == pytest.approx(_theory_slip(name, slope_deg), abs=0.06)
 
 
-def test_rigid_contact_does_not_slip_and_loose_sand_bogs_down(flat_scene: Path) -> None:
-    assert abs(_steady_slip(_on_slope(flat_scene, "rigid", 10.0), 4.0)) < 0.02
-    # megaripple sand: past its largest drawbar pull the wheels spin nearly in place
-    assert _steady_slip(_on_slope(flat_scene, "megaripple_sand", 12.0), 6.0) > 0.85
+def test_rigid_contact_does_not_slip(flat_scene: Path) -> None:
+    # (a rover bogged in sand: tests/env/test_nav_env.py, the episode ends stuck)
+    assert abs(_steady_slip(_on_slope(flat_scene, "rigid", 10.0), 3.0)) < 0.02
 
 
 def test_wheels_sink_into_sand_and_the_ground_truth_shows_it(flat_scene: Path) -> None:
@@ -99,7 +98,7 @@ def test_same_inputs_same_trajectory(flat_scene: Path) -> None:
     for _ in range(2):
         sim = _on_slope(flat_scene, "drift_sand", 5.0)
         sim.apply(SPEED_M_S, 0.05)
-        sim.advance(250)
+        sim.advance(150)
         poses.append(np.concatenate(sim.pose()).tobytes())
     assert poses[0] == poses[1]
 
