@@ -127,7 +127,7 @@ class WorldBatch:
         draws: list[list[Any]] = []
         cell = None
         for w in range(count):
-            sim = RoverSim(path(w), run=RunConfig(), settle_s=0.0)
+            sim = RoverSim(path(w), run=RunConfig(), settle_s=0.0, soil="rigid")  # terrain only
             hf, obstacles = sim.heightfield, scene_obstacles(sim)
             if cell is None:
                 cell = hf.cell_size_m
