@@ -10,8 +10,10 @@ notebook only when its code changed) or ``off`` (no execution: a quick check of 
 from __future__ import annotations
 
 import os
+import re
 import sys
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -36,6 +38,10 @@ extensions = [
     "numpydoc",
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    # MathJax 3 from a pip package, copied into the site's _static/mathjax: the pages render
+    # their formulas offline (Sphinx's default MathJax comes from a CDN at view time).
+    "sphinx-mathjax-offline",
     "sphinx_design",
 ]
 
@@ -53,7 +59,7 @@ root_doc = "index"
 suppress_warnings: list[str] = []
 
 # -- MyST: Markdown pages --------------------------------------------------------------------
-myst_enable_extensions = ["colon_fence", "deflist", "attrs_inline"]
+myst_enable_extensions = ["colon_fence", "deflist", "attrs_inline", "dollarmath", "amsmath"]
 myst_heading_anchors = 4  # [text](page.md#a-heading) links resolve, and the build checks them
 
 # -- myst-nb: notebooks executed during the build ---------------------------------------------
@@ -92,8 +98,43 @@ html_theme_options = {
     "show_toc_level": 2,
     "navigation_depth": 3,
     "show_nav_level": 1,
-    "secondary_sidebar_items": ["page-toc"],
+    # the gallery's cards take the width of the page's table of contents
+    "secondary_sidebar_items": {"**": ["page-toc"], "gallery": []},
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }
 html_sidebars = {"index": [], "getting_started": []}
+
+
+# -- Gallery thumbnails: a figure the build itself made ------------------------------------------
+# docs/gallery.md shows each notebook's card with <img src="_static/gallery/NAME.png">. Once the
+# site is written, that file is the first figure among the notebook page's cell outputs (as the
+# build executed it), scaled down to GALLERY_THUMB_PX wide; a notebook without one (a build with
+# MARSSCENE_DOCS_EXECUTE=off) gets a plain grey tile, so no card shows a broken image.
+GALLERY_THUMB_PX = 480
+_FIRST_OUTPUT_IMAGE = re.compile(r'class="cell_output.*?<img [^>]*src="\.\./(_images/[^"]+\.png)"',
+                                 re.S)
+
+
+def _gallery_thumbnails(app: Any, exception: Exception | None) -> None:
+    if exception is not None or app.builder.format != "html":
+        return
+    from PIL import Image  # matplotlib's dependency: installed wherever the notebooks run
+
+    out = Path(app.outdir)
+    folder = out / "_static" / "gallery"
+    folder.mkdir(parents=True, exist_ok=True)
+    for page in sorted((out / "notebooks").glob("*.html")):
+        m = _FIRST_OUTPUT_IMAGE.search(page.read_text(encoding="utf-8"))
+        if m:
+            with Image.open(out / m.group(1)) as im:
+                im = im.convert("RGB")
+                im.thumbnail((GALLERY_THUMB_PX, GALLERY_THUMB_PX))
+                im.save(folder / f"{page.stem}.png", optimize=True)
+        else:
+            Image.new("RGB", (GALLERY_THUMB_PX, GALLERY_THUMB_PX // 2), "#d9d9d9").save(
+                folder / f"{page.stem}.png")
+
+
+def setup(app: Any) -> None:
+    app.connect("build-finished", _gallery_thumbnails)

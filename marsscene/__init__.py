@@ -6,7 +6,7 @@ The build side, in pipeline order (wired only by ``pipeline/``)::
 
 and the run side: ``sim/`` (MuJoCo rover) with ``sensors/`` -> ``runs/`` (run folder, ATE/RPE)
 -> ``runs/export/`` (ROS 2 bags, SLAM datasets), driven by one call, :func:`drive`
-(:mod:`marsscene.runtime`). The layers and which way imports run: ``docs/architecture.md``.
+(:mod:`marsscene.runtime`). The layers and which way imports run: :doc:`/architecture`.
 
 Examples
 --------

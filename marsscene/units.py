@@ -1,4 +1,4 @@
-"""Mars constants used across marsscene (docs/science/dem.md)."""
+"""Mars constants used across marsscene (:doc:`/science/dem`)."""
 
 from __future__ import annotations
 

@@ -2,9 +2,10 @@
 
 Run: ``python perf/bench_vpr.py [PROTOCOL] [LENGTH_M] [OUT]`` (default: ``dust`` on the
 default scene's 60 m loop instead of Mars Base, so it needs no 1 km build; ``PROTOCOL`` may be
-``dust``, ``day-dark`` or a spec TOML; ``LENGTH_M`` ``full`` keeps the protocol's route and
-scene). Prints per traversal the frames, wall time and frames per second (640 x 480, a frame
-every 0.1 m, JPEG), the dataset's size, and the patch-normalised baseline's Recall@N.
+``dust``, ``day-low-sun``, ``day-dim`` or a spec TOML; ``LENGTH_M`` ``full`` keeps the
+protocol's route and scene). Prints per traversal the frames, wall time and frames per second
+(640 x 480, a frame every 0.1 m, JPEG), the dataset's size, and the patch-normalised
+baseline's Recall@N.
 
 ``MARSSCENE_BENCH_VPR_SCENE=dir`` reuses a built scene folder (e.g. on a GPU machine without
 the build's dependencies): it is copied to ``OUT/scene``. ``MARSSCENE_BENCH_VPR_WORKERS=2``

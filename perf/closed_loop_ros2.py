@@ -74,7 +74,8 @@ def main() -> None:
         run = work / "run"
         serve = subprocess.Popen(
             ["marsscene", "serve", str(scene), "--localhost", "--domain-id",
-             str(DOMAIN), "--lidar", "--start", str(sx), str(sy), "--yaw", str(yaw),
+             str(DOMAIN), "--lidar", "--start-xy", str(sx), str(sy),
+             "--yaw-deg", str(math.degrees(yaw)),
              "--seconds", "150", "--out", str(run)],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         dx, dy = GOAL_M * math.cos(yaw), GOAL_M * math.sin(yaw)

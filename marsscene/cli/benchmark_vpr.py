@@ -35,13 +35,14 @@ __all__ = ["vpr", "vpr_eval"]
               "machine with 2 or more cores; the same bytes either way).")
 def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, resume: bool,
         no_eval: bool, baseline: str, workers: int | None) -> None:
-    """Generate the VPR dataset of PROTOCOL (`dust`, `day-dark` or a spec TOML) into OUT, then
-    score a classical baseline (vpr-eval): VLAD over RootSIFT, or patch-normalised thumbnails.
+    """Generate the VPR dataset of PROTOCOL (`dust`, `day-low-sun`, `day-dim` or a spec TOML)
+    into OUT, then score a classical baseline (vpr-eval): VLAD over RootSIFT, or
+    patch-normalised thumbnails.
 
     \b
     Examples:
       marsscene benchmark vpr dust --out vpr/dust
-      marsscene benchmark vpr day-dark --out vpr/daydark --length-m 60
+      marsscene benchmark vpr day-dim --out vpr/dim --length-m 60
     Then any method: marsscene benchmark vpr-eval vpr/dust --descriptors my_descs/
     """
     from marsscene.benchmark.vpr.dataset import generate_vpr

@@ -86,14 +86,16 @@ Examples:
     help="Seed of the sensor-noise stream.",
 )
 @click.option(
-    "--lookahead",
+    "--lookahead-m",
+    "lookahead",
     type=click.FloatRange(min=0.05),
     default=1.0,
     show_default=True,
     help="Pure-pursuit lookahead (m).",
 )
 @click.option(
-    "--max-slope",
+    "--max-slope-deg",
+    "max_slope",
     type=click.FloatRange(0, 90, min_open=True),
     default=20.0,
     show_default=True,
@@ -101,7 +103,8 @@ Examples:
 )
 @click.option("--write-rover-xml", is_flag=True, help="Also write SCENE_DIR/mjcf/rover.xml.")
 @click.option(
-    "--corridor",
+    "--corridor-m",
+    "corridor",
     type=click.FloatRange(min=1.0),
     default=15.0,
     show_default=True,

@@ -23,7 +23,8 @@ _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
     help="Alignment of EST onto GT before ATE (sim3: monocular).",
 )
 @click.option(
-    "--max-dt",
+    "--max-dt-s",
+    "max_dt",
     type=click.FloatRange(min=0),
     default=0.01,
     show_default=True,

@@ -59,7 +59,7 @@ _SPECS: dict[str, tuple[tuple[str, ...], dict[str, Any]]] = {
     "tau": (("--tau",), dict(
         type=click.FloatRange(0, 10), default=None,
         help="Override the scene's dust optical depth for the camera's lighting.")),
-    "sun_elevation": (("--sun-elevation",), dict(
+    "sun_elevation": (("--sun-elevation-deg", "sun_elevation"), dict(
         type=click.FloatRange(-10, 90), default=None,
         help="Override the sun elevation (deg) for the camera's lighting.")),
     "lidar": (("--lidar",), dict(

@@ -42,8 +42,8 @@ _ros_options = compose(
                  help="Velocity commands to obey."),
     click.option("--cmd-vel-stamped", is_flag=True,
                  help="geometry_msgs/TwistStamped commands (Nav2 enable_stamped_cmd_vel)."),
-    click.option("--cmd-timeout", type=click.FloatRange(min=0), default=_R.cmd_timeout_s,
-                 show_default=True,
+    click.option("--cmd-timeout-s", "cmd_timeout", type=click.FloatRange(min=0),
+                 default=_R.cmd_timeout_s, show_default=True,
                  help="Stop after this many sim seconds without a command (0: never)."),
     click.option("--pace", type=click.Choice(PACES), default=_R.pace, show_default=True,
                  help="Follow the wall clock, run as fast as it goes, or advance only when "
@@ -73,12 +73,13 @@ _ros_options = compose(
 @click.argument("scene_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @_ros_options
 @_sensor_options
-@click.option("--start", nargs=2, type=float, default=None, metavar="X Y",
-              help="Start position in m (default: the terrain centre).")
+@click.option("--start-xy", "start", nargs=2, type=float, default=None, metavar="X Y",
+              help="Start position (m, world frame; default: the terrain centre), as build "
+              "--rover-xy.")
 @click.option("--yaw-deg", type=click.FloatRange(-360.0, 360.0), default=0.0,
               show_default=True, help="Start heading (degrees, counter-clockwise from east).")
-@click.option("--yaw", "yaw_rad", type=float, default=None, hidden=True,
-              help="Start heading in radians; replaced by --yaw-deg, to be removed.")
+@click.option("--yaw", "yaw_rad", type=float, default=None, metavar="RAD",
+              help="Deprecated: the start heading in radians; use --yaw-deg.")
 @click.option("--seconds", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Sim-time limit (default: until Ctrl-C).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),

@@ -26,7 +26,7 @@ def _report(lat: float, lon: float, utc: str | None, mars_year: int | None, ls: 
         pos = sun_position_at_local_time(mars_year=mars_year, ls_deg=ls, ltst_h=ltst,
                                          lat_deg=lat, lon_east_deg=lon)
     else:
-        raise click.UsageError("give --utc, or --mars-year with --ls and --ltst")
+        raise click.UsageError("give --utc, or --mars-year with --ls-deg and --ltst-h")
     cfg = LightingConfig(utc=pos.utc.isoformat(), tau=tau, diffuse_model=diffuse_model)
     lt = compute_lighting(cfg, lat_deg=lat, lon_east_deg=lon)
     return {
@@ -52,15 +52,15 @@ def _hms(hours: float) -> str:
 
 
 @click.command(short_help="Sun position and irradiance at a Mars site and time.")
-@click.option("--lat", type=click.FloatRange(-90.0, 90.0), required=True,
-              help="Planetocentric latitude (deg).")
-@click.option("--lon", type=click.FloatRange(-360.0, 360.0), required=True,
-              help="East longitude (deg; negative = west).")
+@click.option("--site-lat-deg", "lat", type=click.FloatRange(-90.0, 90.0), required=True,
+              help="Planetocentric latitude of the site (deg).")
+@click.option("--site-lon-east-deg", "lon", type=click.FloatRange(-360.0, 360.0), required=True,
+              help="East longitude of the site (deg; negative = west).")
 @click.option("--utc", default=None, metavar="ISO", help="UTC time, e.g. 2021-02-18T20:55Z.")
-@click.option("--mars-year", type=int, default=None, help="Mars Year (with --ls, --ltst).")
-@click.option("--ls", type=click.FloatRange(0.0, 360.0, max_open=True), default=None,
+@click.option("--mars-year", type=int, default=None, help="Mars Year (with --ls-deg, --ltst-h).")
+@click.option("--ls-deg", "ls", type=click.FloatRange(0.0, 360.0, max_open=True), default=None,
               help="Solar longitude (deg).")
-@click.option("--ltst", type=click.FloatRange(0.0, 24.0, max_open=True), default=None,
+@click.option("--ltst-h", "ltst", type=click.FloatRange(0.0, 24.0, max_open=True), default=None,
               help="Local true solar time (h).")
 @click.option("--tau", type=click.FloatRange(0.0, 50.0), default=0.5, show_default=True,
               help="Dust optical depth.")
@@ -73,8 +73,9 @@ def sun(lat: float, lon: float, utc: str | None, mars_year: int | None, ls: floa
 
     \b
     Examples:
-      marsscene sun --lat 18.44 --lon 77.45 --utc 2021-02-18T20:55Z
-      marsscene sun --lat 18.44 --lon 77.45 --mars-year 36 --ls 90 --ltst 12 --tau 2 --json
+      marsscene sun --site-lat-deg 18.44 --site-lon-east-deg 77.45 --utc 2021-02-18T20:55Z
+      marsscene sun --site-lat-deg 18.44 --site-lon-east-deg 77.45 --mars-year 36 \\
+        --ls-deg 90 --ltst-h 12 --tau 2 --json
     """
     with user_errors():
         r = _report(lat, lon, utc, mars_year, ls, ltst, tau, diffuse_model)

@@ -108,7 +108,7 @@ class CraterConfig:
 
     Defaults give sub-DEM-scale craters (2-20 m) on a 3.5 Ga surface capped at the Hartmann
     (1984) equilibrium, which keeps the default build fast and does not duplicate the craters
-    a 1 m DEM already resolves. See ``docs/craters.md``.
+    a 1 m DEM already resolves. See :doc:`/craters`.
     """
 
     enabled: bool = True
@@ -147,7 +147,7 @@ class CraterConfig:
     """Background (non-impact, e.g. aeolian) topographic diffusivity (in m^2/Myr), added to the
     impact-driven degradation implied by the equilibrium. 0 keeps the recognisable craters at
     ``min(production, equilibrium)``; a positive value removes small craters faster and lowers
-    their density below equilibrium (see docs/craters.md for published Mars values)."""
+    their density below equilibrium (see :doc:`/science/craters` for published Mars values)."""
     axis_ratio_min: float = 1.0
     """Minor/major axis ratio drawn uniformly in [axis_ratio_min, 1] (1 = circular)."""
     resurfacing: tuple[ResurfacingEvent, ...] = ()

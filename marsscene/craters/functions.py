@@ -1,4 +1,4 @@
-"""Mars crater production, chronology and equilibrium functions (docs/science/craters.md).
+"""Mars crater production, chronology and equilibrium functions (:doc:`/science/craters`).
 
 All coefficients live in ``data/mars_crater_functions.toml`` with their references. Public
 functions take diameters in **metres** and return densities **per km^2**; ages are in Ga.

@@ -1,4 +1,4 @@
-"""Crater radial profiles (docs/science/craters.md) and their degradation by topographic diffusion.
+"""Crater radial profiles (:doc:`/science/craters`) and their degradation by topographic diffusion.
 
 ``rho = r / R`` (``R = D / 2``); heights are relative to the pre-impact surface. Three fresh
 profile models:

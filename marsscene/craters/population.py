@@ -1,4 +1,4 @@
-"""Seeded crater populations (docs/science/craters.md).
+"""Seeded crater populations (:doc:`/science/craters`).
 
 The catalogue holds the *recognisable* craters of a surface: those whose relief has not been
 degraded below the recognisability limit ``s <= S_ERASE`` (see :mod:`.morphology`). Their
@@ -179,11 +179,17 @@ def sample_craters(
 ) -> tuple[CraterTable, PopulationStats]:
     """Sample a crater population over a scene footprint.
 
+    Diameters follow the production function of the surface age ``config.age_ga``, capped at
+    the equilibrium density; centres are uniform over a footprint grown by the largest
+    crater, so craters reach in from outside (:doc:`/science/craters`). Stamp the table into
+    a terrain with :func:`stamp_craters`; :func:`marsscene.build_scene` does both.
+
     Parameters
     ----------
     bounds_xy_m : tuple of float
         Scene footprint ``(x_min, y_min, x_max, y_max)`` (in m).
     config : CraterConfig
+        Age, diameter range, chronology system, profile, degradation and resurfacing.
     rng : numpy.random.Generator
         The crater stage's stream.
     heightfield : Heightfield, optional
@@ -198,13 +204,24 @@ def sample_craters(
     table : CraterTable
         Rows in formation order (oldest first), the stamping order.
     stats : PopulationStats
+        Expected, sampled, resurfaced, degraded-away and kept counts (for the manifest).
 
     Examples
     --------
     >>> import numpy as np
+    >>> from marsscene.craters import CraterConfig, sample_craters, stamp_craters
     >>> cfg = CraterConfig(d_min_m=5.0, d_max_m=50.0)
     >>> table, stats = sample_craters((0, 0, 100, 100), cfg, rng=np.random.default_rng(1))
     >>> len(table) == stats.kept
+    True
+    >>> bool(table.diameter_m.min() >= 5.0), table.center_xy_m.shape == (len(table), 2)
+    (True, True)
+
+    Stamped into flat ground 100 m x 100 m (1 m posts), the craters dig below it:
+
+    >>> from marsscene.terrain import Heightfield
+    >>> hf = Heightfield(np.zeros((101, 101), np.float32), cell_size_m=1.0)
+    >>> bool(stamp_craters(hf, table).z_m.min() < 0.0)
     True
     """
     x0, y0, x1, y1 = (float(v) for v in bounds_xy_m)

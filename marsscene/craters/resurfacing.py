@@ -1,4 +1,4 @@
-"""Partial resurfacing (Michael & Neukum 2010 forward model, docs/science/craters.md).
+"""Partial resurfacing (Michael & Neukum 2010 forward model, :doc:`/science/craters`).
 
 Each event erases craters formed *before* it (formation age > event age) whose centre lies in
 its mask, by one of three rules (sharp diameter threshold, burial thickness, soft ramp). Events

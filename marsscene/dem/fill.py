@@ -5,13 +5,12 @@ Re-exported by :mod:`marsscene.dem.ops`.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import spsolve
 
+from marsscene._warnings import warn_external
 from marsscene.dem.model import DEM
 from marsscene.errors import ConfigError, NodataFilledWarning
 
@@ -78,9 +77,9 @@ def fill_nodata(dem: DEM, *, max_missing_fraction: float = 0.5) -> tuple[DEM, in
             "terrain.max_missing_fraction): choose a crop inside the DTM's valid area"
         )
     filled = _laplace_fill(z, missing)
-    warnings.warn(
+    warn_external(
         f"{dem.product_id or 'DEM'}: filled {n:,} missing posts ({frac * 100:.2f} %) by "
-        "Laplace inpainting", NodataFilledWarning, stacklevel=2,
+        "Laplace inpainting", NodataFilledWarning,
     )
     return dem.replace(elevation_m=filled), n
 

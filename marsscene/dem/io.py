@@ -3,7 +3,7 @@
 GeoTIFF/COG, ISIS3 cubes, PDS4 and PDS3 ``.IMG`` (attached label) or ``.LBL`` (detached) all
 open through GDAL. PDS3 labels are also parsed here (:mod:`marsscene.dem.pvl`) and checked
 against the file before any pixel is read (truncated files, wrong ``^IMAGE`` pointers), and the
-label — not GDAL — gives the transform and CRS (GDAL's convention, docs/science/dem.md). Only the
+label — not GDAL — gives the transform and CRS (GDAL's convention, :doc:`/science/dem`). Only the
 requested window is read. Missing values become NaN by **bit pattern** on the raw samples:
 ``MISSING_CONSTANT``, the ISIS special pixels and the dataset nodata.
 """
@@ -178,6 +178,8 @@ def read_dem(
     max_bytes : float, optional
         Refuse (:class:`~marsscene.errors.MemoryBudgetError`) before reading when the estimated
         build memory for this window (resampled to ``target_post_m``) exceeds it.
+    target_post_m : float, optional
+        The post spacing the build will resample to (in m), for the ``max_bytes`` estimate.
 
     Returns
     -------
@@ -187,6 +189,30 @@ def read_dem(
     Raises
     ------
     DEMReadError, CRSError, ConfigError, MemoryBudgetError
+
+    Examples
+    --------
+    A small HiRISE-style PDS3 DTM written by :mod:`marsscene.testing.pds3` (a real one reads
+    the same way: ``ms.read_dem("DTEEC_....IMG")``):
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> import marsscene as ms
+    >>> from marsscene.testing.pds3 import write_pds3_dtm
+    >>> z = np.linspace(-10, 10, 48 * 32, dtype=np.float32).reshape(48, 32)
+    >>> path = write_pds3_dtm(Path(tempfile.mkdtemp()) / "dtm.IMG", z)
+    >>> dem = ms.read_dem(path)
+    >>> dem.shape, dem.post_m
+    ((48, 32), 1.0)
+
+    Only a window (row offset, column offset, rows, columns), and a scene from the DEM:
+
+    >>> ms.read_dem(path, window=(0, 0, 16, 16)).shape
+    (16, 16)
+    >>> cfg = ms.SceneConfig.from_dict({"terrain": {"post_m": 1.0}})
+    >>> ms.build_scene(cfg, seed=7, dem=dem).heightfield.shape
+    (48, 32)
     """
     if window is not None:
         if crop is not None:

@@ -1,6 +1,6 @@
 """Interpret PDS3 labels of HiRISE DTMs and orthoimages (pure: label in, numbers out).
 
-Conventions follow GDAL's PDS driver (``frmts/pds/pdsdataset.cpp``; docs/science/dem.md) so that a
+Conventions follow GDAL's PDS driver (``frmts/pds/pdsdataset.cpp``; :doc:`/science/dem`) so that a
 file read here and through GDAL lands on the same ground coordinates:
 
 * ``MAP_SCALE`` in m (``<M>``/``<METERS...>``), ``<CM>`` / 100, anything else (incl. no unit) is

@@ -4,7 +4,7 @@ Each step applies one ``cmd_vel`` (normalised to [-1, 1] by default: up to
 :data:`~marsscene.rover.config.V_MAX_M_S` and :data:`~marsscene.rover.config.OMEGA_MAX_RAD_S`,
 the rover's route-following bounds) for one control period (``control_hz``, 5 Hz by default)
 of physics at ``physics_hz`` (100 Hz by default: the same route within centimetres of the
-500 Hz reference, ~4x faster; ``docs/gym.md``).
+500 Hz reference, ~4x faster; :doc:`/gym`).
 
 The class is an adapter between Gymnasium and two parts, as dm_control's ``composer`` and
 Gymnasium-Robotics split an environment: the **physics** -- a world loaded and kept compiled
@@ -77,6 +77,29 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         Worlds kept compiled in memory (least recently used dropped).
     render_mode : {"rgb_array"}, optional
         :meth:`render` returns the navcam's view (256 x 192).
+
+    Examples
+    --------
+    One world of the ``plain`` kind (60 m x 60 m, built on first use into ``cache_dir``) and
+    goals 5–8 m away; ``gym.make("marsscene/RoverNav-v0", ...)`` takes the same keywords:
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from marsscene.env import NavTask, RoverNavEnv, WorldSampler
+    >>> worlds = WorldSampler(base="plain", count=1, cache_dir=tempfile.mkdtemp())
+    >>> env = RoverNavEnv(worlds, task=NavTask(distance_m=(5.0, 8.0)))
+    >>> obs, info = env.reset(seed=0)
+    >>> sorted(obs)
+    ['achieved_goal', 'desired_goal', 'height_scan', 'observation']
+    >>> obs["height_scan"].shape, env.action_space.shape
+    ((51, 51), (2,))
+
+    Full speed ahead for one control period (0.2 s):
+
+    >>> obs, reward, terminated, truncated, info = env.step(np.array([1.0, 0.0], np.float32))
+    >>> terminated, truncated, bool(5.0 < info["distance_m"] < 9.0)
+    (False, False, True)
+    >>> env.close()
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 5}  # noqa: RUF012 (gymnasium's)

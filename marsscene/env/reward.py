@@ -22,7 +22,7 @@ progress        0       metres of goal distance gained this step (off by default
 reward transformations", ICML: a difference of a potential, the goal distance, leaves the
 optimal policy unchanged). RLRoverLab's terms pull towards goals a few metres away; for goals
 20-50 m away their pull is weak (``distance`` is 0.1 % of its peak at 30 m), and PPO trained on
-them alone did not leave the start (``docs/results/gym.md``).
+them alone did not leave the start (:doc:`/results/gym`).
 
 Source of the terms and weights: RLRoverLab, Aalborg University's Isaac Lab suite for rover
 navigation (https://github.com/abmoRobotics/RLRoverLab, ``rover_envs/envs/navigation/mdp/

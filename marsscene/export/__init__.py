@@ -81,18 +81,49 @@ def write_scene(
 ) -> dict[str, list[Path]]:
     """Write a scene folder: ``scene.usda`` (+assets), ``mjcf/scene.xml`` (+assets), manifest.
 
+    Everything is written into a temporary sibling folder first and renamed into place only
+    when every writer succeeded, so a failed export never leaves a half-written scene. The
+    crater and rock catalogues and ``manifest.json`` are always written.
+
     Parameters
     ----------
     scene : Scene
+        A built scene (:func:`marsscene.build_scene`).
     out_dir : path-like
         Output folder; replaced as a whole if it exists and ``overwrite`` is true.
     formats : iterable of str, optional
-        Keys of :data:`WRITERS`; default ``scene.config.export.formats``.
+        Keys of :data:`WRITERS` (``"usd"``: OpenUSD for Isaac Sim and Omniverse, needs
+        ``usd-core``; ``"mjcf"``: MuJoCo); default ``scene.config.export.formats``.
+    overwrite : bool
+        Replace an existing ``out_dir`` (else :class:`~marsscene.errors.ExportError`).
 
     Returns
     -------
-    dict
-        Format -> final paths written (plus ``"manifest"``).
+    dict of str to list of Path
+        Format -> final paths written (plus ``"catalogs"`` and ``"manifest"``).
+
+    Raises
+    ------
+    ExportError
+        An unknown format, an existing ``out_dir`` without ``overwrite``, a writer that failed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import marsscene as ms
+    >>> cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [10, 10]}})
+    >>> scene = ms.build_scene(cfg, seed=7)
+    >>> out = tempfile.mkdtemp()
+    >>> written = ms.write_scene(scene, out, formats=["mjcf"])
+    >>> sorted(written)
+    ['catalogs', 'manifest', 'mjcf']
+    >>> written["mjcf"][-1].relative_to(out).as_posix()
+    'mjcf/scene.xml'
+
+    The MJCF loads in MuJoCo as it is:
+
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_path(str(written["mjcf"][-1]))
     """
     from marsscene.export.manifest import manifest_bytes
 

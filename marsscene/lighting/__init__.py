@@ -1,6 +1,6 @@
 """Lighting: Mars24 sun position, Beer's-law sun, dusty-sky diffuse light and visibility.
 
-Pure functions (numpy/scipy only); see ``docs/lighting.md`` for the science and citations.
+Pure functions (numpy/scipy only); see :doc:`/lighting` for the science and citations.
 """
 
 from __future__ import annotations

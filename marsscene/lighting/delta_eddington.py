@@ -1,6 +1,6 @@
 """COMIMART-style delta-Eddington two-stream fluxes (Joseph, Wiscombe & Weinman 1976;
 Vicente-Retortillo et al. 2015, J. Space Weather Space Clim. 5, A33, Eqs. 10-23 as transcribed in
-docs/science/atmosphere.md). Broadband use with user (omega, g, surface albedo)."""
+:doc:`/science/atmosphere`). Broadband use with user (omega, g, surface albedo)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Solar irradiance at the Martian surface (W m^-2): top of atmosphere, Beer's-law direct beam,
-and the diffuse sky from the Appelbaum-Flood / Pollack net-flux table (docs/science/atmosphere.md).
+and the diffuse sky from the Appelbaum-Flood / Pollack net-flux table (:doc:`/science/atmosphere`).
 
 All functions are pure and vectorised over ``zenith_deg`` (and ``tau`` where noted).
 

@@ -3,7 +3,7 @@
 Allison, M. & McEwen, M. (2000), "A post-Pathfinder evaluation of areocentric solar coordinates
 with improved timing recipes for Mars seasonal/diurnal climate studies", Planet. Space Sci. 48,
 215-235, doi:10.1016/S0032-0633(99)00092-6; current constants from the NASA GISS Mars24
-algorithm page (docs/science/sun.md). Longitudes are planetocentric **east** (0-360); the
+algorithm page (:doc:`/science/sun`). Longitudes are planetocentric **east** (0-360); the
 azimuth is measured clockwise from north (east = 90 deg).
 """
 
@@ -237,6 +237,40 @@ def sun_position_at_local_time(
     Mars years follow Clancy et al. (2000) / Piqueux et al. (2015): MY 1 starts 1955-04-11,
     MY 36 on 2021-02-07 (Ls = 0). Ls advances ~0.5 deg per sol, so the returned ``ls_deg`` is
     within ~0.3 deg of the request; ``ltst_h`` matches to < 1e-6 h.
+
+    Parameters
+    ----------
+    mars_year : int
+        Mars Year (MY 36 began on 2021-02-07).
+    ls_deg : float
+        Areocentric solar longitude of the sol, in [0, 360) (90: northern summer solstice).
+    ltst_h : float
+        Local true solar time at the site, in hours [0, 24) (12: the sun crosses the meridian).
+    lat_deg : float
+        Planetocentric latitude, in [-90, 90].
+    lon_east_deg : float
+        East longitude in degrees (0-360; negative values are west).
+
+    Returns
+    -------
+    SunPosition
+        Elevation, azimuth (clockwise from north) and zenith in degrees, the UTC instant,
+        ``ls_deg``, ``ltst_h``, the Sun–Mars distance and more (:func:`mars_sun_position`).
+
+    Raises
+    ------
+    ConfigError
+        A non-integer Mars year, or a value out of range.
+
+    Examples
+    --------
+    Local noon at Jezero crater on the northern summer solstice of MY 36:
+
+    >>> from marsscene.lighting import sun_position_at_local_time
+    >>> p = sun_position_at_local_time(mars_year=36, ls_deg=90.0, ltst_h=12.0,
+    ...                                lat_deg=18.4, lon_east_deg=77.5)
+    >>> p.utc.date().isoformat(), round(p.elevation_deg, 1), round(p.ls_deg, 1)
+    ('2021-08-24', 83.0, 89.9)
     """
     if isinstance(mars_year, bool) or not isinstance(mars_year, int | np.integer):
         raise ConfigError(f"mars_year = {mars_year!r} must be an integer")

@@ -5,7 +5,7 @@ illuminance on a surface facing the light, in lux; a ``DomeLight``'s is its lumi
 (cd m^-2), and a uniform dome of luminance ``L`` gives a horizontal illuminance ``pi L``. So:
 
 * sun: ``intensity = k * E_direct_normal``
-* sky: ``intensity = k * E_diffuse_horizontal / pi``  (isotropic sky; docs/science/atmosphere.md)
+* sky: ``intensity = k * E_diffuse_horizontal / pi``  (isotropic sky; :doc:`/science/atmosphere`)
 
 with ``k = luminous_efficacy_lm_per_w`` for ``units="lux"`` (default 98 lm/W) or ``k = 1`` for
 ``units="w_m2"`` (radiometric: renderers then treat 1 W m^-2 as "1 lux"). ``exposure`` is left 0.

@@ -36,28 +36,47 @@ log = logging.getLogger("marsscene")
 
 
 def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None = None) -> Scene:
-    """Build a Mars scene.
+    """Build a Mars scene: terrain, then craters, rocks and lighting, all from one seed.
+
+    The same ``config`` and ``seed`` give the same scene on every run (each stage draws from
+    its own stream, :func:`marsscene.seeding.stage_rng`). Nothing is written to disk: pass
+    the scene to :func:`marsscene.write_scene` for USD and MJCF, or to :func:`marsscene.drive`.
 
     Parameters
     ----------
     config : SceneConfig, optional
         Stage parameters (defaults: the bundled Gale crater DEM at 0.25 m with detail).
+        :meth:`SceneConfig.from_dict` and :meth:`SceneConfig.from_toml` take the keys of a
+        ``scene.toml``.
     seed : int
         User seed; every stage derives its own stream from it.
     dem : DEM, optional
-        An already-read DEM; overrides ``config.terrain.source``.
+        An already-read DEM (:func:`marsscene.read_dem`); overrides ``config.terrain.source``.
 
     Returns
     -------
     Scene
+        The terrain (``heightfield``, craters stamped), the ``craters`` and ``rocks`` tables
+        (None for a disabled stage), the ``lighting``, the ``config`` and ``seed``.
+
+    Raises
+    ------
+    ConfigError
+        A configuration that cannot be built (for example, more rocks than ``rocks.max_rocks``).
+    DEMReadError
+        A DEM source that cannot be read.
 
     Examples
     --------
+    A procedural 20 m x 20 m scene (0.25 m posts):
+
     >>> import marsscene as ms
     >>> cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [20, 20]}})
     >>> scene = ms.build_scene(cfg, seed=7)
     >>> scene.heightfield.shape
     (81, 81)
+    >>> len(scene.craters), len(scene.rocks)
+    (3, 265)
     """
     config = config if config is not None else SceneConfig()
     rec = BuildRecord()

@@ -5,7 +5,7 @@ et al. 2003, doi:10.1029/2002JE002035; Golombek et al. 2008, doi:10.1029/2007JE0
 
     F_k(D) = k exp(-q(k) D),   q(k) = 1.79 + 0.152 / k        (D in m, q in 1/m)
 
-A rock of diameter D covers pi D^2 / 4, so the number densities are (docs/science/rocks.md)::
+A rock of diameter D covers pi D^2 / 4, so the number densities are (:doc:`/science/rocks`)::
 
     n(D)   = 4 k q exp(-q D) / (pi D^2)                      (per m^2 per m)
     N(>D)  = (4 k q / pi) [exp(-q D) / D - q E1(q D)]        (per m^2)

@@ -4,7 +4,7 @@
 Eclipse Cyclone DDS (``pip install "marsscene[ros2]"``): the bag's topics published live (the
 same message builders and ``rosbags`` CDR bytes), ``cmd_vel`` subscribed with a time-out, reset /
 teleport / goal topics, sim time on ``/clock``, real-time pacing or as fast as it goes, and a
-localhost-only mode. Topics, QoS and how to connect ROS 2: ``docs/ros2_live.md``.
+localhost-only mode. Topics, QoS and how to connect ROS 2: :doc:`/ros2_live`.
 
 ``cyclonedds`` is imported only when a session starts (:mod:`.dds`).
 """

@@ -52,7 +52,7 @@ def _check_rate(key: str, rate_hz: float, physics_hz: float = _PHYSICS_HZ) -> No
 
 @dataclass(frozen=True, kw_only=True)
 class RoverConfig:
-    """Perseverance-class rover (see docs/runtime.md for sources of every number).
+    """Perseverance-class rover (see :doc:`/runtime` for sources of every number).
 
     Lengths in m, masses in kg, torques in N m, speeds in rad/s.
     """
@@ -234,7 +234,7 @@ class NoiseConfig:
 class CameraConfig:
     """Mast RGB-D camera rendered offscreen (``MUJOCO_GL=egl`` or ``osmesa``).
 
-    See docs/camera.md: appearance, lighting, exposure and the stereo pair.
+    See :doc:`/camera`: appearance, lighting, exposure and the stereo pair.
     """
 
     width_px: int = 640
@@ -278,6 +278,10 @@ class CameraConfig:
     """Override the sun's elevation in degrees (lighting is recomputed)."""
     sun_azimuth_deg: float | None = None
     """Override the sun's azimuth in degrees clockwise from north (lighting is recomputed)."""
+    irradiance_scale: float = 1.0
+    """Multiplies the sun's and the sky's irradiance; their directions, colours and the
+    shadows stay. With ``exposure = "fixed"`` the frames darken by this factor (a dimmer scene
+    under the same sun); the auto exposure brings them back up to its longest exposure."""
     trigger_distance_m: float | None = None
     """Capture a frame every this many metres driven (horizontal path, checked at the control
     rate) instead of at ``rate_hz``: place-recognition datasets sample space, not time."""
@@ -305,6 +309,7 @@ class CameraConfig:
             check_range("camera.sun_elevation_deg", self.sun_elevation_deg, -10.0, 90.0)
         if self.sun_azimuth_deg is not None:
             check_range("camera.sun_azimuth_deg", self.sun_azimuth_deg, -360.0, 360.0)
+        check_range("camera.irradiance_scale", self.irradiance_scale, 0.0, 1e3, lo_open=True)
         if self.trigger_distance_m is not None:
             check_range("camera.trigger_distance_m", self.trigger_distance_m, 0.01, 1e4)
         _check_rate("camera.rate_hz", self.rate_hz)
@@ -317,7 +322,7 @@ class RunConfig:
     Every rate divides the physics rate: the scene's 500 Hz (a 2 ms step), or ``physics_hz``.
     A coarser physics step is faster and stays close to the 2 ms reference: 100 Hz (10 ms) runs
     about 4x faster and drives the same route to within a few centimetres over 20 s
-    (``docs/runtime.md``, "Physics rate").
+    (:doc:`/runtime`, "Physics rate").
     """
 
     control_hz: float = 50.0
@@ -335,7 +340,7 @@ class RunConfig:
     """Physics rate (Hz); None: the scene's (``scene.xml`` timestep 2 ms, 500 Hz)."""
     soil: str | None = None
     """Deformable soil under the wheels, by name (``marsscene.rover.terramechanics.soils``:
-    slip, sinkage and their forces, ``docs/science/terramechanics.md``); None: the terrain's
+    slip, sinkage and their forces, :doc:`/science/terramechanics`); None: the terrain's
     rigid contact."""
 
     def __post_init__(self) -> None:

@@ -7,7 +7,7 @@ the rover's differential bar), four steerable corner wheels (front and rear) and
 wheels, all six driven. With steering every wheel rolls without side slip about an instantaneous
 centre on the middle-axle line, so ``cmd_vel = (v, omega)`` maps exactly to wheel speeds and
 steering angles (:func:`wheel_commands`) and turning in place (v = 0) is possible.
-Numbers and sources: ``docs/runtime.md``.
+Numbers and sources: :doc:`/runtime`.
 """
 
 from __future__ import annotations

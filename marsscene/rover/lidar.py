@@ -99,8 +99,8 @@ class LidarSpec:
 
 @dataclass(frozen=True, kw_only=True)
 class LidarConfig:
-    """A spinning 3D LiDAR by ray casting: a named ``model`` (default
-    :data:`DEFAULT_LIDAR_MODEL`) with any of its values overridden.
+    """A spinning 3D LiDAR by ray casting: a named ``model`` (default ``"os1-128"``, the
+    Ouster OS1-128; ``DEFAULT_LIDAR_MODEL``) with any of its values overridden.
 
     ``channels`` with ``vertical_fov_deg`` (or either alone, the other from the model) gives
     uniformly spaced beams; ``vertical_angles_deg`` gives them explicitly. Dust attenuates

@@ -16,7 +16,7 @@ deck pivoting about x and two vertical rods, bar to rocker, with ball joints at 
 the rod-to-rocker joints close the loops and are excluded from the articulation. Their 3 kg
 come out of the chassis, so both rovers weigh ``RoverConfig.mass_kg``
 (:func:`loop_joints`).
-Numbers and sources: ``docs/runtime.md``; the USD rover: ``docs/usd_rover.md``.
+Numbers and sources: :doc:`/runtime`; the USD rover: :doc:`/usd_rover`.
 """
 
 from __future__ import annotations

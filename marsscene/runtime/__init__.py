@@ -7,7 +7,7 @@ same function. The pieces it wires are importable for finer control: the simulat
 (:class:`Observation`, :class:`Controller`), routes, and trajectory evaluation (:func:`ate`,
 :func:`rpe`). Code lives in :mod:`marsscene.rover`, :mod:`marsscene.sensors`,
 :mod:`marsscene.sim`, :mod:`marsscene.runs` and :mod:`marsscene.runs.export`
-(``docs/architecture.md``).
+(:doc:`/architecture`).
 
 ``mujoco`` is imported only when something that simulates is used; configs, routes, TUM files
 and the evaluation are pure numpy/scipy.

@@ -28,7 +28,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.errors import RuntimeSimError
-from marsscene.sensors.camera_scene import scene_albedo_field, scene_lighting
+from marsscene.sensors.camera_scene import (
+    scaled_irradiance,
+    scene_albedo_field,
+    scene_lighting,
+)
 from marsscene.sensors.camera_shadow import shade_mesh_geoms
 from marsscene.sensors.camera_world import ALBEDO_SCALE, CameraWorld
 from marsscene.sensors.exposure import Exposure
@@ -46,7 +50,7 @@ MAX_EXPOSURE_GAIN = 100.0
 #: camera with _SHADOW_MAP_PX texels a side, 1.3 cm texels. At 1024 (3.9 cm) the rover's mast
 #: cast a saw-tooth strip at the bottom of the image (a texel is ~7 px at 3 m) and a 2 deg sun
 #: stretched texels 1 / sin(elevation) along the ground into blocky rock-shadow ends; 4096
-#: costs ~25 % more per frame on llvmpipe, 3072 ~10-15 % (docs/camera.md)
+#: costs ~25 % more per frame on llvmpipe, 3072 ~10-15 % (:doc:`/camera`)
 _SHADOW_CLIP_M = 20.0
 _SHADOW_MAP_PX = 3072
 _SKY_ZFAR_FRACTION = 0.45
@@ -65,8 +69,9 @@ class MastCamera:
         self.width, self.height = cam.width_px, cam.height_px
         self.depth = cam.depth
         self.noise_rng = rng if cam.sensor_noise else None
-        lt = scene_lighting(sim.scene_dir, tau=cam.tau, sun_elevation_deg=cam.sun_elevation_deg,
-                            sun_azimuth_deg=cam.sun_azimuth_deg)
+        lt = scaled_irradiance(
+            scene_lighting(sim.scene_dir, tau=cam.tau, sun_elevation_deg=cam.sun_elevation_deg,
+                           sun_azimuth_deg=cam.sun_azimuth_deg), cam.irradiance_scale)
         self.lighting = lt
         share = lt.direct_horizontal_w_m2 / max(lt.global_horizontal_w_m2, 1e-9)
         from marsscene.seeding import stage_rng

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["TWILIGHT_ANCHOR_DEG", "TWILIGHT_DECADE_DEG", "scene_albedo_field",
-           "scene_lighting", "scene_seed"]
+__all__ = ["TWILIGHT_ANCHOR_DEG", "TWILIGHT_DECADE_DEG", "scaled_irradiance",
+           "scene_albedo_field", "scene_lighting", "scene_seed"]
 
 #: Below this sun elevation the sky's irradiance follows the twilight model (module doc).
 TWILIGHT_ANCHOR_DEG = 1.0
@@ -72,6 +72,18 @@ def scene_lighting(
     diffuse = max(lt.diffuse_horizontal_w_m2, sky)
     return dataclasses.replace(lt, diffuse_horizontal_w_m2=diffuse,
                                global_horizontal_w_m2=lt.direct_horizontal_w_m2 + diffuse)
+
+
+def scaled_irradiance(lt: Any, scale: float) -> Any:
+    """``lt`` with the sun's and the sky's irradiance times ``scale`` (directions, colours and
+    the direct share, hence the shadows, unchanged)."""
+    if scale == 1.0:
+        return lt
+    return dataclasses.replace(
+        lt, direct_normal_w_m2=lt.direct_normal_w_m2 * scale,
+        diffuse_horizontal_w_m2=lt.diffuse_horizontal_w_m2 * scale,
+        direct_horizontal_w_m2=lt.direct_horizontal_w_m2 * scale,
+        global_horizontal_w_m2=lt.global_horizontal_w_m2 * scale)
 
 
 def scene_albedo_field(scene_dir: Any, heightfield: Any) -> Any:

@@ -13,7 +13,7 @@ Solver: ``SolverSteel`` (reduced coordinates, projected Gauss-Seidel contacts, i
 drives, loop-closing ball joints: the rover's differential). It is experimental in Newton 1.8;
 the maximal-coordinate solvers (XPBD, semi-implicit) diverge on this rover's mass ratios
 (20 kg wheels on 4 kg steering units) and Featherstone ignores loop joints. See
-``docs/usd_rover.md``.
+:doc:`/usd_rover`.
 
 Rocks: Newton's importer turns every collider prim into its own mesh (about 1 ms a prim), so
 the rock colliders (``/World/RockColliders``: an instance per obstacle rock, the smaller rocks

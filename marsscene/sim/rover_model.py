@@ -1,6 +1,6 @@
 """The Perseverance-class rover as MJCF text, written from the link table of
 :mod:`marsscene.rover.links` (the USD rover reads the same table). Numbers and sources:
-``docs/runtime.md``.
+:doc:`/runtime`.
 """
 
 from __future__ import annotations

@@ -126,6 +126,38 @@ def test_example_specs_parse() -> None:
     assert paper.scenes[0].route.center_asset == "habitat"  # the paper's route is at the base
     assert {m.align for m in paper.methods} == {"se3", "sim3"}
     assert next(m for m in quick.methods if m.kind == "opencv-mono").align == "sim3"
+    # the paper spec: one row per method of the paper, the wheel prior where the paper's
+    # stacks had odometry; the extended spec adds the prior-free rows over the same cells
+    assert [(m.kind, m.options.get("wheel_prior", False)) for m in paper.methods] == [
+        ("wheel-odometry", False), ("kiss-icp", True), ("open3d-rgbd", True),
+        ("opencv-mono", False)]
+    extended = SlamSpec.from_toml(EXAMPLES / "benchmark_slam_paper_extended.toml")
+    assert extended.methods[:4] == paper.methods and extended.scenes == paper.scenes
+    assert extended.sensors == paper.sensors and extended.tau == paper.tau
+    assert [(m.kind, m.options) for m in extended.methods[4:]] == [("kiss-icp", {}),
+                                                                  ("open3d-rgbd", {})]
+
+
+def test_extends_overrides_keys_and_methods_by_name(tmp_path: Path) -> None:
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "route.tum").write_text("0 0 0 0 0 0 0 1\n1 5 0 0 0 0 0 1\n")
+    (tmp_path / "base.toml").write_text(
+        '[benchmark]\nseeds = [3]\ntau = [0.5]\n[sensors.lidar]\n'
+        '[[scenes]]\nname = "a"\nroute = { file = "route.tum" }\n'
+        '[[methods]]\nname = "w"\nkind = "wheel-odometry"\n'
+        '[[methods]]\nname = "k"\nkind = "kiss-icp"\n')
+    (tmp_path / "sub" / "child.toml").write_text(
+        '[benchmark]\nextends = "../base.toml"\ntau = [6.0]\n'
+        '[[methods]]\nname = "k"\nkind = "kiss-icp"\noptions = { wheel_prior = true }\n'
+        '[[methods]]\nname = "k2"\nkind = "kiss-icp"\n')
+    spec = SlamSpec.from_toml(tmp_path / "sub" / "child.toml")
+    assert spec.seeds == (3,) and spec.tau == (6.0,)
+    assert [(m.name, m.options) for m in spec.methods] == [
+        ("w", {}), ("k", {"wheel_prior": True}), ("k2", {})]
+    assert spec.scenes[0].route.file == str((tmp_path / "route.tum").resolve())
+    (tmp_path / "loop.toml").write_text('[benchmark]\nextends = "loop.toml"\n')
+    with pytest.raises(ConfigError, match="at most 8 levels"):
+        SlamSpec.from_toml(tmp_path / "loop.toml")
 
 
 _OK = {"sensors": {"camera": {}}, "scenes": [{"name": "a", "route": {"shape": "loop",

@@ -4,6 +4,7 @@ and a resume that drives again only when a camera method must run on deleted ima
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -52,6 +53,10 @@ seconds = 6.0
 name = "kiss"
 kind = "kiss-icp"
 [[methods]]
+name = "kiss-wheel"
+kind = "kiss-icp"
+options = { wheel_prior = true }
+[[methods]]
 name = "truth"
 kind = "command"
 command = "cp {tum_rgbd_dir}/groundtruth.txt {out_tum}"
@@ -91,6 +96,15 @@ def test_cell_storage_and_resume(tmp_path: Path) -> None:
     assert len([ln for ln in live if not ln.startswith("#")]) == len(stamps) - 1
     row = (cell / "methods" / "kiss.json").read_text(encoding="utf-8")
     assert '"status": "ok"' in row
+    # with the wheel prior, in the same drive: its row says how many ICP steps it kept
+    primed = json.loads((cell / "methods" / "kiss-wheel.json").read_text(encoding="utf-8"))
+    kept = json.loads((drive / "benchmark_drive.json").read_text(encoding="utf-8"))[
+        "summary"]["icp_steps_kept"]["kiss-wheel"]
+    assert kept[1] == len(stamps) - 1 and 0 < kept[0] < kept[1]
+    assert f"{kept[0]} of {kept[1]} ICP steps kept" in primed["row"]["note"]
+    assert primed["row"]["tracked_fraction"] == pytest.approx(kept[0] / kept[1], abs=0.02)
+    assert "with the wheel odometry's prior" in (drive / "live" / "kiss-wheel.tum").read_text(
+        encoding="utf-8").splitlines()[0]
     # scored, the camera images are gone; what the scores need stays
     assert (drive / "images_removed.txt").is_file()
     assert not list(drive.rglob("*.png"))

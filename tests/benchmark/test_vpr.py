@@ -29,18 +29,35 @@ _TINY = {
 }
 
 
-def test_shipped_protocols_are_the_papers() -> None:
-    dust, dark = (VprSpec.from_toml(p) for p in PROTOCOLS)
+def test_shipped_protocols_are_the_papers(tmp_path: Path) -> None:
+    dust, dark, dim = (VprSpec.from_toml(p) for p in PROTOCOLS)
     assert (dust.queries.tau, dust.database.tau) == (0.05, 0.60)
     assert dark.queries.tau == dark.database.tau == 0.05
     assert dark.database.sun_elevation_deg < 5.0 < dark.queries.sun_elevation_deg
-    for spec in (dust, dark):
+    # Day/Dark's other reading: the day's sun, dimmed to a 3 deg sun's irradiance, with noise
+    assert dim.database.sun_elevation_deg == dim.queries.sun_elevation_deg == 50.0
+    assert dim.database.irradiance_of_sun_elevation_deg == dark.database.sun_elevation_deg
+    assert dim.database.exposure == "fixed" and dim.camera_config(dim.database).sensor_noise
+    from marsscene.benchmark.vpr.dataset import irradiance_scale
+    from marsscene.lighting import LightingConfig, compute_lighting
+
+    def ghi(el: float) -> float:  # no manifest: the lighting's defaults at that sun
+        return compute_lighting(LightingConfig(tau=0.05, sun_azimuth_deg=135.0,
+                                               sun_elevation_deg=el),
+                                lat_deg=0.0, lon_east_deg=0.0).global_horizontal_w_m2
+    scale = irradiance_scale(dim.database, tmp_path)
+    assert scale == pytest.approx(ghi(3.0) / ghi(50.0), rel=1e-9) and 0.02 < scale < 0.2
+    assert irradiance_scale(dim.queries, tmp_path) == 1.0
+    with pytest.raises(ConfigError, match=r"day-low-sun .* or day-dim") as err:
+        VprSpec.from_toml("day-dark")  # the former name says what to type
+    assert "\n" not in str(err.value)
+    for spec in (dust, dark, dim):
         assert spec.spacing_m == 0.1 and spec.radius_m == 2.0
         assert spec.scene.preset == "mars-base"
         cam = spec.camera_config(spec.database)
         assert cam.trigger_distance_m == 0.1 and not cam.depth
     assert dust.with_length(40.0).scene.route.length_m == 40.0
-    for spec in (dust, dark):  # the Mars Base route passes the habitat (issue 36)
+    for spec in (dust, dark, dim):  # the Mars Base route passes the habitat (issue 36)
         assert spec.scene.route.center_asset == spec.landmark_name == "habitat"
         assert spec.scene.route.shape == "out-and-back" and spec.scene.route.width_m >= 20.0
 

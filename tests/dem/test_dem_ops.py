@@ -157,6 +157,19 @@ def test_fill_nodata_reproduces_a_plane() -> None:
     np.testing.assert_allclose(filled.elevation_m, dem.elevation_m, atol=2e-3)
 
 
+def test_fill_warning_points_at_the_callers_line() -> None:
+    # filled deep inside a build, the warning names the user's line, not marsscene's own file
+    from marsscene.terrain.config import TerrainConfig
+    from marsscene.terrain.from_dem import prepare_dem
+
+    dem = plane_dem()
+    z = np.array(dem.elevation_m)
+    z[20:35, 30:50] = np.nan
+    with pytest.warns(NodataFilledWarning) as record:
+        prepare_dem(dem.replace(elevation_m=z), TerrainConfig(), default_post_m=None)
+    assert [w.filename for w in record] == [__file__]
+
+
 def test_mostly_missing_crop_is_refused() -> None:
     z = np.full((20, 20), np.nan, np.float32)
     z[:5] = 1.0

@@ -2,8 +2,10 @@
 
 The site is served from a loopback HTTP server (127.0.0.1, an ephemeral port) and read by
 Debian's ``chromium`` through ``chromium-driver`` and Selenium; nothing else is contacted. The
-test asserts that the start page, an API page and a gallery page render with their images, and
-that the search page finds "Golombek". ``MARSSCENE_SITE_SHOTS=DIR`` also saves screenshots.
+test asserts that the start page, an API page and a gallery page render with their images, that
+the gallery's cards show their thumbnails and .ipynb downloads, that the live ROS 2 page's topic
+tables fit a 1280 px window, and that the search page finds "Golombek".
+``MARSSCENE_SITE_SHOTS=DIR`` also saves screenshots.
 """
 
 from __future__ import annotations
@@ -127,6 +129,29 @@ def test_gallery_pages_render_their_figures(browser: Any, base_url: str) -> None
     _assert_images_render(browser, 3)
     _open(browser, f"{base_url}/getting_started.html", "getting_started")
     _assert_images_render(browser, 2)
+
+
+def test_gallery_cards_have_thumbnails_and_downloads(browser: Any, base_url: str) -> None:
+    _open(browser, f"{base_url}/gallery.html", "gallery_cards")
+    thumbs = browser.find_elements("css selector", "article .sd-card img.gallery-thumb")
+    assert len(thumbs) >= 11
+    _assert_images_render(browser, 11)
+    downloads = browser.find_elements("css selector", "article .sd-card a.download")
+    assert len(downloads) == len(thumbs)
+    assert all(a.get_attribute("href").endswith(".ipynb") for a in downloads)
+
+
+def test_ros2_topic_tables_fit_at_1280_px(browser: Any, base_url: str) -> None:
+    browser.set_window_size(1280, 1000)
+    try:
+        _open(browser, f"{base_url}/ros2_live.html", "ros2_live_1280")
+        widths = browser.execute_script(
+            "return Array.from(document.querySelectorAll('#topics table'))"
+            ".map(t => [t.scrollWidth, t.clientWidth]);")
+    finally:
+        browser.set_window_size(1400, 1000)
+    assert len(widths) >= 2
+    assert all(scroll <= client + 1 for scroll, client in widths), widths
 
 
 def test_search_finds_golombek(browser: Any, base_url: str) -> None:

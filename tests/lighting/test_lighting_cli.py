@@ -13,7 +13,8 @@ from marsscene.lighting import mars_sun_position
 
 
 def test_sun_text_and_json(runner: CliRunner) -> None:
-    args = ["sun", "--lat", "18.44", "--lon", "77.45", "--utc", "2021-02-18T20:55Z"]
+    args = ["sun", "--site-lat-deg", "18.44", "--site-lon-east-deg", "77.45",
+            "--utc", "2021-02-18T20:55Z"]
     res = runner.invoke(main, args)
     assert res.exit_code == 0, res.output
     assert "azimuth 258.72" in res.output and "elevation 37.02" in res.output
@@ -29,8 +30,8 @@ def test_sun_text_and_json(runner: CliRunner) -> None:
 
 
 def test_sun_mars_local_time(runner: CliRunner) -> None:
-    res = runner.invoke(main, ["sun", "--lat", "0", "--lon", "0", "--mars-year", "36", "--ls",
-                               "90", "--ltst", "12", "--json"])
+    res = runner.invoke(main, ["sun", "--site-lat-deg", "0", "--site-lon-east-deg", "0",
+                               "--mars-year", "36", "--ls-deg", "90", "--ltst-h", "12", "--json"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.output)["ltst_h"] == pytest.approx(12.0, abs=1e-6)
 
@@ -41,14 +42,16 @@ def test_sun_mars_local_time(runner: CliRunner) -> None:
     ([], 2, "--utc"),
 ])
 def test_sun_errors(runner: CliRunner, args: list[str], code: int, text: str) -> None:
-    res = runner.invoke(main, ["sun", "--lat", "18.44", "--lon", "77.45", *args])
+    res = runner.invoke(main, ["sun", "--site-lat-deg", "18.44", "--site-lon-east-deg", "77.45",
+                               *args])
     assert res.exit_code == code
     assert text in res.output
 
 
 def test_sun_bad_latitude(runner: CliRunner) -> None:
-    res = runner.invoke(main, ["sun", "--lat", "95", "--lon", "0", "--utc", "2021-02-18T20:55Z"])
-    assert res.exit_code == 2 and "--lat" in res.output
+    res = runner.invoke(main, ["sun", "--site-lat-deg", "95", "--site-lon-east-deg", "0",
+                               "--utc", "2021-02-18T20:55Z"])
+    assert res.exit_code == 2 and "--site-lat-deg" in res.output
 
 
 def test_build_with_explicit_sun_and_tau(runner: CliRunner, tmp_path: Path) -> None:

@@ -203,6 +203,31 @@ def test_fixed_exposure_at_twilight_is_dark_and_unbanded(low_sun_scene) -> None:
     assert len(np.unique(ground)) > 20  # many codes on the ground, not a few bands
 
 
+def test_irradiance_scale_dims_a_fixed_exposure_and_keeps_the_shadows(low_sun_scene) -> None:
+    """``irradiance_scale`` (the VPR ``day-dim`` database): the same sun and shadows, every
+    pixel's linear value times the factor under a fixed exposure."""
+    from marsscene.sensors.exposure import srgb_encode
+
+    decode = np.interp(np.arange(256) / 255.0, srgb_encode(np.linspace(0, 1, 4097)),
+                       np.linspace(0, 1, 4097))  # 8-bit sRGB code -> linear
+    linear = {}
+    for scale in (1.0, 0.25):
+        run = RunConfig(camera=CameraConfig(**_SIZE, sun_elevation_deg=20.0, exposure="fixed",
+                                            irradiance_scale=scale))
+        sim = RoverSim(low_sun_scene, run=run, start_xy_m=_VIEWS[1][0],
+                       start_yaw_rad=_VIEWS[1][1], settle_s=0.2)
+        cam = _renderer(sim)
+        linear[scale] = decode[sim.render(cam)[0][70:]]  # the ground
+        assert cam.lighting.sun_elevation_deg == 20.0
+        cam.close()
+    bright, dim = linear[1.0], linear[0.25]
+    usable = (bright > 0.05) & (bright < 0.95)  # above 8-bit quantisation, not clipped
+    assert usable.mean() > 0.5
+    ratio = dim[usable] / bright[usable]
+    assert abs(np.median(ratio) - 0.25) < 0.01
+    assert np.percentile(np.abs(ratio - 0.25), 90) < 0.02  # shadows and shading unchanged
+
+
 def test_shadowed_normals_carry_the_visibility() -> None:
     """Normals turned for the terrain's shadows (terrain, rock vertices): ``n' . s = v n . s``."""
     from marsscene.sensors.camera_shadow import shadowed_normals

@@ -36,6 +36,14 @@ def test_models_follow_their_datasheets():
     assert LidarConfig().spec.model == "os1-128"  # KISS-ICP tracks the paper-style drive
 
 
+
+def test_the_documented_default_model_is_the_default():
+    # the class docstring names the default literally, so the API page shows it
+    from marsscene.rover.lidar import DEFAULT_LIDAR_MODEL
+
+    assert LidarConfig().model == DEFAULT_LIDAR_MODEL
+    assert f'``"{DEFAULT_LIDAR_MODEL}"``' in (LidarConfig.__doc__ or "")
+
 def test_rings_are_beams_sorted_by_elevation():
     s = LidarConfig(model="vlp16").spec
     ring = s.rings()

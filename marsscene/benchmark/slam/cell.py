@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from marsscene._atomic import replacing_dir, write_atomic
-from marsscene.benchmark.slam.methods import CellData, estimate
+from marsscene.benchmark.slam.methods import DRIVE_FILE, CellData, estimate
 from marsscene.benchmark.slam.metrics import failed_score, score_estimate
 from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
 from marsscene.errors import MarsSceneError
@@ -43,7 +43,6 @@ from marsscene.sweep.grid import Cell
 __all__ = ["DRIVE_FILE", "run_slam_cell"]
 
 log = logging.getLogger("marsscene")
-DRIVE_FILE = "benchmark_drive.json"
 IMAGES_REMOVED = "images_removed.txt"  # in drive/: the camera images were deleted after scoring
 
 
@@ -108,13 +107,15 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     if done is not None and done.get("key") == key:
         return dict(done["summary"])
     import marsscene as ms
-    from marsscene.benchmark.slam.kiss_icp import LiveKissIcp
+    from marsscene.benchmark.slam.kiss_icp import LiveKissIcp, lidar_mount
+    from marsscene.rover.config import RoverConfig
     from marsscene.runs.tum import write_tum
 
     # every sensor with [sensors] bag = true, else the LiDAR alone (a command reading {bag_dir})
     bag_options = ms.BagOptions(sensors=None if spec.sensors.get("bag") else ("lidar",)) \
         if bag else None
-    odometry = {m.name: LiveKissIcp() for m in live}
+    mount = lidar_mount(RoverConfig())  # the rover every drive runs
+    odometry = {m.name: LiveKissIcp(lidar_mount=mount, **m.options) for m in live}
     with replacing_dir(final) as tmp:
         t0 = time.perf_counter()
         drv = ms.drive(
@@ -128,11 +129,14 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
         for name, odo in odometry.items():
             traj = odo.trajectory()
             if traj is not None:
+                prior = " with the wheel odometry's prior" if odo.wheel_prior else ""
                 write_tum(tmp / "live" / f"{name}.tum", traj,
-                          header=f"{name}: KISS-ICP fed each scan during the drive")
+                          header=f"{name}: KISS-ICP fed each scan during the drive{prior}")
         summary = {"route_m": round(drv.route.length_m, 3) if drv.route else None,
                    "t_drive_s": time.perf_counter() - t0 - drv.export_s,
                    "t_live_s": {n: round(o.seconds, 3) for n, o in odometry.items()},
+                   "icp_steps_kept": {n: [o.icp_steps_kept, len(o.poses)]
+                                      for n, o in odometry.items() if o.wheel_prior},
                    **{k: drv.summary.get(k) for k in ("path_length_m", "sim_time_s",
                                                       "goal_reached", "cross_track_rms_m")}}
         _write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
@@ -197,8 +201,9 @@ def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_key: str
                 frames_total=data.frames(str(method.sensor)), frames_tracked=est.frames_tracked,
                 min_tracked_fraction=spec.min_tracked_fraction,
                 rpe_distance_m=spec.rpe_distance_m)
-            if est.note and not score.note:
-                score = dataclasses.replace(score, note=est.note)
+            if est.note:  # after the score's own (e.g. the tracked fraction)
+                score = dataclasses.replace(score, note="; ".join(filter(None, (
+                    score.note, est.note))))
     except MarsSceneError as err:
         score = failed_score("failed", f"{type(err).__name__}: {err}", align=str(method.align))
     row = {"method": method.name, "kind": method.kind, **score.as_row(),

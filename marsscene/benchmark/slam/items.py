@@ -26,7 +26,8 @@ _SENSOR_OF = {"wheel-odometry": "none", "kiss-icp": "lidar", "open3d-rgbd": "cam
 _OPTIONS_OF = {"open3d-rgbd": ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
                                "max_step_dev_deg", "decimate"),
                "opencv-mono": ("max_corners", "min_parallax_px", "min_inliers"),
-               "wheel-odometry": (), "kiss-icp": ()}
+               "wheel-odometry": (),
+               "kiss-icp": ("wheel_prior", "max_step_dev_m", "max_step_dev_deg")}
 
 
 @dataclass(frozen=True, kw_only=True)

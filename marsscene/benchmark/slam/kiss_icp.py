@@ -4,7 +4,15 @@
 user would (``kiss_icp_pipeline --topic /rover/lidar/points RUN/bag``, default configuration
 unless ``config`` is given) and reads the TUM trajectory it writes; :class:`LiveKissIcp` is the
 same odometry (KISS-ICP's own ``KissICP`` class, the pipeline's configuration) fed each scan as a
-drive makes it, so a benchmark needs no copy of the LiDAR stream on disk; :func:`lidar_ground_truth`
+drive makes it, so a benchmark needs no copy of the LiDAR stream on disk. With ``wheel_prior``
+it is LiDAR odometry with an odometry prior, as MOLA runs on a wheeled robot (Blanco-Claraco
+2024, MOLA, arXiv:2407.20465): before each scan, KISS-ICP's constant-velocity prediction (the
+pose step that deskews the scan and seeds the ICP) is replaced by the wheel odometry's step
+since the previous scan, moved to the LiDAR frame, and an ICP step that departs from it by
+more than ``max_step_dev_m`` or ``max_step_dev_deg`` is replaced by it (the gate of the
+RGB-D row's wheel prior, :mod:`.rgbd_odometry`): a standing start's ground rings, which
+KISS-ICP alone locks onto and slides along, no longer move the estimate.
+:func:`lidar_ground_truth`
 is the run's ground truth moved to the ``lidar_link`` frame, the frame KISS-ICP estimates;
 :func:`score_lidar_odometry` aligns one to the other (Umeyama, SE(3)) and reports ATE and the
 estimated path length. A run that fails (no output, too few poses) is a result, not a crash.
@@ -30,8 +38,8 @@ from marsscene.runs.evaluation import ate
 from marsscene.runs.runlog import RunLog
 from marsscene.runs.tum import Trajectory, read_tum
 
-__all__ = ["LidarOdometryScore", "LiveKissIcp", "lidar_ground_truth", "run_kiss_icp",
-           "score_lidar_odometry"]
+__all__ = ["LidarOdometryScore", "LiveKissIcp", "lidar_ground_truth", "lidar_mount",
+           "run_kiss_icp", "score_lidar_odometry"]
 
 KISS_ICP_CITATION = ("Vizzo, Guadagnino, Mersch, Wiesmann, Behley, Stachniss 2023, KISS-ICP, "
                      "IEEE RA-L 8(2), doi:10.1109/LRA.2023.3236571")
@@ -86,10 +94,14 @@ class LiveKissIcp:
     configuration ``kiss_icp_pipeline`` uses (``config``, else KISS-ICP's defaults).
 
     :meth:`trajectory` is the estimate (lidar frame, first pose the identity), what
-    :func:`run_kiss_icp` gives on the bag of the same drive.
+    :func:`run_kiss_icp` gives on the bag of the same drive. With ``wheel_prior`` it also
+    listens to the control steps and predicts each scan's pose step from the wheel odometry
+    (``lidar_mount``: :func:`lidar_mount` of the rover) instead of KISS-ICP's constant velocity.
     """
 
-    def __init__(self, config: str | Path | None = None) -> None:
+    def __init__(self, config: str | Path | None = None, *, wheel_prior: bool = False,
+                 lidar_mount: np.ndarray | None = None, max_step_dev_m: float = 0.05,
+                 max_step_dev_deg: float = 1.0) -> None:
         try:
             from kiss_icp.config import load_config
             from kiss_icp.kiss_icp import KissICP
@@ -100,6 +112,34 @@ class LiveKissIcp:
         self.stamps_s: list[float] = []
         self.poses: list[np.ndarray] = []
         self.seconds = 0.0  #: wall time spent registering scans
+        self.wheel_prior = wheel_prior
+        #: ``lidar_link`` in ``base_link`` (4 x 4); the wheel prior needs it
+        self.lidar_mount = np.eye(4) if lidar_mount is None else np.asarray(lidar_mount, float)
+        self._odom: list[tuple[float, np.ndarray]] = []  # (t, lidar pose by wheel odometry)
+        self._previous_wheel: np.ndarray | None = None
+        self.max_step_dev = (float(max_step_dev_m), float(max_step_dev_deg))
+        self.icp_steps_kept = 0  #: scans whose ICP step passed the wheel prior's gate
+
+    def control(self, t: float, v: float, w: float, rates: Any, steer: Any,
+                gt: tuple[Any, Any], odom: tuple[Any, Any]) -> None:
+        """Keep the wheel odometry's pose of each control step (for ``wheel_prior``)."""
+        if not self.wheel_prior:
+            return
+        from scipy.spatial.transform import Rotation
+
+        xyz, wxyz = odom
+        pose = np.eye(4)
+        pose[:3, :3] = Rotation.from_quat(np.asarray(wxyz, float)[[1, 2, 3, 0]]).as_matrix()
+        pose[:3, 3] = xyz
+        self._odom.append((float(t), pose @ self.lidar_mount))
+
+    def _wheel_pose(self, t: float) -> np.ndarray | None:
+        """The odometry's LiDAR pose at the last control step at or before ``t``."""
+        at = [i for i, (s, _) in enumerate(self._odom) if s <= t + 1e-9]
+        if not at:
+            return None
+        self._odom = self._odom[at[-1]:]  # the next scan is later
+        return self._odom[0][1]
 
     def lidar(self, t: float, index: int, scan: dict[str, Any]) -> None:
         from marsscene.runs.logs import scan_record
@@ -107,10 +147,44 @@ class LiveKissIcp:
         t0 = time.perf_counter()
         rec = scan_record(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"])
         xyz = np.column_stack([rec["x"], rec["y"], rec["z"]]).astype(np.float64)
-        self.odometry.register_frame(xyz, rec["t"].astype(np.float64))
+        if self.wheel_prior:
+            wheel = self._wheel_pose(t)
+            step = None
+            if wheel is not None and self._previous_wheel is not None:
+                step = np.linalg.inv(self._previous_wheel) @ wheel
+            self._previous_wheel = wheel if wheel is not None else self._previous_wheel
+            self._register_with_prior(xyz, rec["t"].astype(np.float64), step)
+        else:
+            self.odometry.register_frame(xyz, rec["t"].astype(np.float64))
         self.seconds += time.perf_counter() - t0
         self.stamps_s.append(float(t))
         self.poses.append(np.array(self.odometry.last_pose, dtype=np.float64))
+
+    def _register_with_prior(self, xyz: np.ndarray, stamps: np.ndarray,
+                             step: np.ndarray | None) -> None:
+        """``KissICP.register_frame`` with the wheel step as its prediction, and the gate."""
+        from marsscene.benchmark.slam.rgbd_odometry import step_deviation
+
+        kiss = self.odometry
+        if step is not None:
+            kiss.last_delta = step
+        frame = kiss.preprocessor.preprocess(xyz, stamps, kiss.last_delta)
+        source, frame_downsample = kiss.voxelize(frame)
+        sigma = kiss.adaptive_threshold.get_threshold()
+        guess = kiss.last_pose @ kiss.last_delta
+        pose = kiss.registration.align_points_to_map(
+            points=source, voxel_map=kiss.local_map, initial_guess=guess,
+            max_correspondance_distance=3 * sigma, kernel=sigma)
+        if step is not None:
+            dev_m, dev_deg = step_deviation(kiss.last_delta, np.linalg.inv(kiss.last_pose) @ pose)
+            if dev_m > self.max_step_dev[0] or dev_deg > self.max_step_dev[1]:
+                pose = guess
+            else:
+                self.icp_steps_kept += 1
+        kiss.adaptive_threshold.update_model_deviation(np.linalg.inv(guess) @ pose)
+        kiss.local_map.update(frame_downsample, pose)
+        kiss.last_delta = np.linalg.inv(kiss.last_pose) @ pose
+        kiss.last_pose = pose
 
     def trajectory(self) -> Trajectory | None:
         """The estimate so far (None before the first scan)."""
@@ -121,6 +195,17 @@ class LiveKissIcp:
         poses = np.stack(self.poses)
         return Trajectory(np.asarray(self.stamps_s), poses[:, :3, 3],
                           Rotation.from_matrix(poses[:, :3, :3]).as_quat())
+
+
+def lidar_mount(rover: Any) -> np.ndarray:
+    """``lidar_link`` in ``base_link`` (4 x 4) for a :class:`~marsscene.rover.RoverConfig`."""
+    from scipy.spatial.transform import Rotation
+
+    (mx, my, mz), pitch = sensor_mounts(rover)["lidar"]
+    mount = np.eye(4)
+    mount[:3, :3] = Rotation.from_euler("y", pitch).as_matrix()
+    mount[:3, 3] = (mx, my, mz)
+    return mount
 
 
 def lidar_ground_truth(run: RunLog) -> Trajectory:

@@ -6,7 +6,9 @@ kind               estimate                                                    f
 =================  ==========================================================  ======  =====
 wheel-odometry     the run's ``odom.tum`` (wheel odometry + IMU yaw)           base    SE(3)
 kiss-icp           KISS-ICP fed each scan during the drive (``drive/live/``;     lidar   SE(3)
-                   on the run's ROS 2 bag in a benchmark folder made before)
+                   on the run's ROS 2 bag in a benchmark folder made before;
+                   ``wheel_prior``: each scan's step predicted by the wheel
+                   odometry, :class:`.kiss_icp.LiveKissIcp`)
 open3d-rgbd        Open3D ``compute_rgbd_odometry``, frame to frame (hybrid;   camera  SE(3)
                    ``wheel_prior``: the wheel odometry as guess and fallback,
                    :mod:`.rgbd_odometry`)
@@ -35,7 +37,10 @@ from marsscene.errors import MarsSceneError, MissingDependencyError
 from marsscene.runs.runlog import RunLog, read_image
 from marsscene.runs.tum import Trajectory, read_tum
 
-__all__ = ["CellData", "Estimate", "estimate"]
+__all__ = ["DRIVE_FILE", "CellData", "Estimate", "estimate"]
+
+#: In a cell's ``drive/``: the drive's key and summary (live methods' counts included).
+DRIVE_FILE = "benchmark_drive.json"
 
 
 @dataclass(frozen=True)
@@ -141,7 +146,17 @@ def _opencv_mono(cell: CellData, method: MethodSpec) -> Estimate:
 def _kiss_icp(cell: CellData, method: MethodSpec) -> Estimate:
     live = cell.run_dir / "live" / f"{method.name}.tum"
     if live.is_file():
-        return Estimate(read_tum(live))
+        if not method.options.get("wheel_prior"):
+            return Estimate(read_tum(live))
+        import json
+
+        summary = json.loads((cell.run_dir / DRIVE_FILE).read_text(encoding="utf-8"))["summary"]
+        kept, scans = summary["icp_steps_kept"][method.name]
+        return Estimate(read_tum(live), frames_tracked=int(kept),
+                        note=f"{kept} of {scans} ICP steps kept, the others the wheel odometry's")
+    if method.options.get("wheel_prior"):
+        return Estimate(None, status="failed", note="no live KISS-ICP estimate (the wheel "
+                        "prior runs during the drive)")
     if not (cell.run_dir / "bag").is_dir():
         return Estimate(None, status="failed", note="no live KISS-ICP estimate and no bag")
     from marsscene.benchmark.slam.kiss_icp import run_kiss_icp

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from marsscene.errors import RuntimeSimError, missing_dependency
 from marsscene.runs.runlog import RunLog, read_image
 
-__all__ = ["RgbdOdometry", "rgbd_odometry", "wheel_camera_steps"]
+__all__ = ["RgbdOdometry", "rgbd_odometry", "step_deviation", "wheel_camera_steps"]
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ def wheel_camera_steps(run_dir: Path, stamps_s: NDArray[np.float64]) -> NDArray[
     return np.linalg.inv(cam[:-1]) @ cam[1:]
 
 
-def _step_deviation(a: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[float, float]:
+def step_deviation(a: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[float, float]:
     """Translation (m) and rotation (deg) between two rigid steps."""
     d = np.linalg.inv(a) @ b
     cos = np.clip((np.trace(d[:3, :3]) - 1.0) / 2.0, -1.0, 1.0)
@@ -164,7 +164,7 @@ def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
         if kept:
             seen = np.linalg.inv(np.asarray(trans, dtype=np.float64))
             if prior is not None:
-                dev_m, dev_deg = _step_deviation(prior[k], seen)
+                dev_m, dev_deg = step_deviation(prior[k], seen)
                 kept = dev_m <= max_step_dev_m and dev_deg <= max_step_dev_deg
             if kept:
                 step = seen

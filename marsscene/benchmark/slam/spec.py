@@ -3,6 +3,7 @@
 ::
 
     [benchmark]
+    extends = "paper.toml"          # optional: this file's tables over another spec's
     seeds = [7]                     # scene seeds (one cell per scene x tau x seed)
     tau = [0.5, 6.0]                # dust optical depths of the camera runs
     lidar_tau = 0.5                 # the one tau whose cell also logs the LiDAR (default: first)
@@ -75,8 +76,7 @@ class SlamSpec:
         """Read and check a benchmark TOML (relative config / route paths resolve against
         it)."""
         p = Path(path)
-        return _spec_from_dict(load_toml(p, what="benchmark spec"),
-                               base_dir=p.parent.resolve(), source=str(p))
+        return _spec_from_dict(_load_extended(p), base_dir=p.parent.resolve(), source=str(p))
 
     def __post_init__(self) -> None:
         if not self.scenes:
@@ -182,6 +182,39 @@ class SlamSpec:
     def needs_bag(self) -> bool:
         """A method reads the cell's bag (KISS-ICP runs during the drive and needs none)."""
         return any(m.kind == "command" and "{bag_dir}" in str(m.command) for m in self.methods)
+
+
+def _load_extended(path: Path, depth: int = 0) -> dict[str, Any]:
+    """A spec TOML merged over the one its ``benchmark.extends`` names (relative to it):
+    ``[benchmark]`` and ``[sensors]`` keys override, ``[[scenes]]`` replace the base's when
+    given, ``[[methods]]`` replace the base's of the same name and add the others."""
+    data = load_toml(path, what="benchmark spec")
+    base_name = _table(data, "benchmark").get("extends")
+    if base_name is None:
+        return data
+    if not isinstance(base_name, str) or depth > 8:
+        raise ConfigError(f"{path}: benchmark.extends = {base_name!r}; need a spec file name "
+                          "(at most 8 levels)")
+    base_path = (path.parent / base_name).resolve()
+    if not base_path.is_file():
+        raise ConfigError(f"{path}: benchmark.extends: no spec at {base_path}")
+    base = _load_extended(base_path, depth + 1)
+    for raw in base.get("scenes") or ():  # the base's relative paths stay relative to it
+        if isinstance(raw, dict) and isinstance(raw.get("config"), str):
+            raw["config"] = str((base_path.parent / raw["config"]).resolve())
+        route = raw.get("route") if isinstance(raw, dict) else None
+        if isinstance(route, dict) and isinstance(route.get("file"), str):
+            route["file"] = str((base_path.parent / route["file"]).resolve())
+    out = dict(base)
+    for key in ("benchmark", "sensors"):
+        out[key] = {**_table(base, key), **_table(data, key)}
+    out["benchmark"].pop("extends", None)
+    if "scenes" in data:
+        out["scenes"] = data["scenes"]
+    mine = {m.get("name"): m for m in data.get("methods") or () if isinstance(m, dict)}
+    out["methods"] = [mine.pop(m.get("name"), m) if isinstance(m, dict) else m
+                      for m in base.get("methods") or ()] + list(mine.values())
+    return out
 
 
 def _table(data: Any, key: str) -> dict[str, Any]:

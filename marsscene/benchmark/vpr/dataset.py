@@ -38,7 +38,7 @@ from marsscene._atomic import replacing_dir, write_atomic
 from marsscene.benchmark.vpr.spec import SPLITS, TraversalSpec, VprSpec
 from marsscene.errors import RuntimeSimError
 
-__all__ = ["generate_vpr", "image_name", "offset_route"]
+__all__ = ["generate_vpr", "image_name", "irradiance_scale", "offset_route"]
 
 log = logging.getLogger(__name__)
 
@@ -93,6 +93,21 @@ def _route(spec: VprSpec, scene_dir: Path) -> Any:
     return auto_route(centred_on_asset(r, scene_dir), world.heightfield, world.obstacles)
 
 
+def irradiance_scale(lighting: TraversalSpec, scene_dir: Path) -> float:
+    """Global horizontal irradiance of the sun at ``irradiance_of_sun_elevation_deg`` over
+    that of the traversal's own sun (1 without it), on the scene's site and ``tau``."""
+    if lighting.irradiance_of_sun_elevation_deg is None:
+        return 1.0
+    from marsscene.sensors.camera_scene import scene_lighting
+
+    def ghi(el: float) -> float:
+        return float(scene_lighting(scene_dir, tau=lighting.tau, sun_elevation_deg=el,
+                                    sun_azimuth_deg=lighting.sun_azimuth_deg
+                                    ).global_horizontal_w_m2)
+
+    return ghi(lighting.irradiance_of_sun_elevation_deg) / ghi(lighting.sun_elevation_deg)
+
+
 def _traverse(spec: VprSpec, split: str, lighting: TraversalSpec, scene_dir: Path, route: Any,
               offset_m: float, lookahead_m: float, run_dir: Path,
               progress: Callable[[Any], None] | None) -> None:
@@ -100,8 +115,9 @@ def _traverse(spec: VprSpec, split: str, lighting: TraversalSpec, scene_dir: Pat
     from marsscene.sim.pursuit import PursuitConfig
     from marsscene.sim.route import Route
 
+    camera = spec.camera_config(lighting, irradiance_scale(lighting, scene_dir))
     ms.drive(scene_dir, route=Route(offset_route(route.xy_m, offset_m)),
-             config=ms.RunConfig(camera=spec.camera_config(lighting)),
+             config=ms.RunConfig(camera=camera),
              options=ms.DriveOptions(pursuit=PursuitConfig(lookahead_m=lookahead_m)),
              out_dir=run_dir, seed=spec.seed + 1000 * SPLITS.index(split), progress=progress)
 
@@ -254,8 +270,11 @@ def generate_vpr(spec: VprSpec, out_dir: str | Path, *, overwrite: bool = False,
         with open(out / "traversals" / split / "poses.csv", encoding="utf-8") as fh:
             split_rows = list(csv.reader(fh))[1:]
         rows += split_rows
+        lighting = getattr(spec, split)
         doc["traversals"][split] = {"offset_m": round(draws[split][0], 6),
                                     "lookahead_m": round(draws[split][1], 6),
+                                    "irradiance_scale": round(irradiance_scale(lighting,
+                                                                               scene_dir), 6),
                                     "frames": len(split_rows), **asdict(getattr(spec, split))}
     if spec.landmark_name:
         doc["landmark"] = _landmark(spec.landmark_name, scene_dir, out, rows,

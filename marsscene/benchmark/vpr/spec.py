@@ -1,11 +1,12 @@
 """``VprSpec``: a visual place-recognition dataset spec (TOML) parsed and checked (pure).
 
 Two traversals of one route, a *database* and a *queries* one, each under its own dust optical
-depth and sun elevation, with a frame every ``spacing_m`` metres driven. The two shipped
+depth and sun elevation, with a frame every ``spacing_m`` metres driven. The three shipped
 protocols of the MarsLab paper (Mars Base route, frames every 0.1 m, 2 m positive radius)::
 
     marsscene benchmark vpr dust --out vpr_dust          # tau 0.05 queries vs tau 0.60 database
-    marsscene benchmark vpr day-dark --out vpr_daydark   # day queries vs a dark database
+    marsscene benchmark vpr day-low-sun --out vpr_lowsun # day queries vs a 3 deg sun's database
+    marsscene benchmark vpr day-dim --out vpr_dim        # day queries vs the day's sun, dimmed
 
 A spec file::
 
@@ -51,7 +52,10 @@ from marsscene.rover.config import CameraConfig
 __all__ = ["PROTOCOLS", "TraversalSpec", "VprSpec"]
 
 #: Shipped protocols (``marsscene/benchmark/vpr/data/vpr_<name>.toml``).
-PROTOCOLS = ("dust", "day-dark")
+PROTOCOLS = ("dust", "day-low-sun", "day-dim")
+#: Former protocol names, and what to type instead.
+RENAMED = {"day-dark": "the paper's Day/Dark has two readings: day-low-sun (a 3 deg sun, its "
+                       "light and long shadows) or day-dim (the day's sun at dusk's light)"}
 SPLITS = ("database", "queries")
 
 
@@ -64,10 +68,17 @@ class TraversalSpec:
     sun_azimuth_deg: float | None = None
     exposure: str = "auto"
     """``auto`` (frames exposed for a mean of 0.45) or ``fixed`` (a dark frame stays dark)."""
+    irradiance_of_sun_elevation_deg: float | None = None
+    """Light the scene with the sun's and sky's irradiance of a sun at this elevation (same
+    tau), while the sun keeps ``sun_elevation_deg``'s direction and shadows (the camera's
+    ``irradiance_scale``); None: its own."""
 
     def __post_init__(self) -> None:
         check_range("tau", self.tau, 0.0, 10.0)
         check_range("sun_elevation_deg", self.sun_elevation_deg, -10.0, 90.0)
+        if self.irradiance_of_sun_elevation_deg is not None:
+            check_range("irradiance_of_sun_elevation_deg", self.irradiance_of_sun_elevation_deg,
+                        -10.0, 90.0)
         if self.exposure not in ("auto", "fixed"):
             raise ConfigError(f"exposure = {self.exposure!r}; expected auto or fixed")
 
@@ -106,13 +117,15 @@ class VprSpec:
         check_range("vpr.jpeg_quality", self.jpeg_quality, 1, 100)
         self.camera_config(self.database)  # a bad [camera] key fails here, before any drive
 
-    def camera_config(self, lighting: TraversalSpec) -> CameraConfig:
+    def camera_config(self, lighting: TraversalSpec, irradiance_scale: float = 1.0
+                      ) -> CameraConfig:
         """The camera of one traversal: ``[camera]`` plus its lighting, distance-triggered,
-        no depth."""
+        no depth (``irradiance_scale``: the scene's, :func:`.dataset.irradiance_scale`)."""
         cam = dataclass_from_mapping(CameraConfig, self.camera, "camera")
         return replace(cam, depth=False, stereo=False, trigger_distance_m=self.spacing_m,
                        tau=lighting.tau, sun_elevation_deg=lighting.sun_elevation_deg,
-                       sun_azimuth_deg=lighting.sun_azimuth_deg, exposure=lighting.exposure)
+                       sun_azimuth_deg=lighting.sun_azimuth_deg, exposure=lighting.exposure,
+                       irradiance_scale=irradiance_scale)
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], *, base_dir: Path | None = None,
@@ -123,8 +136,10 @@ class VprSpec:
 
     @classmethod
     def from_toml(cls, name_or_path: str | Path) -> VprSpec:
-        """A spec TOML file, or a shipped protocol by name (``dust``, ``day-dark``)."""
+        """A spec TOML file, or a shipped protocol by name (:data:`PROTOCOLS`)."""
         p = Path(name_or_path)
+        if str(name_or_path) in RENAMED and not p.exists():
+            raise ConfigError(f"VPR protocol {name_or_path!r}: {RENAMED[str(name_or_path)]}")
         if str(name_or_path) in PROTOCOLS and not p.exists():
             text = resources.files("marsscene.benchmark.vpr").joinpath(
                 f"data/vpr_{str(name_or_path).replace('-', '_')}.toml").read_text("utf-8")

@@ -9,7 +9,7 @@
 - :class:`BatchVectorEnv`: Gymnasium's vector API.
 - :class:`WarpPhysics`: heightfield posts, solver limits and determinism of MuJoCo Warp.
 
-Docs: ``docs/gym.md`` (the batched environment); figures: ``docs/results/gym.md``.
+Docs: :doc:`/gym` (the batched environment); figures: :doc:`/results/gym`.
 """
 
 from __future__ import annotations

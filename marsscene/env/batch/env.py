@@ -45,7 +45,7 @@ __all__ = ["BatchNavEnv"]
 ROCK_CONTACT_M = 0.02
 #: The batch's rover unless one is given: sphere wheels. MuJoCo Warp collides a sphere with
 #: the heightfield's prisms 2.5 times as fast as a cylinder, and ends nearer MuJoCo C's
-#: cylinder wheels at the 90th percentile (``docs/results/gym.md``).
+#: cylinder wheels at the 90th percentile (:doc:`/results/gym`).
 BATCH_ROVER = RoverConfig(wheel_collision="sphere")
 
 

@@ -15,7 +15,7 @@ own (0.25 m for :data:`~marsscene.env.worlds.WORLD_KINDS`): at 0.1 m a wheel ove
 prisms than the 50 contacts MuJoCo Warp 4.0 keeps for a geom pair, and the rover parts from
 MuJoCo C's (``perf/bench_batch_env.py agree``). What this
 changes against the CPU environment's mesh rocks (convex hulls with overhangs and sharp
-edges) is measured in ``docs/results/gym.md``.
+edges) is measured in :doc:`/results/gym`.
 
 The scene's physics settings come from the MJCF writer: gravity, integrator, regolith friction
 (:mod:`marsscene.export.mjcf.common`); the rover is :func:`~marsscene.sim.rover_model.rover_mjcf`,

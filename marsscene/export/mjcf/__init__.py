@@ -27,7 +27,37 @@ def to_mjcf(scene: Any) -> tuple[str, dict[str, bytes]]:
 
 
 def write_mjcf(scene: Any, out_dir: str | Path) -> list[Path]:
-    """Write ``out_dir/mjcf/scene.xml`` and its assets; return the written paths."""
+    """Write ``out_dir/mjcf/scene.xml`` and its assets; return the written paths.
+
+    The MJCF writer of :func:`marsscene.write_scene`, which most users call instead (it writes
+    atomically and adds the manifest); this one writes into ``out_dir`` as it is.
+
+    Parameters
+    ----------
+    scene : Scene
+        A built scene (:func:`marsscene.build_scene`).
+    out_dir : path-like
+        Folder in which the ``mjcf/`` folder is written.
+
+    Returns
+    -------
+    list of Path
+        Every file written (meshes, heightfield): ``mjcf/scene.xml`` is the last.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import mujoco
+    >>> import marsscene as ms
+    >>> from marsscene.export.mjcf import write_mjcf
+    >>> cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [10, 10]}})
+    >>> paths = write_mjcf(ms.build_scene(cfg, seed=7), tempfile.mkdtemp())
+    >>> paths[-1].name
+    'scene.xml'
+    >>> model = mujoco.MjModel.from_xml_path(str(paths[-1]))
+    >>> model.nhfield
+    1
+    """
     xml, assets = to_mjcf(scene)
     base = Path(out_dir) / "mjcf"
     written = []

@@ -156,7 +156,43 @@ def validate_stage(stage: Any) -> list[str]:
 def write_usd(scene: Any, out_dir: str | Path, *, usd_format: str = "usda",
               textures: Future[Any] | None = None) -> list[Path]:
     """Write ``out_dir/scene.<usd_format>`` and its assets; return the written paths.
-    ``textures``: see :func:`to_stage`."""
+
+    The USD writer of :func:`marsscene.write_scene`, which most users call instead (it writes
+    atomically and adds the manifest); this one writes into ``out_dir`` as it is.
+
+    Parameters
+    ----------
+    scene : Scene
+        A built scene (:func:`marsscene.build_scene`).
+    out_dir : path-like
+        Folder to write into (created if missing).
+    usd_format : {"usda", "usdc", "usdz"}
+        The root layer's format.
+    textures : Future, optional
+        Terrain textures prepared on another thread (see :func:`to_stage`).
+
+    Returns
+    -------
+    list of Path
+        Every file written: the asset layers, the root layer ``scene.<usd_format>``, then its
+        display-referred siblings (``scene_blender.usda``, ...); a ``.usdz`` is one file.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import marsscene as ms
+    >>> from marsscene.export.usd import write_usd
+    >>> cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [10, 10]}})
+    >>> out = Path(tempfile.mkdtemp())
+    >>> paths = write_usd(ms.build_scene(cfg, seed=7), out)
+    >>> out / "scene.usda" in paths
+    True
+    >>> from pxr import Usd, UsdGeom
+    >>> stage = Usd.Stage.Open(str(out / "scene.usda"))
+    >>> UsdGeom.GetStageUpAxis(stage), UsdGeom.GetStageMetersPerUnit(stage)
+    ('Z', 1.0)
+    """
     out = Path(out_dir)
     # asset layers go to disk one at a time
     stage, assets = to_stage(scene, stream_to=out, textures=textures)

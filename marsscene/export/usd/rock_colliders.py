@@ -30,7 +30,7 @@ geom names. An instance carries only its transform (type, ``instanceable`` and
 attribute spec, authored with the ``Sdf`` API inside one change block, about 80 us a rock to
 write and as much to open, parse and validate; so only the few obstacle rocks get one
 (1,610 of the default scene's 120,631 rocks). The merged tiles cost vectorised array work
-(:mod:`marsscene.rocks.merged`). The trade-offs are measured in ``docs/usd_rover.md``
+(:mod:`marsscene.rocks.merged`). The trade-offs are measured in :doc:`/usd_rover`
 (``perf/bench_default_scene.py``, ``perf/bench_rocks.py``).
 """
 

@@ -22,7 +22,7 @@ Drive gains follow ``UsdPhysics.DriveAPI``'s angular units (per degree): wheel d
 ``drive_kv_nm_s * pi / 180`` N m s/deg, stiffness 0, ``maxForce`` the torque limit;
 steering stiffness ``steer_kp_nm * pi / 180`` N m/deg and damping of the servo plus the MJCF
 joint damping. UsdPhysics has no passive joint damping or armature: the MJCF's 20 N m s/rad on
-rockers and bogies and its rotor armatures are not carried (docs/usd_rover.md).
+rockers and bogies and its rotor armatures are not carried (:doc:`/usd_rover`).
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ attributes in SI units: ``cohesionPa``, ``frictionDeg``, ``kc`` (N/m^(n+1)), ``k
 (N/m^(n+2)), ``n``, ``nSlip``, ``shearModulusM``, ``a0``, ``a1``, ``exitRatio`` and
 ``reference`` (the source). ``/World/Terrain`` carries ``marsscene:soil:map`` (the asset
 ``soil/soil_map.png``: 8-bit indices, north row first, over ``marsscene:soil:boundsXYM``) and
-``marsscene:soil:names`` (the soils by index). The model: ``docs/science/terramechanics.md``.
+``marsscene:soil:names`` (the soils by index). The model: :doc:`/science/terramechanics`.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Messages are built from ROS 2 Jazzy (or Humble) message classes of a ``rosbags``
 serialised to CDR by ``rosbags`` and written by ``rosbags.rosbag2.Writer`` (MCAP storage by
 default, sqlite3 as an alternative; compression and metadata version:
 :mod:`.bag_writer`). Images go in as image_transport's ``compressed`` / ``compressedDepth``
-sub-topics (:mod:`.bag_images`), raw, or both. Topics, frames and units: ``docs/ros.md``.
+sub-topics (:mod:`.bag_images`), raw, or both. Topics, frames and units: :doc:`/ros`.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@
   (``images="link"``; ORB-SLAM3 turns them grey itself), or mono8 copies as in EuRoC
   (``images="convert"``).
 
-Commands to run ORB-SLAM3 on them: ``docs/ros.md``.
+Commands to run ORB-SLAM3 on them: :doc:`/ros`.
 """
 
 from __future__ import annotations
@@ -68,6 +68,51 @@ def export_dataset(
     PNGs (copied where the file system cannot link) and writes TUM depth at 5000 per metre;
     ``"convert"`` also writes EuRoC mono8; ``"run-depth"`` hard-links TUM depth at the run's
     1000 per metre. Returns the folder.
+
+    Parameters
+    ----------
+    run_dir : path-like
+        A run folder of :func:`marsscene.drive` with camera logs.
+    fmt : {"tum-rgbd", "euroc"}
+        TUM RGB-D (colour, depth, ``groundtruth.txt``, ``associations.txt``, an ORB-SLAM3
+        settings file) or EuRoC MAV (``mav0/``: cameras, IMU, ground truth).
+    out_dir : path-like, optional
+        The dataset folder (default ``RUN_DIR/tum_rgbd`` or ``RUN_DIR/euroc``).
+    overwrite : bool
+        Replace an existing dataset folder.
+    progress : callable, optional
+        ``progress(done, total)`` per image written.
+    images : {"link", "convert", "run-depth"}
+        How images are written (above).
+
+    Returns
+    -------
+    Path
+        The dataset folder.
+
+    Raises
+    ------
+    RuntimeSimError
+        A run without camera logs.
+    ExportError
+        An unknown format, or an existing folder without ``overwrite``.
+
+    Examples
+    --------
+    A one-second drive with a small camera, written as TUM RGB-D:
+
+    >>> import tempfile
+    >>> import marsscene as ms
+    >>> from marsscene.runs.export import export_dataset
+    >>> cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [20, 20]}})
+    >>> camera = ms.CameraConfig(width_px=64, height_px=48, rate_hz=2.0)
+    >>> run = ms.drive(ms.build_scene(cfg, seed=1), command=(0.3, 0.0), seconds=1.0,
+    ...                config=ms.RunConfig(camera=camera), out_dir=tempfile.mkdtemp())
+    >>> folder = export_dataset(run.out_dir, "tum-rgbd")
+    >>> folder.name, sorted(p.name for p in folder.iterdir())[:4]
+    ('tum_rgbd', ['associations.txt', 'depth', 'depth.txt', 'groundtruth.txt'])
+    >>> len(list((folder / "rgb").glob("*.png")))
+    3
     """
     if fmt not in FORMATS:
         raise ExportError(f"format = {fmt!r}; expected one of {', '.join(FORMATS)}")

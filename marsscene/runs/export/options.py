@@ -73,7 +73,7 @@ def _choice(key: str, value: Any, allowed: tuple[str, ...]) -> None:
 
 @dataclass(frozen=True, kw_only=True)
 class BagOptions:
-    """How a run folder becomes a ROS 2 bag (topics, frames and units: ``docs/ros.md``).
+    """How a run folder becomes a ROS 2 bag (topics, frames and units: :doc:`/ros`).
 
     Parameters
     ----------

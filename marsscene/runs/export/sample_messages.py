@@ -32,7 +32,7 @@ from marsscene.runs.export.bag_messages import MessageBuilder
 from marsscene.runs.export.bag_topics import ImageOptions
 from marsscene.runs.export.frames import camera_frame, rover_urdf, static_transforms
 from marsscene.runs.export.imu_noise import imu_noise_of
-from marsscene.runs.export.topic_table import STEREO_SIDES, Topic, topic_table
+from marsscene.runs.export.topic_table import STEREO_SIDES, WHEEL_SOIL_TOPIC, Topic, topic_table
 from marsscene.runs.logs import depth_mm, scan_record
 
 __all__ = ["SampleMessages"]
@@ -69,19 +69,24 @@ class SampleMessages:
         ``wanted(topic)``: build that topic's messages (default: all).
     map_tf : bool
         ``/tf`` carries ``map -> odom`` (from ground truth) besides ``odom -> base_link``.
+    soil : WheelSoil, optional
+        The simulation's wheel--soil model (``RoverSim.wheel_soil``): each control step also
+        gives ``/rover/wheel_soil`` (sinkage, slip and load per wheel, as the bag's).
     """
 
     def __init__(self, rover: RoverConfig, noise: NoiseConfig, *, imu_hz: float,
                  lidar: dict[str, Any] | None = None, camera: dict[str, Any] | None = None,
                  stereo: dict[str, dict[str, Any]] | None = None, camera_depth: bool = True,
                  images: ImageOptions | None = None, distro: str = "jazzy",
-                 wanted: Callable[[str], bool] | None = None, map_tf: bool = True) -> None:
+                 wanted: Callable[[str], bool] | None = None, map_tf: bool = True,
+                 soil: Any = None) -> None:
         self.b = MessageBuilder(distro)
         self.rover, self.noise, self.lidar_cfg = rover, noise, lidar
         self.cam_intr, self.stereo_intr, self.camera_depth = camera, stereo or {}, camera_depth
         self.opts = images if images is not None else ImageOptions()
         self.wanted = wanted if wanted is not None else (lambda topic: True)
         self.map_tf = map_tf
+        self.soil = soil  # the simulation's WheelSoil (its state now), or None: rigid ground
         nd = imu_noise_of(asdict(noise), imu_hz)
         self.g_var = nd["gyroscope_noise_density"] ** 2 * nd["rate_hz"]
         self.a_var = nd["accelerometer_noise_density"] ** 2 * nd["rate_hz"]
@@ -94,7 +99,8 @@ class SampleMessages:
         """Every topic this publisher can make (:mod:`.topic_table` rows, in the bag's order)."""
         return topic_table(images=self.opts.images, camera=self.cam_intr is not None,
                            depth=self.camera_depth, stereo=bool(self.stereo_intr),
-                           lidar=self.lidar_cfg is not None, depth_cloud=self.opts.depth_cloud)
+                           lidar=self.lidar_cfg is not None, depth_cloud=self.opts.depth_cloud,
+                           soil=self.soil is not None)
 
     def static(self, t_s: float) -> Pairs:
         """``/tf_static`` (sensor mounts) and ``/rover/robot_description`` (the URDF)."""
@@ -153,6 +159,10 @@ class SampleMessages:
             out.append(("/rover/joint_states", b.joint_state(
                 t, self.names, np.concatenate([self._angle, steer]),
                 np.concatenate([rates, steer_rate]))))
+        if self.soil is not None and want(WHEEL_SOIL_TOPIC):
+            ws = self.soil  # as the bag's: sinkage, slip and load as position, velocity, effort
+            out.append((WHEEL_SOIL_TOPIC, b.joint_state(t, list(DRIVE_JOINTS), ws.sinkage_m,
+                                                        ws.slip, ws.load_n)))
         return out
 
     def imu(self, t: float, acc: Any, gyr: Any, acc_true: Any, gyr_true: Any,

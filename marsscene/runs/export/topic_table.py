@@ -123,9 +123,9 @@ def lidar_topics() -> list[Topic]:
 
 def topic_table(*, images: str, imu_true: bool = True, camera: bool = False,
                 depth: bool = False, stereo: bool = False, lidar: bool = False,
-                depth_cloud: bool = False) -> list[Topic]:
+                depth_cloud: bool = False, soil: bool = False) -> list[Topic]:
     """Every topic of a bag (or a live session) with these sensors, in the bag's order."""
-    out = state_topics(imu_true=imu_true)
+    out = state_topics(imu_true=imu_true, soil=soil)
     out += camera_topics(images=images, depth=depth, depth_cloud=depth_cloud) if camera else []
     for side in STEREO_SIDES if stereo else ():
         out += stereo_topics(side, images=images)

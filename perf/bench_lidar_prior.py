@@ -1,0 +1,116 @@
+"""KISS-ICP with and without the wheel odometry's prior on the paper spec's routes (issue 47).
+
+Run: ``python perf/bench_lidar_prior.py [SECONDS] [SCENES] [MODEL] [GATES]`` (defaults: each
+route to its end; ``mars-base,main-crater,grand-canyon``; the spec's ``os1-64``; the gate of
+the method's defaults, ``0.05/1``; more as ``M/DEG,M/DEG``, ``inf/inf`` for none).
+
+For each scene of ``docs/examples/benchmark_slam_paper.toml`` (built as its cells build it,
+seed 1, kept in a temporary folder between runs) the rover drives the scene's route (LiDAR
+only, ``ln200s`` noise, the spec's noise seed) for at most ``SECONDS`` simulated seconds, with
+two :class:`~marsscene.benchmark.slam.kiss_icp.LiveKissIcp` listeners on the same scans: plain
+(KISS-ICP as ``kiss_icp_pipeline`` runs it) and ``wheel_prior`` (each scan's step predicted by
+the wheel odometry). Prints per scene and mode:
+
+* ATE after SE(3) alignment, and as % of the path (the benchmark's figure);
+* the anchored error: the estimate against the true ``lidar_link`` motion, both from the first
+  scan, at 10 s, 60 s and the end (what the ATE's alignment hides: a jump at the start);
+* KISS-ICP's path and its CPU time per scan.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ("mars-base", "main-crater", "grand-canyon")
+
+
+def anchored_error_m(estimate, truth, t: float) -> float:
+    """|estimate - truth| at ``t``, both as motions from their first pose (no alignment)."""
+    from bench_kiss_start import _pose
+
+    t0 = float(estimate.timestamps_s[0])
+    true_m = (np.linalg.inv(_pose(truth, t0)) @ _pose(truth, t))[:3, 3]
+    est_m = (np.linalg.inv(_pose(estimate, t0)) @ _pose(estimate, t))[:3, 3]
+    return float(np.linalg.norm(true_m - est_m))
+
+
+def _drive(name: str, seconds: float | None, model: str, out: Path, gates: list[str]):
+    import dataclasses
+    import shutil
+
+    from _measure import paper_scene
+
+    import marsscene as ms
+    from marsscene.benchmark.routes import auto_route, centred_on_asset
+    from marsscene.benchmark.slam.kiss_icp import LiveKissIcp, lidar_mount
+    from marsscene.benchmark.slam.spec import SlamSpec
+    from marsscene.rover.config import RoverConfig
+    from marsscene.sim.world import load_world
+
+    spec = SlamSpec.from_toml(ROOT / "docs" / "examples" / "benchmark_slam_paper.toml")
+    scene = next(s for s in spec.scenes if s.name == name)
+    t0 = time.perf_counter()
+    scene_dir, built = paper_scene(name)
+    print(f"{name}: scene {'built' if built else 'reused'} in {time.perf_counter() - t0:.0f} s",
+          flush=True)
+    world = load_world(scene_dir)
+    route = auto_route(centred_on_asset(scene.route, scene_dir), world.heightfield,
+                       world.obstacles)
+    run = spec.run_config(lidar=True, camera=False)
+    run = dataclasses.replace(run, lidar=dataclasses.replace(run.lidar, model=model))
+    live = {"plain": LiveKissIcp()}
+    for gate in gates:
+        dev_m, dev_deg = (float(v) for v in gate.split("/"))
+        live[f"prior {gate}"] = LiveKissIcp(wheel_prior=True, lidar_mount=lidar_mount(
+            RoverConfig()), max_step_dev_m=dev_m, max_step_dev_deg=dev_deg)
+    shutil.rmtree(out, ignore_errors=True)
+    t0 = time.perf_counter()
+    ms.drive(scene_dir, route=route, config=run, out_dir=out, seed=spec.noise_seed,
+             seconds=seconds, listeners=list(live.values()),
+             options=ms.DriveOptions(max_slope_deg=scene.route.max_slope_deg),
+             export=ms.ExportOptions(lidar_files=False))  # as a cell: the scans not stored
+    print(f"{name}: route {route.length_m:.0f} m, drive {time.perf_counter() - t0:.0f} s wall",
+          flush=True)
+    return live
+
+
+def main(argv: list[str]) -> None:
+    import tempfile
+
+    from marsscene.benchmark.slam.kiss_icp import lidar_ground_truth, score_lidar_odometry
+    from marsscene.runs.runlog import RunLog
+
+    seconds = float(argv[0]) if argv and argv[0] else None
+    scenes = argv[1].split(",") if len(argv) > 1 else list(SCENES)
+    model = argv[2] if len(argv) > 2 and argv[2] else "os1-64"
+    gates = argv[3].split(",") if len(argv) > 3 else ["0.05/1"]
+    out = Path(tempfile.gettempdir()) / "bench_lidar_prior"
+    for name in scenes:
+        live = _drive(name, seconds, model, out / name, gates)
+        run = RunLog(out / name)
+        gt = lidar_ground_truth(run)
+        for mode, odo in live.items():
+            est = odo.trajectory()
+            score = score_lidar_odometry(est, run)
+            end = float(est.timestamps_s[-1]) if est is not None else 0.0
+            marks = [t for t in (10.0, 60.0) if t < end] + [end]
+            anchored = ", ".join(f"{t:.0f} s {anchored_error_m(est, gt, t):.2f} m"
+                                 for t in marks) if est is not None else "lost"
+            print(f"{name:13s} {model} {mode:16s} ATE {score.ate_rmse_m:.3f} m "
+                  f"({score.ate_percent:.2f} % of {score.path_m:.1f} m), KISS-ICP path "
+                  f"{score.estimated_path_m:.1f} m, {odo.seconds / max(len(odo.poses), 1):.3f} "
+                  f"s/scan; anchored error {anchored}"
+                  + (f"; ICP steps kept {odo.icp_steps_kept}/{len(odo.poses)}"
+                     if odo.wheel_prior else ""), flush=True)
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    main(sys.argv[1:])
