@@ -2,7 +2,16 @@
 
 Run: ``python perf/bench_lidar_prior.py [SECONDS] [SCENES] [MODEL] [GATES]`` (defaults: each
 route to its end; ``mars-base,main-crater,grand-canyon``; the spec's ``os1-64``; the gate of
-the method's defaults, ``0.05/1``; more as ``M/DEG,M/DEG``, ``inf/inf`` for none).
+the method's defaults, ``0.05/1``; more as ``M/DEG,M/DEG``, ``inf/inf`` for none, a gate
+other than the step gate as ``slip:M/DEG``). ``python perf/bench_lidar_prior.py replay RUN_DIR
+[GATES]`` feeds a stored run instead (the scans of its ``bag/``, its ``odom.tum``), e.g. a drive
+on slipping wheels::
+
+    marsscene build --seed 7 --out /tmp/s
+    printf -- '-10 0\n10 0\n10 8\n' > /tmp/wp.txt
+    marsscene drive /tmp/s --waypoints /tmp/wp.txt --lidar-model os1-64 --soil dry_sand \
+        --noise-profile ln200s --bag --out /tmp/r
+    python perf/bench_lidar_prior.py replay /tmp/r 0.05/1,slip:0.05/1
 
 For each scene of ``docs/examples/benchmark_slam_paper.toml`` (built as its cells build it,
 seed 1, kept in a temporary folder between runs) the rover drives the scene's route (LiDAR
@@ -49,9 +58,7 @@ def _drive(name: str, seconds: float | None, model: str, out: Path, gates: list[
 
     import marsscene as ms
     from marsscene.benchmark.routes import auto_route, centred_on_asset
-    from marsscene.benchmark.slam.kiss_icp import LiveKissIcp, lidar_mount
     from marsscene.benchmark.slam.spec import SlamSpec
-    from marsscene.rover.config import RoverConfig
     from marsscene.sim.world import load_world
 
     spec = SlamSpec.from_toml(ROOT / "docs" / "examples" / "benchmark_slam_paper.toml")
@@ -65,11 +72,7 @@ def _drive(name: str, seconds: float | None, model: str, out: Path, gates: list[
                        world.obstacles)
     run = spec.run_config(lidar=True, camera=False)
     run = dataclasses.replace(run, lidar=dataclasses.replace(run.lidar, model=model))
-    live = {"plain": LiveKissIcp()}
-    for gate in gates:
-        dev_m, dev_deg = (float(v) for v in gate.split("/"))
-        live[f"prior {gate}"] = LiveKissIcp(wheel_prior=True, lidar_mount=lidar_mount(
-            RoverConfig()), max_step_dev_m=dev_m, max_step_dev_deg=dev_deg)
+    live = _listeners(gates)
     shutil.rmtree(out, ignore_errors=True)
     t0 = time.perf_counter()
     ms.drive(scene_dir, route=route, config=run, out_dir=out, seed=spec.noise_seed,
@@ -81,20 +84,84 @@ def _drive(name: str, seconds: float | None, model: str, out: Path, gates: list[
     return live
 
 
+def _listeners(gates: list[str]) -> dict:
+    """KISS-ICP plain, and with the wheel prior at each gate (``M/DEG`` or ``KIND:M/DEG``)."""
+    from marsscene.benchmark.slam.kiss_icp import LiveKissIcp, lidar_mount
+    from marsscene.rover.config import RoverConfig
+
+    live = {"plain": LiveKissIcp()}
+    for gate in gates:
+        kind, _, devs = gate.rpartition(":")
+        dev_m, dev_deg = (float(v) for v in devs.split("/"))
+        live[f"prior {gate}"] = LiveKissIcp(wheel_prior=True, lidar_mount=lidar_mount(
+            RoverConfig()), max_step_dev_m=dev_m, max_step_dev_deg=dev_deg, gate=kind or "step")
+    return live
+
+
+def _bag_scans(bag: Path):
+    """(t_s, scan) of each ``/rover/lidar/points`` message of a run's bag, as a drive gives
+    them to its listeners."""
+    from rosbags.highlevel import AnyReader
+
+    types = {2: "u1", 4: "u2", 6: "u4", 7: "f4", 8: "f8"}
+    with AnyReader([bag]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/rover/lidar/points"]
+        for conn, _, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, conn.msgtype)
+            dtype = np.dtype({"names": [f.name for f in msg.fields],
+                              "formats": [types[f.datatype] for f in msg.fields],
+                              "offsets": [f.offset for f in msg.fields],
+                              "itemsize": msg.point_step})
+            rec = np.frombuffer(msg.data, dtype=dtype, count=msg.width * msg.height)
+            yield msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, {
+                "xyz_m": np.column_stack([rec["x"], rec["y"], rec["z"]]),
+                "intensity": rec["intensity"], "ring": rec["ring"], "t_s": rec["t"] * 1e-9}
+
+
+def _replay(run_dir: Path, gates: list[str]) -> dict:
+    """Feed a stored run (its bag's scans, its ``odom.tum``) to the listeners."""
+    from marsscene.runs.runlog import RunLog
+
+    live = _listeners(gates)
+    odom = RunLog(run_dir).odom
+    i = 0
+    t0 = time.perf_counter()
+    for index, (t, scan) in enumerate(_bag_scans(run_dir / "bag")):
+        while i < len(odom) and odom.timestamps_s[i] <= t + 1e-9:  # the control steps before it
+            wxyz = odom.quat_xyzw[i][[3, 0, 1, 2]]
+            for odo in live.values():
+                odo.control(odom.timestamps_s[i], 0.0, 0.0, None, None, (None, None),
+                            (odom.xyz_m[i], wxyz))
+            i += 1
+        for odo in live.values():
+            odo.lidar(t, index, scan)
+    print(f"{run_dir}: replayed in {time.perf_counter() - t0:.0f} s wall", flush=True)
+    return live
+
+
 def main(argv: list[str]) -> None:
     import tempfile
 
     from marsscene.benchmark.slam.kiss_icp import lidar_ground_truth, score_lidar_odometry
     from marsscene.runs.runlog import RunLog
 
-    seconds = float(argv[0]) if argv and argv[0] else None
-    scenes = argv[1].split(",") if len(argv) > 1 else list(SCENES)
-    model = argv[2] if len(argv) > 2 and argv[2] else "os1-64"
-    gates = argv[3].split(",") if len(argv) > 3 else ["0.05/1"]
-    out = Path(tempfile.gettempdir()) / "bench_lidar_prior"
-    for name in scenes:
-        live = _drive(name, seconds, model, out / name, gates)
-        run = RunLog(out / name)
+    replay = bool(argv) and argv[0] == "replay"
+    if replay:  # replay RUN_DIR [GATES]
+        runs = [Path(argv[1])]
+        gates = argv[2].split(",") if len(argv) > 2 else ["0.05/1"]
+        model = "its LiDAR"
+    else:
+        seconds = float(argv[0]) if argv and argv[0] else None
+        scenes = argv[1].split(",") if len(argv) > 1 else list(SCENES)
+        model = argv[2] if len(argv) > 2 and argv[2] else "os1-64"
+        gates = argv[3].split(",") if len(argv) > 3 else ["0.05/1"]
+        out = Path(tempfile.gettempdir()) / "bench_lidar_prior"
+        runs = [out / name for name in scenes]
+    for run_dir in runs:
+        name = run_dir.name
+        live = _replay(run_dir, gates) if replay else _drive(name, seconds, model, run_dir,
+                                                               gates)
+        run = RunLog(run_dir)
         gt = lidar_ground_truth(run)
         for mode, odo in live.items():
             est = odo.trajectory()

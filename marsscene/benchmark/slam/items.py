@@ -27,7 +27,7 @@ _OPTIONS_OF = {"open3d-rgbd": ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
                                "max_step_dev_deg", "decimate"),
                "opencv-mono": ("max_corners", "min_parallax_px", "min_inliers"),
                "wheel-odometry": (),
-               "kiss-icp": ("wheel_prior", "max_step_dev_m", "max_step_dev_deg")}
+               "kiss-icp": ("wheel_prior", "max_step_dev_m", "max_step_dev_deg", "gate")}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -183,6 +183,10 @@ class MethodSpec:
         if unknown:
             raise ConfigError(f"method {self.name!r}: unknown option {unknown[0]!r} for "
                               f"{self.kind}; allowed: {', '.join(allowed or ()) or 'none'}")
+        if self.kind == "kiss-icp" and "gate" in self.options:
+            from marsscene.benchmark.slam.kiss_icp import GATES
+
+            check_choice(f"method {self.name!r} options.gate", self.options["gate"], GATES)
 
 
 

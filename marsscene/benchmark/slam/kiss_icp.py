@@ -8,10 +8,23 @@ drive makes it, so a benchmark needs no copy of the LiDAR stream on disk. With `
 it is LiDAR odometry with an odometry prior, as MOLA runs on a wheeled robot (Blanco-Claraco
 2024, MOLA, arXiv:2407.20465): before each scan, KISS-ICP's constant-velocity prediction (the
 pose step that deskews the scan and seeds the ICP) is replaced by the wheel odometry's step
-since the previous scan, moved to the LiDAR frame, and an ICP step that departs from it by
-more than ``max_step_dev_m`` or ``max_step_dev_deg`` is replaced by it (the gate of the
-RGB-D row's wheel prior, :mod:`.rgbd_odometry`): a standing start's ground rings, which
-KISS-ICP alone locks onto and slides along, no longer move the estimate.
+since the previous scan, moved to the LiDAR frame, and an ICP step outside a gate around it
+is replaced by it: a standing start's ground rings, which KISS-ICP alone locks onto and slides
+along, no longer move the estimate. Two gates (:func:`passes_gate`):
+
+* ``"step"`` (rigid ground): the ICP step departs from the wheel step by at most
+  ``max_step_dev_m`` and ``max_step_dev_deg`` (the gate of the RGB-D row's wheel prior,
+  :mod:`.rgbd_odometry`);
+* ``"slip"`` (deformable soil): the wheels may slip, the rover may not outrun them. Along the
+  wheel step the ICP step may be anything from standing still (100 % slip) to the wheel step,
+  each end widened by ``max_step_dev_m``; across it (side slip, sinkage) at most
+  ``max_step_dev_m`` plus :data:`SIDE_SLIP_RATIO` of the wheel step; its rotation departs from
+  the wheels' by at most ``max_step_dev_deg``. Slip is longitudinal slip of a driven wheel,
+  ``1 - v / (omega r)`` in [0, 1] (Wong 2008, Theory of Ground Vehicles, 4th ed., ch. 2);
+  Curiosity's wheels reached 77 % of it in the Hidden Valley megaripples (Arvidson et al.
+  2016, doi:10.1002/rob.21647). On slipping wheels the step gate compares each ICP step with a
+  wheel step that is itself wrong, rejects the LiDAR where it is right, and builds KISS-ICP's map
+  from the slipping wheels' poses (docs/results/benchmark.md has the figures).
 :func:`lidar_ground_truth`
 is the run's ground truth moved to the ``lidar_link`` frame, the frame KISS-ICP estimates;
 :func:`score_lidar_odometry` aligns one to the other (Umeyama, SE(3)) and reports ATE and the
@@ -38,12 +51,18 @@ from marsscene.runs.evaluation import ate
 from marsscene.runs.runlog import RunLog
 from marsscene.runs.tum import Trajectory, read_tum
 
-__all__ = ["LidarOdometryScore", "LiveKissIcp", "lidar_ground_truth", "lidar_mount",
-           "run_kiss_icp", "score_lidar_odometry"]
+__all__ = ["GATES", "SIDE_SLIP_RATIO", "LidarOdometryScore", "LiveKissIcp", "lidar_ground_truth",
+           "lidar_mount", "passes_gate", "run_kiss_icp", "score_lidar_odometry"]
 
 KISS_ICP_CITATION = ("Vizzo, Guadagnino, Mersch, Wiesmann, Behley, Stachniss 2023, KISS-ICP, "
                      "IEEE RA-L 8(2), doi:10.1109/LRA.2023.3236571")
 TOPIC = "/rover/lidar/points"
+#: The wheel prior's gates (module doc).
+GATES = ("step", "slip")
+#: Largest side step of the ``"slip"`` gate per metre of wheel step, beyond ``max_step_dev_m``:
+#: a slip angle up to atan(0.3) = 17 deg (side slip of a steered rover wheel on loose soil as
+#: Ishigami et al. 2007, doi:10.1002/rob.20187, model it).
+SIDE_SLIP_RATIO = 0.3
 
 
 @dataclass(frozen=True)
@@ -59,6 +78,24 @@ class LidarOdometryScore:
     @property
     def ate_percent(self) -> float:
         return 100.0 * self.ate_rmse_m / max(self.path_m, 1e-9)
+
+
+def passes_gate(wheel_step: np.ndarray, icp_step: np.ndarray, gate: str = "step", *,
+                max_step_dev_m: float = 0.05, max_step_dev_deg: float = 1.0) -> bool:
+    """Whether an ICP step (4 x 4) is kept beside the wheel odometry's step (module doc)."""
+    from marsscene.benchmark.slam.rgbd_odometry import step_deviation
+
+    dev_m, dev_deg = step_deviation(wheel_step, icp_step)
+    if dev_deg > max_step_dev_deg:
+        return False
+    if gate == "step":
+        return dev_m <= max_step_dev_m
+    wheel_m = float(np.linalg.norm(wheel_step[:3, 3]))
+    ahead = wheel_step[:3, 3] / wheel_m if wheel_m > 0.0 else np.zeros(3)
+    along_m = float(icp_step[:3, 3] @ ahead)
+    side_m = float(np.linalg.norm(icp_step[:3, 3] - along_m * ahead))
+    return (-max_step_dev_m <= along_m <= wheel_m + max_step_dev_m
+            and side_m <= max_step_dev_m + SIDE_SLIP_RATIO * wheel_m)
 
 
 def _executable() -> str:
@@ -96,12 +133,17 @@ class LiveKissIcp:
     :meth:`trajectory` is the estimate (lidar frame, first pose the identity), what
     :func:`run_kiss_icp` gives on the bag of the same drive. With ``wheel_prior`` it also
     listens to the control steps and predicts each scan's pose step from the wheel odometry
-    (``lidar_mount``: :func:`lidar_mount` of the rover) instead of KISS-ICP's constant velocity.
+    (``lidar_mount``: :func:`lidar_mount` of the rover) instead of KISS-ICP's constant velocity,
+    and keeps an ICP step only within ``gate`` (``"step"`` on rigid ground, ``"slip"`` where
+    the wheels slip: :func:`passes_gate`).
     """
 
     def __init__(self, config: str | Path | None = None, *, wheel_prior: bool = False,
                  lidar_mount: np.ndarray | None = None, max_step_dev_m: float = 0.05,
-                 max_step_dev_deg: float = 1.0) -> None:
+                 max_step_dev_deg: float = 1.0, gate: str = "step") -> None:
+        from marsscene._validate import check_choice
+
+        check_choice("kiss-icp gate", gate, GATES)
         try:
             from kiss_icp.config import load_config
             from kiss_icp.kiss_icp import KissICP
@@ -118,6 +160,7 @@ class LiveKissIcp:
         self._odom: list[tuple[float, np.ndarray]] = []  # (t, lidar pose by wheel odometry)
         self._previous_wheel: np.ndarray | None = None
         self.max_step_dev = (float(max_step_dev_m), float(max_step_dev_deg))
+        self.gate = gate
         self.icp_steps_kept = 0  #: scans whose ICP step passed the wheel prior's gate
 
     def control(self, t: float, v: float, w: float, rates: Any, steer: Any,
@@ -163,8 +206,6 @@ class LiveKissIcp:
     def _register_with_prior(self, xyz: np.ndarray, stamps: np.ndarray,
                              step: np.ndarray | None) -> None:
         """``KissICP.register_frame`` with the wheel step as its prediction, and the gate."""
-        from marsscene.benchmark.slam.rgbd_odometry import step_deviation
-
         kiss = self.odometry
         if step is not None:
             kiss.last_delta = step
@@ -176,11 +217,12 @@ class LiveKissIcp:
             points=source, voxel_map=kiss.local_map, initial_guess=guess,
             max_correspondance_distance=3 * sigma, kernel=sigma)
         if step is not None:
-            dev_m, dev_deg = step_deviation(kiss.last_delta, np.linalg.inv(kiss.last_pose) @ pose)
-            if dev_m > self.max_step_dev[0] or dev_deg > self.max_step_dev[1]:
-                pose = guess
-            else:
+            if passes_gate(step, np.linalg.inv(kiss.last_pose) @ pose, self.gate,
+                           max_step_dev_m=self.max_step_dev[0],
+                           max_step_dev_deg=self.max_step_dev[1]):
                 self.icp_steps_kept += 1
+            else:
+                pose = guess
         kiss.adaptive_threshold.update_model_deviation(np.linalg.inv(guess) @ pose)
         kiss.local_map.update(frame_downsample, pose)
         kiss.last_delta = np.linalg.inv(kiss.last_pose) @ pose
