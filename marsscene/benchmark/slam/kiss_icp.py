@@ -24,7 +24,9 @@ along, no longer move the estimate. Two gates (:func:`passes_gate`):
   Curiosity's wheels reached 77 % of it in the Hidden Valley megaripples (Arvidson et al.
   2016, doi:10.1002/rob.21647). On slipping wheels the step gate compares each ICP step with a
   wheel step that is itself wrong, rejects the LiDAR where it is right, and builds KISS-ICP's map
-  from the slipping wheels' poses (docs/results/benchmark.md has the figures).
+  from the slipping wheels' poses; on rigid ground the slip gate takes a standing start's ring
+  lock (the ICP holding still while the wheels roll) for slip, so ``"step"`` is the default
+  (docs/results/benchmark.md has the figures of both).
 :func:`lidar_ground_truth`
 is the run's ground truth moved to the ``lidar_link`` frame, the frame KISS-ICP estimates;
 :func:`score_lidar_odometry` aligns one to the other (Umeyama, SE(3)) and reports ATE and the
