@@ -23,6 +23,8 @@ the ``lidar_link`` frame, ``base`` the rover's ``base_link`` (``gt.tum``).
 
 from __future__ import annotations
 
+import hashlib
+import json
 import shlex
 import subprocess
 from dataclasses import dataclass
@@ -102,8 +104,6 @@ def _associations(folder: Path) -> list[list[str]]:
 
 
 def _intrinsics(folder: Path) -> dict[str, float]:
-    import json
-
     return json.loads((folder / "camera" / "intrinsics.json").read_text(encoding="utf-8"))
 
 
@@ -118,7 +118,13 @@ def _open3d_rgbd(cell: CellData, method: MethodSpec) -> Estimate:
     opts = {k: method.options[k] for k in ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
                                            "max_step_dev_deg", "decimate")
             if k in method.options}
-    res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, **opts)
+    drive = cell.run_dir / DRIVE_FILE  # a new drive, or other options, start over
+    key = hashlib.sha256(json.dumps(
+        {"options": opts, "drive": drive.read_text(encoding="utf-8") if drive.is_file() else ""},
+        sort_keys=True).encode()).hexdigest()
+    res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, checkpoint_key=key,
+                        checkpoint=cell.cell_dir / "estimates" / f".{method.name}.partial.npz",
+                        **opts)
     note = (f"{res.fallbacks} of {len(res.poses) - 1} steps from the wheel odometry"
             if opts.get("wheel_prior") else "")
     return Estimate(_trajectory(res.stamps_s, res.poses), frames_tracked=int(res.visual.sum()),
@@ -148,8 +154,6 @@ def _kiss_icp(cell: CellData, method: MethodSpec) -> Estimate:
     if live.is_file():
         if not method.options.get("wheel_prior"):
             return Estimate(read_tum(live))
-        import json
-
         summary = json.loads((cell.run_dir / DRIVE_FILE).read_text(encoding="utf-8"))["summary"]
         kept, scans = summary["icp_steps_kept"][method.name]
         return Estimate(read_tum(live), frames_tracked=int(kept),
