@@ -3,9 +3,11 @@
 Run: ``python perf/bench_lidar_prior.py [SECONDS] [SCENES] [MODEL] [GATES]`` (defaults: each
 route to its end; ``mars-base,main-crater,grand-canyon``; the spec's ``os1-64``; the gate of
 the method's defaults, ``0.05/1``; more as ``M/DEG,M/DEG``, ``inf/inf`` for none, a gate
-other than the step gate as ``slip:M/DEG``). ``python perf/bench_lidar_prior.py replay RUN_DIR
-[GATES]`` feeds a stored run instead (the scans of its ``bag/``, its ``odom.tum``), e.g. a drive
-on slipping wheels::
+other than the step gate as ``slip:M/DEG``; ``planar-`` before a gate, e.g.
+``planar-step:0.05/1``, takes the prior's rotation from the planar wheel odometry instead of the
+gyro). ``python perf/bench_lidar_prior.py replay RUN_DIR [GATES]`` feeds a stored run instead
+(the scans of its ``bag/``, its ``odom.tum`` and ``imu.csv``), e.g. a drive on slipping
+wheels::
 
     marsscene build --seed 7 --out /tmp/s
     printf -- '-10 0\n10 0\n10 8\n' > /tmp/wp.txt
@@ -85,16 +87,19 @@ def _drive(name: str, seconds: float | None, model: str, out: Path, gates: list[
 
 
 def _listeners(gates: list[str]) -> dict:
-    """KISS-ICP plain, and with the wheel prior at each gate (``M/DEG`` or ``KIND:M/DEG``)."""
+    """KISS-ICP plain, and with the wheel prior at each gate (``M/DEG`` or ``KIND:M/DEG``,
+    ``planar-`` before it for the wheels' rotation)."""
     from marsscene.benchmark.slam.kiss_icp import LiveKissIcp, lidar_mount
     from marsscene.rover.config import RoverConfig
 
     live = {"plain": LiveKissIcp()}
     for gate in gates:
-        kind, _, devs = gate.rpartition(":")
+        planar = gate.startswith("planar-")
+        kind, _, devs = gate.removeprefix("planar-").rpartition(":")
         dev_m, dev_deg = (float(v) for v in devs.split("/"))
         live[f"prior {gate}"] = LiveKissIcp(wheel_prior=True, lidar_mount=lidar_mount(
-            RoverConfig()), max_step_dev_m=dev_m, max_step_dev_deg=dev_deg, gate=kind or "step")
+            RoverConfig()), max_step_dev_m=dev_m, max_step_dev_deg=dev_deg, gate=kind or "step",
+            gyro=not planar)
     return live
 
 
@@ -119,12 +124,13 @@ def _bag_scans(bag: Path):
 
 
 def _replay(run_dir: Path, gates: list[str]) -> dict:
-    """Feed a stored run (its bag's scans, its ``odom.tum``) to the listeners."""
+    """Feed a stored run (its bag's scans, its ``odom.tum`` and gyro) to the listeners."""
     from marsscene.runs.runlog import RunLog
 
     live = _listeners(gates)
-    odom = RunLog(run_dir).odom
-    i = 0
+    run = RunLog(run_dir)
+    odom, imu = run.odom, run.imu  # imu: t, accel xyz, gyro xyz
+    i = j = 0
     t0 = time.perf_counter()
     for index, (t, scan) in enumerate(_bag_scans(run_dir / "bag")):
         while i < len(odom) and odom.timestamps_s[i] <= t + 1e-9:  # the control steps before it
@@ -133,6 +139,10 @@ def _replay(run_dir: Path, gates: list[str]) -> dict:
                 odo.control(odom.timestamps_s[i], 0.0, 0.0, None, None, (None, None),
                             (odom.xyz_m[i], wxyz))
             i += 1
+        while j < len(imu) and imu[j, 0] <= t + 1e-9:
+            for odo in live.values():
+                odo.imu(imu[j, 0], imu[j, 1:4], imu[j, 4:7], None, None)
+            j += 1
         for odo in live.values():
             odo.lidar(t, index, scan)
     print(f"{run_dir}: replayed in {time.perf_counter() - t0:.0f} s wall", flush=True)

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from marsscene._atomic import replacing_dir, write_atomic
+from marsscene.benchmark.slam.kiss_icp import PRIOR_MODEL
 from marsscene.benchmark.slam.methods import DRIVE_FILE, CellData, estimate
 from marsscene.benchmark.slam.metrics import failed_score, score_estimate
 from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
@@ -102,7 +103,8 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
                                if (lidar or k != "lidar") and (camera or k != "camera")},
                    "noise": dataclasses.asdict(run.noise),  # the profile's values, defaults too
                    "lidar": lidar, "bag": bag,
-                   "live": [dataclasses.asdict(m) for m in live]})
+                   "live": [dataclasses.asdict(m) for m in live],
+                   **({"prior": PRIOR_MODEL} if live else {})})
     done = None if force else _read_json(final / DRIVE_FILE)
     if done is not None and done.get("key") == key:
         return dict(done["summary"])

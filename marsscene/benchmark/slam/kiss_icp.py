@@ -7,8 +7,9 @@ same odometry (KISS-ICP's own ``KissICP`` class, the pipeline's configuration) f
 drive makes it, so a benchmark needs no copy of the LiDAR stream on disk. With ``wheel_prior``
 it is LiDAR odometry with an odometry prior, as MOLA runs on a wheeled robot (Blanco-Claraco
 2024, MOLA, arXiv:2407.20465): before each scan, KISS-ICP's constant-velocity prediction (the
-pose step that deskews the scan and seeds the ICP) is replaced by the wheel odometry's step
-since the previous scan, moved to the LiDAR frame, and an ICP step outside a gate around it
+pose step that deskews the scan and seeds the ICP) is replaced by the odometry's step since the
+previous scan (the wheels' travel, the gyro's rotation: :mod:`.odometry_prior`), moved to the
+LiDAR frame, and an ICP step outside a gate around it
 is replaced by it: a standing start's ground rings, which KISS-ICP alone locks onto and slides
 along, no longer move the estimate. Two gates (:func:`passes_gate`):
 
@@ -47,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from marsscene.benchmark.slam.odometry_prior import WheelGyroPrior
 from marsscene.errors import MissingDependencyError
 from marsscene.rover.geometry import sensor_mounts
 from marsscene.runs.evaluation import ate
@@ -59,6 +61,9 @@ __all__ = ["GATES", "SIDE_SLIP_RATIO", "LidarOdometryScore", "LiveKissIcp", "lid
 KISS_ICP_CITATION = ("Vizzo, Guadagnino, Mersch, Wiesmann, Behley, Stachniss 2023, KISS-ICP, "
                      "IEEE RA-L 8(2), doi:10.1109/LRA.2023.3236571")
 TOPIC = "/rover/lidar/points"
+#: What the wheel prior is made of; part of a benchmark drive's key, so a drive whose live
+#: estimate came from another prior is driven again.
+PRIOR_MODEL = "wheel travel, gyro rotation"
 #: The wheel prior's gates (module doc).
 GATES = ("step", "slip")
 #: Largest side step of the ``"slip"`` gate per metre of wheel step, beyond ``max_step_dev_m``:
@@ -134,15 +139,17 @@ class LiveKissIcp:
 
     :meth:`trajectory` is the estimate (lidar frame, first pose the identity), what
     :func:`run_kiss_icp` gives on the bag of the same drive. With ``wheel_prior`` it also
-    listens to the control steps and predicts each scan's pose step from the wheel odometry
-    (``lidar_mount``: :func:`lidar_mount` of the rover) instead of KISS-ICP's constant velocity,
+    listens to the control steps and the IMU and predicts each scan's pose step from the wheel
+    odometry's travel and the gyro's rotation (:class:`.WheelGyroPrior`; ``gyro = False``: the
+    planar wheel odometry's rotation; ``lidar_mount``: :func:`lidar_mount` of the rover) instead
+    of KISS-ICP's constant velocity,
     and keeps an ICP step only within ``gate`` (``"step"`` on rigid ground, ``"slip"`` where
     the wheels slip: :func:`passes_gate`).
     """
 
     def __init__(self, config: str | Path | None = None, *, wheel_prior: bool = False,
                  lidar_mount: np.ndarray | None = None, max_step_dev_m: float = 0.05,
-                 max_step_dev_deg: float = 1.0, gate: str = "step") -> None:
+                 max_step_dev_deg: float = 1.0, gate: str = "step", gyro: bool = True) -> None:
         from marsscene._validate import check_choice
 
         check_choice("kiss-icp gate", gate, GATES)
@@ -157,10 +164,8 @@ class LiveKissIcp:
         self.poses: list[np.ndarray] = []
         self.seconds = 0.0  #: wall time spent registering scans
         self.wheel_prior = wheel_prior
-        #: ``lidar_link`` in ``base_link`` (4 x 4); the wheel prior needs it
-        self.lidar_mount = np.eye(4) if lidar_mount is None else np.asarray(lidar_mount, float)
-        self._odom: list[tuple[float, np.ndarray]] = []  # (t, lidar pose by wheel odometry)
-        self._previous_wheel: np.ndarray | None = None
+        #: the wheel prior's steps (``gyro``: its rotation from the gyro, else the wheels')
+        self.prior = WheelGyroPrior(lidar_mount, gyro=gyro)
         self.max_step_dev = (float(max_step_dev_m), float(max_step_dev_deg))
         self.gate = gate
         self.icp_steps_kept = 0  #: scans whose ICP step passed the wheel prior's gate
@@ -168,23 +173,14 @@ class LiveKissIcp:
     def control(self, t: float, v: float, w: float, rates: Any, steer: Any,
                 gt: tuple[Any, Any], odom: tuple[Any, Any]) -> None:
         """Keep the wheel odometry's pose of each control step (for ``wheel_prior``)."""
-        if not self.wheel_prior:
-            return
-        from scipy.spatial.transform import Rotation
+        if self.wheel_prior:
+            self.prior.control(t, *odom)
 
-        xyz, wxyz = odom
-        pose = np.eye(4)
-        pose[:3, :3] = Rotation.from_quat(np.asarray(wxyz, float)[[1, 2, 3, 0]]).as_matrix()
-        pose[:3, 3] = xyz
-        self._odom.append((float(t), pose @ self.lidar_mount))
-
-    def _wheel_pose(self, t: float) -> np.ndarray | None:
-        """The odometry's LiDAR pose at the last control step at or before ``t``."""
-        at = [i for i, (s, _) in enumerate(self._odom) if s <= t + 1e-9]
-        if not at:
-            return None
-        self._odom = self._odom[at[-1]:]  # the next scan is later
-        return self._odom[0][1]
+    def imu(self, t: float, acc: Any, gyr: Any, acc_true: Any, gyr_true: Any,
+            bias: Any = None) -> None:
+        """Integrate the measured gyro rates (for ``wheel_prior``)."""
+        if self.wheel_prior:
+            self.prior.imu(t, gyr)
 
     def lidar(self, t: float, index: int, scan: dict[str, Any]) -> None:
         from marsscene.runs.logs import scan_record
@@ -193,12 +189,7 @@ class LiveKissIcp:
         rec = scan_record(scan["xyz_m"], scan["intensity"], scan["ring"], scan["t_s"])
         xyz = np.column_stack([rec["x"], rec["y"], rec["z"]]).astype(np.float64)
         if self.wheel_prior:
-            wheel = self._wheel_pose(t)
-            step = None
-            if wheel is not None and self._previous_wheel is not None:
-                step = np.linalg.inv(self._previous_wheel) @ wheel
-            self._previous_wheel = wheel if wheel is not None else self._previous_wheel
-            self._register_with_prior(xyz, rec["t"].astype(np.float64), step)
+            self._register_with_prior(xyz, rec["t"].astype(np.float64), self.prior.step(t))
         else:
             self.odometry.register_frame(xyz, rec["t"].astype(np.float64))
         self.seconds += time.perf_counter() - t0

@@ -7,7 +7,7 @@ next on the TUM RGB-D export and chain the steps.
 * ``open3d-rgbd`` (plain): every pair starts from the identity; a pair Open3D reports as failed
   keeps the previous step (constant velocity).
 * ``open3d-rgbd`` with ``options.wheel_prior = true``: the wheel odometry (``odom.tum``:
-  wheel speeds and the IMU's yaw rate, what RTAB-Map receives as ``odom_topic`` in the
+  planar, from the wheel rates and steering, what RTAB-Map receives as ``odom_topic`` in the
   paper's RGB-D + wheel-odometry setup) gives each pair's **initial guess**, the camera's
   motion between the two frames, and its **fallback**: where Open3D fails, or its step departs
   from the wheel step by more than ``max_step_dev_m`` (translation) or ``max_step_dev_deg``
@@ -133,6 +133,37 @@ def _load_checkpoint(path: Path, key: str, n_rows: int) -> dict[str, NDArray[Any
     return saved
 
 
+def _frame_reader(o3d: Any, folder: Path, halvings: int, depth_trunc_m: float) -> Any:
+    """A function from an associations row to Open3D's RGB-D image (halved ``halvings``
+    times)."""
+    from marsscene.runs.export.datasets import tum_depth_per_m
+
+    depth_scale = tum_depth_per_m(folder)
+
+    def frame(row: list[str]) -> Any:
+        rgb = np.ascontiguousarray(_halve(read_image(folder / row[1])[..., :3], halvings))
+        depth = np.ascontiguousarray(_halve(read_image(folder / row[3]).astype(np.uint16),
+                                            halvings))
+        image: Any = o3d.geometry.Image
+        return o3d.geometry.RGBDImage.create_from_color_and_depth(
+            image(rgb), image(depth), depth_scale=depth_scale, depth_trunc=depth_trunc_m,
+            convert_rgb_to_intensity=True)
+
+    return frame
+
+
+def _start(checkpoint: Path | None, key: str, n_rows: int
+           ) -> tuple[list[NDArray[Any]], list[bool], NDArray[Any]]:
+    """Poses, visual flags and last step to start from: the checkpoint's, or the first
+    frame's."""
+    saved = None if checkpoint is None else _load_checkpoint(checkpoint, key, n_rows)
+    if saved is None:
+        return [np.eye(4)], [True], np.eye(4)
+    log.info("open3d-rgbd: continuing from frame %d of %d (%s)", len(saved["poses"]), n_rows,
+             checkpoint)
+    return list(saved["poses"]), [bool(v) for v in saved["visual"]], saved["step"]
+
+
 def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
                   wheel_prior: bool = False, max_step_dev_m: float = 0.02,
                   max_step_dev_deg: float = 1.0, decimate: int = 1,
@@ -170,39 +201,19 @@ def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
         import open3d as o3d
     except ImportError:
         raise missing_dependency("open3d", "bench") from None
-    from marsscene.runs.export.datasets import tum_depth_per_m
-
     rows = _associations(folder)
     i = json.loads((run_dir / "camera" / "intrinsics.json").read_text(encoding="utf-8"))
     d = float(decimate)
     pin = o3d.camera.PinholeCameraIntrinsic(int(i["width"]) // decimate,
                                             int(i["height"]) // decimate, i["fx"] / d,
                                             i["fy"] / d, i["cx"] / d, i["cy"] / d)
-    depth_scale = tum_depth_per_m(folder)
     odo = o3d.pipelines.odometry
     stamps = np.array([float(r[0]) for r in rows])
     prior = wheel_camera_steps(run_dir, stamps) if wheel_prior else None
-
-    def frame(row: list[str]) -> Any:
-        rgb = np.ascontiguousarray(_halve(read_image(folder / row[1])[..., :3], halvings))
-        depth = np.ascontiguousarray(_halve(read_image(folder / row[3]).astype(np.uint16),
-                                            halvings))
-        image: Any = o3d.geometry.Image
-        return o3d.geometry.RGBDImage.create_from_color_and_depth(
-            image(rgb), image(depth), depth_scale=depth_scale, depth_trunc=depth_trunc_m,
-            convert_rgb_to_intensity=True)
-
+    frame = _frame_reader(o3d, folder, halvings, depth_trunc_m)
     jac, opt = odo.RGBDOdometryJacobianFromHybridTerm(), odo.OdometryOption()
-    pose: NDArray[Any] = np.eye(4)
-    step: NDArray[Any] = np.eye(4)
-    poses, visual = [pose], [True]
-    saved = None if checkpoint is None else _load_checkpoint(checkpoint, checkpoint_key,
-                                                             len(rows))
-    if saved is not None:
-        poses, visual = list(saved["poses"]), [bool(v) for v in saved["visual"]]
-        pose, step = poses[-1], saved["step"]
-        log.info("open3d-rgbd: continuing from frame %d of %d (%s)", len(poses), len(rows),
-                 checkpoint)
+    poses, visual, step = _start(checkpoint, checkpoint_key, len(rows))
+    pose = poses[-1]
     prev = frame(rows[len(poses) - 1])
     for k in range(len(poses) - 1, len(rows) - 1):  # T maps source (previous) points into
         cur = frame(rows[k + 1])                    # the target
