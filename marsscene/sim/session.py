@@ -33,9 +33,23 @@ from marsscene.sensors.odometry import WheelOdometry, measure_wheels
 from marsscene.sim.control import CameraFrame, Observation
 from marsscene.sim.run_writer import RunWriter
 
-__all__ = ["DriveSession", "SessionOptions"]
+__all__ = ["DriveSession", "SessionOptions", "sensor_rng"]
 
 _STREAMS = ("control", "imu", "lidar", "camera", "stereo")
+#: Each sensor's child of the session's noise stream, by a fixed index: turning one sensor on
+#: or off never moves another's noise (a LiDAR-only drive scans as a camera + LiDAR drive does).
+_SENSOR_CHILD = {"camera": 0, "lidar": 1}
+
+
+def sensor_rng(rng: np.random.Generator, sensor: str) -> np.random.Generator:
+    """The noise stream of ``sensor``: the child of ``rng``'s seed sequence at the sensor's
+    fixed index (what ``rng.spawn`` gives in that place on a fresh generator)."""
+    seq = rng.bit_generator.seed_seq
+    if not isinstance(seq, np.random.SeedSequence):
+        raise RuntimeSimError("sensor noise needs a generator seeded by a SeedSequence")
+    child = np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, _SENSOR_CHILD[sensor]),
+                                   pool_size=seq.pool_size)
+    return np.random.Generator(type(rng.bit_generator)(child))
 
 
 def _period(sim: Any, rate_hz: float) -> int:
@@ -82,7 +96,8 @@ class DriveSession:
     sim : RoverSim
     rng : numpy.random.Generator
         Sensor noise (e.g. ``stage_rng(seed, "sensors")``); the LiDAR and camera draw from
-        streams spawned from it, so adding a sensor never moves the IMU or wheel noise.
+        their own children of it (:func:`sensor_rng`), so adding a sensor never moves another
+        sensor's noise.
     out_dir : path, optional
         Run folder; nothing is written if omitted.
     options : SessionOptions, optional
@@ -110,19 +125,19 @@ class DriveSession:
             if self.trigger_m is None and not self.at_observe:
                 self.periods["camera"] = _period(sim, run.camera.rate_hz)
             if renderer is None:
-                self.renderer = sim.make_renderer(rng=rng.spawn(1)[0])
+                self.renderer = sim.make_renderer(rng=sensor_rng(rng, "camera"))
             else:  # a renderer of an earlier drive of this simulator (its scene costs seconds)
                 self.renderer = renderer
-                renderer.restart(sim, rng=rng.spawn(1)[0])
+                renderer.restart(sim, rng=sensor_rng(rng, "camera"))
         self.lidar = lidar
         if run.lidar is not None:  # its own stream: LiDAR noise never moves IMU/wheel noise
             if not self.at_observe:
                 self.periods["lidar"] = _period(sim, run.lidar.spec.rate_hz)
             if lidar is None:
-                self.lidar = Lidar(run.lidar, rng=rng.spawn(1)[0],
+                self.lidar = Lidar(run.lidar, rng=sensor_rng(rng, "lidar"),
                                    rocks=read_rock_catalog(Path(sim.scene_dir)))
             else:  # an earlier drive's LiDAR (its ray-casting structures are built once)
-                lidar.rng = rng.spawn(1)[0]
+                lidar.rng = sensor_rng(rng, "lidar")
         self.stereo = self.renderer is not None and self.renderer.stereo_ids is not None
         out = Path(out_dir) if out_dir is not None else None
         self.writer = RunWriter(out, sim, lidar=self.lidar is not None,
