@@ -33,9 +33,9 @@ from pathlib import Path
 from typing import Any
 
 from marsscene._atomic import replacing_dir, write_atomic
-from marsscene.benchmark.slam.kiss_icp import PRIOR_MODEL
 from marsscene.benchmark.slam.methods import DRIVE_FILE, CellData, estimate
 from marsscene.benchmark.slam.metrics import failed_score, score_estimate
+from marsscene.benchmark.slam.odometry_prior import PRIOR_MODEL
 from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
 from marsscene.errors import MarsSceneError
 from marsscene.sweep.cell import run_cell
@@ -162,7 +162,8 @@ def _method_file(spec: SlamSpec, method: MethodSpec, cell_dir: Path, drive_key: 
                  ) -> tuple[Path, str]:
     """Where a method's row lies, and the key of its inputs."""
     key = _digest({"method": dataclasses.asdict(method), "drive": drive_key,
-                   "min_tracked": spec.min_tracked_fraction, "rpe_m": spec.rpe_distance_m})
+                   "min_tracked": spec.min_tracked_fraction, "rpe_m": spec.rpe_distance_m,
+                   **({"prior": PRIOR_MODEL} if method.options.get("wheel_prior") else {})})
     return cell_dir / "methods" / f"{method.name}.json", key
 
 

@@ -24,10 +24,11 @@ _SENSOR_OF = {"wheel-odometry": "none", "kiss-icp": "lidar", "open3d-rgbd": "cam
               "opencv-mono": "camera"}
 #: Adapter options per built-in kind (``[[methods]] options = {...}``).
 _OPTIONS_OF = {"open3d-rgbd": ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
-                               "max_step_dev_deg", "decimate"),
+                               "max_step_dev_deg", "gyro", "decimate"),
                "opencv-mono": ("max_corners", "min_parallax_px", "min_inliers"),
                "wheel-odometry": (),
-               "kiss-icp": ("wheel_prior", "max_step_dev_m", "max_step_dev_deg", "gate")}
+               "kiss-icp": ("wheel_prior", "max_step_dev_m", "max_step_dev_deg", "gate",
+                            "gyro")}
 
 
 @dataclass(frozen=True, kw_only=True)

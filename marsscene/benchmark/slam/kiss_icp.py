@@ -61,9 +61,6 @@ __all__ = ["GATES", "SIDE_SLIP_RATIO", "LidarOdometryScore", "LiveKissIcp", "lid
 KISS_ICP_CITATION = ("Vizzo, Guadagnino, Mersch, Wiesmann, Behley, Stachniss 2023, KISS-ICP, "
                      "IEEE RA-L 8(2), doi:10.1109/LRA.2023.3236571")
 TOPIC = "/rover/lidar/points"
-#: What the wheel prior is made of; part of a benchmark drive's key, so a drive whose live
-#: estimate came from another prior is driven again.
-PRIOR_MODEL = "wheel travel, gyro rotation"
 #: The wheel prior's gates (module doc).
 GATES = ("step", "slip")
 #: Largest side step of the ``"slip"`` gate per metre of wheel step, beyond ``max_step_dev_m``:

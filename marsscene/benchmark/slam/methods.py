@@ -4,13 +4,13 @@ a status saying why there is none (never an exception).
 =================  ==========================================================  ======  =====
 kind               estimate                                                    frame   align
 =================  ==========================================================  ======  =====
-wheel-odometry     the run's ``odom.tum`` (wheel odometry + IMU yaw)           base    SE(3)
+wheel-odometry     the run's ``odom.tum`` (planar: wheel rates and steering)     base    SE(3)
 kiss-icp           KISS-ICP fed each scan during the drive (``drive/live/``;     lidar   SE(3)
                    on the run's ROS 2 bag in a benchmark folder made before;
-                   ``wheel_prior``: each scan's step predicted by the wheel
-                   odometry, :class:`.kiss_icp.LiveKissIcp`)
+                   ``wheel_prior``: each scan's step predicted by the wheels'
+                   travel and the gyro, :class:`.kiss_icp.LiveKissIcp`)
 open3d-rgbd        Open3D ``compute_rgbd_odometry``, frame to frame (hybrid;   camera  SE(3)
-                   ``wheel_prior``: the wheel odometry as guess and fallback,
+                   ``wheel_prior``: the same odometry as guess and fallback,
                    :mod:`.rgbd_odometry`)
 opencv-mono        :func:`~marsscene.benchmark.slam.mono_vo.mono_vo` on the RGB     camera  Sim(3)
 tum-file           a TUM file dropped into the cell (``file`` template)        any     any
@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from marsscene.benchmark.slam.odometry_prior import PRIOR_MODEL
 from marsscene.benchmark.slam.spec import MethodSpec
 from marsscene.errors import MarsSceneError, MissingDependencyError
 from marsscene.runs.runlog import RunLog, read_image
@@ -116,16 +117,17 @@ def _open3d_rgbd(cell: CellData, method: MethodSpec) -> Estimate:
     from marsscene.benchmark.slam.rgbd_odometry import rgbd_odometry
 
     opts = {k: method.options[k] for k in ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
-                                           "max_step_dev_deg", "decimate")
+                                           "max_step_dev_deg", "gyro", "decimate")
             if k in method.options}
-    drive = cell.run_dir / DRIVE_FILE  # a new drive, or other options, start over
+    drive = cell.run_dir / DRIVE_FILE  # a new drive, other options or prior: start over
     key = hashlib.sha256(json.dumps(
-        {"options": opts, "drive": drive.read_text(encoding="utf-8") if drive.is_file() else ""},
+        {"options": opts, "drive": drive.read_text(encoding="utf-8") if drive.is_file() else "",
+         **({"prior": PRIOR_MODEL} if opts.get("wheel_prior") else {})},
         sort_keys=True).encode()).hexdigest()
     res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, checkpoint_key=key,
                         checkpoint=cell.cell_dir / "estimates" / f".{method.name}.partial.npz",
                         **opts)
-    note = (f"{res.fallbacks} of {len(res.poses) - 1} steps from the wheel odometry"
+    note = (f"{res.fallbacks} of {len(res.poses) - 1} steps from the odometry"
             if opts.get("wheel_prior") else "")
     return Estimate(_trajectory(res.stamps_s, res.poses), frames_tracked=int(res.visual.sum()),
                     note=note)

@@ -13,6 +13,8 @@ rotation from the measured gyro rates integrated between the scans (first order,
 vector per IMU sample), the translation the planar wheel step's (the rover moves along its own
 axes, so the step in the previous base frame is the planar one), moved to the LiDAR frame by
 its mount. Before the first IMU sample (e.g. a replay without IMU) the rotation is the wheels'.
+:func:`stored_steps` replays a stored run's ``odom.tum`` and ``imu.csv`` through it, for a
+sensor scored after the drive (the RGB-D baseline's navcam).
 """
 
 from __future__ import annotations
@@ -20,9 +22,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-__all__ = ["WheelGyroPrior"]
+__all__ = ["PRIOR_MODEL", "WheelGyroPrior", "stored_steps"]
+
+#: What the odometry prior is made of; part of the keys of benchmark drives, rows and
+#: checkpoints made with it, so a result of another prior is made again.
+PRIOR_MODEL = "wheel travel, gyro rotation"
 
 
 class WheelGyroPrior:
@@ -80,3 +87,25 @@ class WheelGyroPrior:
         if attitude is not None and previous[1] is not None:
             base[:3, :3] = previous[1].T @ attitude
         return np.linalg.inv(self.lidar_mount) @ base @ self.lidar_mount
+
+
+def stored_steps(run: Any, stamps_s: NDArray[np.float64], mount: np.ndarray, *,
+                 gyro: bool = True) -> NDArray[np.float64]:
+    """The prior's steps of a sensor between consecutive ``stamps_s`` of a stored run
+    (:class:`~marsscene.runs.runlog.RunLog`): its ``odom.tum`` and gyro fed in time order, as
+    a drive feeds the listener. (N - 1, 4, 4), the pose at stamp k in the sensor's frame at
+    stamp k - 1; the odometry must have a pose at or before the first stamp."""
+    prior = WheelGyroPrior(mount, gyro=gyro)
+    odom, imu = run.odom, run.imu  # imu: t, accel xyz, gyro xyz
+    wxyz = odom.quat_xyzw[:, [3, 0, 1, 2]]
+    i = j = 0
+    steps = []
+    for t in np.asarray(stamps_s, dtype=np.float64):
+        while i < len(odom) and odom.timestamps_s[i] <= t + 1e-9:
+            prior.control(odom.timestamps_s[i], odom.xyz_m[i], wxyz[i])
+            i += 1
+        while j < len(imu) and imu[j, 0] <= t + 1e-9:
+            prior.imu(imu[j, 0], imu[j, 4:7])
+            j += 1
+        steps.append(prior.step(t))
+    return np.array(steps[1:], dtype=np.float64).reshape(-1, 4, 4)

@@ -6,12 +6,16 @@ next on the TUM RGB-D export and chain the steps.
 
 * ``open3d-rgbd`` (plain): every pair starts from the identity; a pair Open3D reports as failed
   keeps the previous step (constant velocity).
-* ``open3d-rgbd`` with ``options.wheel_prior = true``: the wheel odometry (``odom.tum``:
-  planar, from the wheel rates and steering, what RTAB-Map receives as ``odom_topic`` in the
-  paper's RGB-D + wheel-odometry setup) gives each pair's **initial guess**, the camera's
-  motion between the two frames, and its **fallback**: where Open3D fails, or its step departs
-  from the wheel step by more than ``max_step_dev_m`` (translation) or ``max_step_dev_deg``
-  (rotation), the wheel step is used. Tracked frames are those whose visual step was kept.
+* ``open3d-rgbd`` with ``options.wheel_prior = true``: the rover's odometry, what RTAB-Map
+  receives as ``odom_topic`` in the paper's RGB-D + wheel-odometry setup, gives each pair's
+  **initial guess**, the camera's motion between the two frames, and its **fallback**: where
+  Open3D fails, or its step departs from the odometry's by more than ``max_step_dev_m``
+  (translation) or ``max_step_dev_deg`` (rotation), the odometry's step is used. Tracked frames
+  are those whose visual step was kept. The odometry is the LiDAR baseline's prior
+  (:mod:`.odometry_prior`): the travel from the wheels (``odom.tum``, planar, from the wheel
+  rates and steering) and the rotation from the gyro (``imu.csv``), so a fallback across a
+  crater rim keeps the rover's tilt change; ``options.gyro = false`` takes the rotation from
+  the planar wheel odometry too.
 
 ``decimate = 2`` runs on images halved in each direction (colour and depth averaged over 2 x 2
 pixels, a block with a missing depth has none; intrinsics halved): a quarter of the pixels,
@@ -70,26 +74,23 @@ def _associations(folder: Path) -> list[list[str]]:
     return [ln.split() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
 
 
-def wheel_camera_steps(run_dir: Path, stamps_s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The navcam's motion between consecutive frames from the wheel odometry: (N - 1, 4, 4),
-    the pose of frame k in the optical frame of frame k - 1 (``odom.tum`` at the frames'
-    stamps, composed with the navcam's mount)."""
-    from scipy.spatial.transform import Rotation
-
+def wheel_camera_steps(run_dir: Path, stamps_s: NDArray[np.float64], *,
+                       gyro: bool = True) -> NDArray[np.float64]:
+    """The navcam's motion between consecutive frames from the rover's odometry: (N - 1, 4, 4),
+    the pose of frame k in the optical frame of frame k - 1 (the wheels' travel and the gyro's
+    rotation, or with ``gyro=False`` the planar ``odom.tum`` alone, at the frames' stamps,
+    composed with the navcam's mount)."""
+    from marsscene.benchmark.slam.odometry_prior import stored_steps
     from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
 
     run = RunLog(run_dir)
     odom = run.odom
-    idx = np.searchsorted(odom.timestamps_s, stamps_s - 1e-6)
-    idx = np.clip(idx, 0, len(odom) - 1)
+    idx = np.clip(np.searchsorted(odom.timestamps_s, stamps_s - 1e-6), 0, len(odom) - 1)
     if np.abs(odom.timestamps_s[idx] - stamps_s).max(initial=0.0) > 0.011:
         raise RuntimeSimError(f"{run_dir}: odom.tum has no pose at some camera frames")
-    base = np.tile(np.eye(4), (len(idx), 1, 1))
-    base[:, :3, :3] = Rotation.from_quat(odom.quat_xyzw[idx]).as_matrix()
-    base[:, :3, 3] = odom.xyz_m[idx]
     name = run.camera_streams()[0].name
-    cam = base @ frame_in_base(static_transforms(run.rover, {}), camera_frame(name))
-    return np.linalg.inv(cam[:-1]) @ cam[1:]
+    mount = frame_in_base(static_transforms(run.rover, {}), camera_frame(name))
+    return stored_steps(run, stamps_s, mount, gyro=gyro)
 
 
 def step_deviation(a: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[float, float]:
@@ -166,7 +167,7 @@ def _start(checkpoint: Path | None, key: str, n_rows: int
 
 def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
                   wheel_prior: bool = False, max_step_dev_m: float = 0.02,
-                  max_step_dev_deg: float = 1.0, decimate: int = 1,
+                  max_step_dev_deg: float = 1.0, gyro: bool = True, decimate: int = 1,
                   checkpoint: Path | None = None, checkpoint_key: str = "",
                   checkpoint_every: int = 500) -> RgbdOdometry:
     """Frame-to-frame Open3D RGB-D odometry over a TUM RGB-D folder (module doc).
@@ -176,14 +177,17 @@ def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
     folder : Path
         The TUM RGB-D export (its depth scale from ``orbslam3_rgbd.yaml``).
     run_dir : Path
-        The run folder (intrinsics; ``odom.tum`` for the wheel prior).
+        The run folder (intrinsics; ``odom.tum`` and ``imu.csv`` for the wheel prior).
     depth_trunc_m : float
         Depth beyond this is ignored (m).
     wheel_prior : bool
-        Start each pair from the wheel odometry's step and fall back to it (module doc).
+        Start each pair from the odometry's step and fall back to it (module doc).
     max_step_dev_m, max_step_dev_deg : float
         With ``wheel_prior``: largest departure of a visual step from the wheel step that is
         kept (m, deg).
+    gyro : bool
+        With ``wheel_prior``: the odometry's rotation from the gyro (False: the planar wheel
+        odometry's).
     decimate : {1, 2, 4}
         Image size divisor (module doc).
     checkpoint : Path, optional
@@ -209,7 +213,7 @@ def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
                                             i["fy"] / d, i["cx"] / d, i["cy"] / d)
     odo = o3d.pipelines.odometry
     stamps = np.array([float(r[0]) for r in rows])
-    prior = wheel_camera_steps(run_dir, stamps) if wheel_prior else None
+    prior = wheel_camera_steps(run_dir, stamps, gyro=gyro) if wheel_prior else None
     frame = _frame_reader(o3d, folder, halvings, depth_trunc_m)
     jac, opt = odo.RGBDOdometryJacobianFromHybridTerm(), odo.OdometryOption()
     poses, visual, step = _start(checkpoint, checkpoint_key, len(rows))
