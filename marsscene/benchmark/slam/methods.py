@@ -159,7 +159,7 @@ def _kiss_icp(cell: CellData, method: MethodSpec) -> Estimate:
         summary = json.loads((cell.run_dir / DRIVE_FILE).read_text(encoding="utf-8"))["summary"]
         kept, scans = summary["icp_steps_kept"][method.name]
         return Estimate(read_tum(live), frames_tracked=int(kept),
-                        note=f"{kept} of {scans} ICP steps kept, the others the wheel odometry's")
+                        note=f"{kept} of {scans} ICP steps kept, the others the odometry's")
     if method.options.get("wheel_prior"):
         return Estimate(None, status="failed", note="no live KISS-ICP estimate (the wheel "
                         "prior runs during the drive)")
