@@ -111,7 +111,7 @@ def _report(run_dir: Path, model: str, mode: str) -> None:
     est = Trajectory(np.asarray(stamps), poses[:, :3, 3],
                      Rotation.from_matrix(poses[:, :3, :3]).as_quat())
     score = score_lidar_odometry(est, run)
-    gt = lidar_ground_truth(run)
+    gt = lidar_ground_truth(run.gt, run.rover)
     first = np.linalg.inv(_pose(gt, stamps[0]))
     anchored = []
     for i in range(0, len(stamps), 50):

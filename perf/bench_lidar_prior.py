@@ -172,7 +172,7 @@ def main(argv: list[str]) -> None:
         live = _replay(run_dir, gates) if replay else _drive(name, seconds, model, run_dir,
                                                                gates)
         run = RunLog(run_dir)
-        gt = lidar_ground_truth(run)
+        gt = lidar_ground_truth(run.gt, run.rover)
         for mode, odo in live.items():
             est = odo.trajectory()
             score = score_lidar_odometry(est, run)

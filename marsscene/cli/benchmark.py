@@ -78,3 +78,30 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
         click.echo(f"wrote: {f}")
     if any(c["status"] == "failed" for c in res.cells):
         raise SystemExit(1)
+
+
+@benchmark.command(short_help="Copy a SLAM benchmark's results, without its scenes and logs.")
+@click.argument("bench_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.argument("dest", type=click.Path(file_okay=False, path_type=Path))
+@click.option("--max-rate-hz", type=click.FloatRange(min=0.0, min_open=True), default=None,
+              help="Thin every trajectory to about this many poses a second (the plots need "
+              "about 1; the rows are scored already). Default: every pose.")
+def pack(bench_dir: Path, dest: Path, max_rate_hz: float | None) -> None:
+    """Copy the results of the SLAM benchmark in BENCH_DIR to DEST: its table, plots and
+    report, and each cell's rows, estimates and ground truth (megabytes where the cells hold
+    gigabytes). `benchmark slam SPEC --out DEST --resume` reuses every cell of DEST whose rows
+    are all current and runs the rest; DEST may be an earlier pack, updated. With
+    --max-rate-hz the trajectories are thinned (each file says so): the table and report
+    stay the same, the plots draw fewer poses.
+
+    \b
+    Example (a long benchmark carried over to another machine, finished cells only):
+      marsscene benchmark pack bench/paper results/paper --max-rate-hz 1
+      marsscene benchmark slam paper.toml --out results/paper --resume
+    """
+    from marsscene.benchmark.slam.pack import pack_benchmark
+
+    with user_errors():
+        done = pack_benchmark(bench_dir, dest, max_rate_hz=max_rate_hz)
+    click.echo(f"packed {done.cells} cells: {done.files} files, {done.bytes / 1e6:.1f} MB "
+               f"into {dest}")

@@ -27,7 +27,7 @@ from marsscene.runs.tum import Trajectory, read_tum
 
 __all__ = ["LIDAR_IN_BAG", "CameraStream", "IncompleteRunWarning", "RunLog",
            "move_lidar_into_bag", "read_image", "read_numeric_csv",
-           "read_ply"]
+           "read_ply", "run_rover"]
 
 _REQUIRED = ("run.json", "gt.tum", "odom.tum", "cmd.csv", "wheels.csv", "imu.csv")
 #: Marker in ``lidar/`` of a run whose PLY scans were removed once its bag held them.
@@ -151,6 +151,14 @@ def read_ply(path: Path) -> NDArray[Any]:
     return np.frombuffer(raw, dtype=np.dtype(fields), count=n, offset=end + len(b"end_header\n"))
 
 
+def run_rover(meta: dict[str, Any]) -> RoverConfig:
+    """The rover a run drove, from its ``run.json`` (``meta``); keys of other versions
+    ignored."""
+    rover = {k: v for k, v in meta.get("rover", {}).items()
+             if k in RoverConfig.__dataclass_fields__}
+    return RoverConfig(**rover)
+
+
 class RunLog:
     """The logs of one run folder (see :mod:`marsscene.runs.logs` for the layout).
 
@@ -168,9 +176,7 @@ class RunLog:
                 f"{self.path} is not a complete run folder: missing {', '.join(missing)}"
             )
         self.meta: dict[str, Any] = json.loads((self.path / "run.json").read_text("utf-8"))
-        rover = {k: v for k, v in self.meta.get("rover", {}).items()
-                 if k in RoverConfig.__dataclass_fields__}
-        self.rover = RoverConfig(**rover)
+        self.rover = run_rover(self.meta)
         #: "complete", "interrupted" (Ctrl-C: finished up to there) or "running" (killed)
         self.status: str = str((self.meta.get("summary") or {}).get("status", "complete"))
         cut = self.incomplete = self.status != "complete"

@@ -55,7 +55,7 @@ def test_kiss_icp_tracks_an_8_m_drive_within_1_percent(tmp_path):
     assert score.ate_percent < 1.0, score
     assert abs(score.estimated_path_m / score.path_m - 1.0) < 0.3, score
     # the ground truth it is scored against is the lidar_link pose: the mast top
-    gt = lidar_ground_truth(run)
+    gt = lidar_ground_truth(run.gt, run.rover)
     assert np.all(gt.xyz_m[:, 2] - run.gt.xyz_m[:, 2] > 1.0)
     # fed live, KISS-ICP gives the pipeline's estimate on the bag (which writes 4 decimals)
     traj = live.trajectory()

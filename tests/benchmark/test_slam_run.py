@@ -12,21 +12,12 @@ import pytest
 os.environ.setdefault("MUJOCO_GL", "egl")
 pytest.importorskip("mujoco")
 
+from bench_util import FLAT_SCENE
 from click.testing import CliRunner
 
 from marsscene.cli import main
 
-SCENE = """
-[terrain]
-source = "procedural"
-size_m = [40.0, 40.0]
-post_m = 0.25
-rms_height_m = 0.05
-[craters]
-enabled = false
-[rocks]
-enabled = false
-"""
+SCENE = FLAT_SCENE
 
 SPEC = """
 [benchmark]

@@ -15,15 +15,15 @@ estimate ``kiss_icp_pipeline`` gives on the bag), so the LiDAR stream is stored 
 scored (a resumed benchmark that must run a camera method again drives the cell again).
     methods/<method>.json              each method's score row (written last: marks it done)
 
-Every stage is atomic and keyed by a hash of its inputs, so a resumed benchmark redoes only
-what changed or never finished. Errors never escape :func:`run_slam_cell`.
+Every stage is atomic and keyed by a hash of its inputs (:mod:`.keys`), so a resumed benchmark
+redoes only what changed or never finished; a cell whose rows are all current is reused from
+its result files alone (:mod:`.pack`: no scene or logs needed). Errors never escape
+:func:`run_slam_cell`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import json
 import logging
 import math
 import time
@@ -33,9 +33,10 @@ from pathlib import Path
 from typing import Any
 
 from marsscene._atomic import replacing_dir, write_atomic
+from marsscene.benchmark.slam.keys import drive_key, method_file, read_json, write_json
 from marsscene.benchmark.slam.methods import DRIVE_FILE, CellData, estimate
 from marsscene.benchmark.slam.metrics import failed_score, score_estimate
-from marsscene.benchmark.slam.odometry_prior import PRIOR_MODEL
+from marsscene.benchmark.slam.pack import scored_cell
 from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
 from marsscene.errors import MarsSceneError
 from marsscene.sweep.cell import run_cell
@@ -45,24 +46,6 @@ __all__ = ["DRIVE_FILE", "run_slam_cell"]
 
 log = logging.getLogger("marsscene")
 IMAGES_REMOVED = "images_removed.txt"  # in drive/: the camera images were deleted after scoring
-
-
-def _digest(doc: Any) -> str:
-    blob = json.dumps(doc, sort_keys=True, separators=(",", ":"), default=str)
-    return hashlib.sha256(blob.encode("utf-8")).hexdigest()
-
-
-def _read_json(path: Path) -> dict[str, Any] | None:
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return doc if isinstance(doc, dict) else None
-
-
-def _write_json(path: Path, doc: dict[str, Any]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, json.dumps(doc, indent=1, sort_keys=True, default=str) + "\n")
 
 
 def is_lidar_cell(spec: SlamSpec, tau: float) -> bool:
@@ -91,21 +74,10 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     """Drive the cell's route with its sensors into ``cell_dir/drive`` (unless done); the
     ``live`` methods (KISS-ICP) run on the LiDAR during the drive."""
     final = cell_dir / "drive"
-    route_doc: dict[str, Any] = dataclasses.asdict(scene.route)
-    if scene.route.file is not None:
-        route_doc["file_sha256"] = hashlib.sha256(Path(scene.route.file).read_bytes()).hexdigest()
-    run = spec.run_config(lidar=lidar, camera=camera)
-    bag = (lidar and spec.needs_bag()) or (bool(spec.sensors.get("bag", False))
-                                           and (run.camera is not None or run.lidar is not None))
     live = live if lidar else ()
-    key = _digest({"scene": scene_hash, "route": route_doc, "seconds": scene.seconds,
-                   "sensors": {k: v for k, v in spec.sensors.items()
-                               if (lidar or k != "lidar") and (camera or k != "camera")},
-                   "noise": dataclasses.asdict(run.noise),  # the profile's values, defaults too
-                   "lidar": lidar, "bag": bag,
-                   "live": [dataclasses.asdict(m) for m in live],
-                   **({"prior": PRIOR_MODEL} if live else {})})
-    done = None if force else _read_json(final / DRIVE_FILE)
+    key, bag = drive_key(spec, scene, lidar, scene_hash, camera, live)
+    run = spec.run_config(lidar=lidar, camera=camera)
+    done = None if force else read_json(final / DRIVE_FILE)
     if done is not None and done.get("key") == key:
         return dict(done["summary"])
     import marsscene as ms
@@ -141,7 +113,7 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
                                       for n, o in odometry.items() if o.wheel_prior},
                    **{k: drv.summary.get(k) for k in ("path_length_m", "sim_time_s",
                                                       "goal_reached", "cross_track_rms_m")}}
-        _write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
+        write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
     return summary
 
 
@@ -158,36 +130,27 @@ def _remove_images(run_dir: Path) -> int:
     return len(files)
 
 
-def _method_file(spec: SlamSpec, method: MethodSpec, cell_dir: Path, drive_key: str
-                 ) -> tuple[Path, str]:
-    """Where a method's row lies, and the key of its inputs."""
-    key = _digest({"method": dataclasses.asdict(method), "drive": drive_key,
-                   "min_tracked": spec.min_tracked_fraction, "rpe_m": spec.rpe_distance_m,
-                   **({"prior": PRIOR_MODEL} if method.options.get("wheel_prior") else {})})
-    return cell_dir / "methods" / f"{method.name}.json", key
-
-
 def _needs_images(spec: SlamSpec, methods: list[MethodSpec], cell_dir: Path) -> bool:
     """A camera method of the cell must run, but its images were deleted after scoring."""
     run_dir = cell_dir / "drive"
     if not (run_dir / IMAGES_REMOVED).is_file():
         return False
-    drive_key = str((_read_json(run_dir / DRIVE_FILE) or {}).get("key"))
+    drive_hash = str((read_json(run_dir / DRIVE_FILE) or {}).get("key"))
     for m in methods:  # a tum-file method reads its own file, a command maybe the images
         if m.kind == "tum-file" or (m.sensor != "camera" and m.kind != "command"):
             continue
-        path, key = _method_file(spec, m, cell_dir, drive_key)
-        done = _read_json(path)
+        path, key = method_file(spec, m, cell_dir, drive_hash)
+        done = read_json(path)
         if done is None or done.get("key") != key:
             return True
     return False
 
 
-def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_key: str,
+def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_hash: str,
            force: bool) -> dict[str, Any]:
     """The method's row, from ``methods/<name>.json`` when its inputs did not change."""
-    path, key = _method_file(spec, method, data.cell_dir, drive_key)
-    done = None if force or method.kind == "tum-file" else _read_json(path)
+    path, key = method_file(spec, method, data.cell_dir, drive_hash)
+    done = None if force or method.kind == "tum-file" else read_json(path)
     if done is not None and done.get("key") == key:
         return dict(done["row"])
     t0 = time.perf_counter()
@@ -211,7 +174,7 @@ def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_key: str
         score = failed_score("failed", f"{type(err).__name__}: {err}", align=str(method.align))
     row = {"method": method.name, "kind": method.kind, **score.as_row(),
            "t_method_s": round(time.perf_counter() - t0, 3)}
-    _write_json(path, {"key": key, "row": row})
+    write_json(path, {"key": key, "row": row})
     return row
 
 
@@ -225,6 +188,21 @@ def _score_or_fail(spec: SlamSpec, method: MethodSpec, **kw: Any) -> dict[str, A
         log.warning("method %s failed: %s", method.name, msg)
         return {"method": method.name, "kind": method.kind,
                 **failed_score("failed", msg, align=str(method.align)).as_row()}
+
+
+def _images_to_remove(spec: SlamSpec, camera: bool, cell_dir: Path) -> bool:
+    """The cell's camera images are still on disk, to be deleted once it is scored."""
+    return camera and not spec.sensors.get("keep_images", True) \
+        and not (cell_dir / "drive" / IMAGES_REMOVED).is_file()
+
+
+def _with_drive(row: dict[str, Any], drv: dict[str, Any]) -> dict[str, Any]:
+    """``row`` with the drive's summary and its columns of the cells' table."""
+    row["drive"] = drv
+    row.update(distance_m=drv.get("path_length_m"), sim_time_s=drv.get("sim_time_s"),
+               goal_reached=drv.get("goal_reached"), t_drive_s=drv.get("t_drive_s"),
+               cross_track_rms_m=drv.get("cross_track_rms_m"))
+    return row
 
 
 def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = False,
@@ -245,22 +223,24 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
     main = seed in spec.seeds
     lidar = is_lidar_cell(spec, tau) and (main or any(m.sensor == "lidar" for m in methods))
     camera = main or any(m.sensor == "camera" for m in methods)
+    cell_dir = Path(out_dir) / cell.cell_id
+    live = tuple(m for m in methods if m.kind == "kiss-icp")
+    stored_row = None if force else scored_cell(spec, scene, cell, cell_dir, methods,
+                                                lidar=lidar, camera=camera, live=live)
+    if stored_row is not None and not _images_to_remove(spec, camera, cell_dir):
+        return _with_drive(stored_row, stored_row["drive"])  # a packed cell: no scene needed
     row = run_cell(cell, out_dir, None, force=force)
     row["methods"] = []
-    cell_dir = Path(out_dir) / cell.cell_id
     try:
         if row["status"] == "failed":
             raise MarsSceneError(row["error"])
         redrive = force or _needs_images(spec, methods, cell_dir)
-        row["drive"] = drv = _drive(spec, scene, cell_dir, lidar, str(row.get("config_hash")),
-                                    redrive, camera,
-                                    tuple(m for m in methods if m.kind == "kiss-icp"))
-        row.update(distance_m=drv.get("path_length_m"), sim_time_s=drv.get("sim_time_s"),
-                   goal_reached=drv.get("goal_reached"), t_drive_s=drv.get("t_drive_s"),
-                   cross_track_rms_m=drv.get("cross_track_rms_m"))
-        drive_key = _read_json(cell_dir / "drive" / DRIVE_FILE) or {}
+        drv = _drive(spec, scene, cell_dir, lidar, str(row.get("config_hash")), redrive,
+                     camera, live)
+        _with_drive(row, drv)
+        stored = read_json(cell_dir / "drive" / DRIVE_FILE) or {}
         data = CellData(cell_dir, scene.name, tau, seed)
-        score = partial(_score_or_fail, spec, data=data, drive_key=str(drive_key.get("key")),
+        score = partial(_score_or_fail, spec, data=data, drive_hash=str(stored.get("key")),
                         force=force)
         if method_workers <= 1 or len(methods) <= 1:
             row["methods"] += [score(m) for m in methods]
@@ -268,8 +248,7 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
             with ThreadPoolExecutor(min(method_workers, len(methods)),
                                     thread_name_prefix="slam-method") as pool:
                 row["methods"] += list(pool.map(score, methods))  # in the spec's order
-        if camera and not spec.sensors.get("keep_images", True) \
-                and not (cell_dir / "drive" / IMAGES_REMOVED).is_file():
+        if _images_to_remove(spec, camera, cell_dir):
             _remove_images(cell_dir / "drive")
     except Exception as err:  # one failing cell never stops the benchmark
         msg = " ".join(f"{type(err).__name__}: {err}".split())

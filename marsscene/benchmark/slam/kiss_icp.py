@@ -240,12 +240,12 @@ def lidar_mount(rover: Any) -> np.ndarray:
     return mount
 
 
-def lidar_ground_truth(run: RunLog) -> Trajectory:
-    """The ground-truth pose of ``lidar_link`` (the base pose composed with the LiDAR mount)."""
+def lidar_ground_truth(gt: Trajectory, rover: Any) -> Trajectory:
+    """The ground-truth pose of ``lidar_link``: the base pose ``gt`` (a run's ``gt.tum``)
+    composed with the LiDAR mount of ``rover`` (a :class:`~marsscene.rover.RoverConfig`)."""
     from scipy.spatial.transform import Rotation
 
-    (mx, my, mz), pitch = sensor_mounts(run.rover)["lidar"]
-    gt = run.gt
+    (mx, my, mz), pitch = sensor_mounts(rover)["lidar"]
     rot = Rotation.from_quat(gt.quat_xyzw)
     xyz = gt.xyz_m + rot.apply(np.array([mx, my, mz]))
     quat = (rot * Rotation.from_euler("y", pitch)).as_quat()
@@ -255,7 +255,7 @@ def lidar_ground_truth(run: RunLog) -> Trajectory:
 def score_lidar_odometry(estimate: Trajectory | None, run: RunLog) -> LidarOdometryScore:
     """ATE of ``estimate`` against the run's lidar_link ground truth (``status`` says why a
     run has no score)."""
-    gt = lidar_ground_truth(run)
+    gt = lidar_ground_truth(run.gt, run.rover)
     path = gt.path_length_m()
     if estimate is None or len(estimate) < 3:
         return LidarOdometryScore(float("nan"), path, float("nan"),

@@ -37,7 +37,7 @@ from scipy.spatial.transform import Rotation
 from marsscene.benchmark.slam.odometry_prior import PRIOR_MODEL
 from marsscene.benchmark.slam.spec import MethodSpec
 from marsscene.errors import MarsSceneError, MissingDependencyError
-from marsscene.runs.runlog import RunLog, read_image
+from marsscene.runs.runlog import RunLog, read_image, run_rover
 from marsscene.runs.tum import Trajectory, read_tum
 
 __all__ = ["DRIVE_FILE", "CellData", "Estimate", "estimate"]
@@ -72,12 +72,13 @@ class CellData:
         """Ground truth of ``base``, ``camera`` (navcam optical) or ``lidar`` (lidar_link)."""
         if frame == "camera":
             return read_tum(self.run_dir / "tum_rgbd" / "groundtruth.txt")
-        run = RunLog(self.run_dir)
-        if frame == "lidar":
+        gt = read_tum(self.run_dir / "gt.tum")
+        if frame == "lidar":  # from gt.tum and run.json alone: a packed cell has no more
             from marsscene.benchmark.slam.kiss_icp import lidar_ground_truth
 
-            return lidar_ground_truth(run)
-        return run.gt
+            meta = json.loads((self.run_dir / "run.json").read_text(encoding="utf-8"))
+            return lidar_ground_truth(gt, run_rover(meta))
+        return gt
 
     def frames(self, sensor: str) -> int:
         """Sensor frames of the run: camera images, LiDAR scans, or ground-truth poses."""
