@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,16 +20,22 @@ from click.testing import CliRunner
 from marsscene.cli import main
 
 
-def _spec(tmp_path: Path) -> object:
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
+    """A two-cell benchmark (wheel odometry, seeds 1 and 2), run once: (spec, its folder)."""
+    from marsscene.benchmark.slam.run import run_slam_benchmark
     from marsscene.benchmark.slam.spec import SlamSpec
 
-    (tmp_path / "scene.toml").write_text(FLAT_SCENE, encoding="utf-8")
-    return SlamSpec.from_dict({
+    root = tmp_path_factory.mktemp("packbench")
+    (root / "scene.toml").write_text(FLAT_SCENE, encoding="utf-8")
+    spec = SlamSpec.from_dict({
         "benchmark": {"tau": [0.5], "seeds": [1]},
         "scenes": [{"name": "s", "config": "scene.toml", "seconds": 3.0,
                     "route": {"waypoints": [[-3.0, 0.0], [3.0, 0.0]]}}],
         "methods": [{"name": "wheel", "kind": "wheel-odometry", "seeds": [1, 2]}],
-    }, base_dir=tmp_path)
+    }, base_dir=root)
+    run_slam_benchmark(spec, root / "out", serial=True)
+    return spec, root / "out"
 
 
 def _scores(root: Path) -> list[dict[str, str]]:
@@ -41,12 +48,12 @@ def _sizes(root: Path) -> int:
     return sum(p.stat().st_size for p in root.rglob("*") if p.is_file())
 
 
-def test_a_packed_benchmark_resumes_without_scenes_or_logs(tmp_path: Path) -> None:
+def test_a_packed_benchmark_resumes_without_scenes_or_logs(bench: tuple[Any, Path],
+                                                            tmp_path: Path) -> None:
     from marsscene.benchmark.slam.run import run_slam_benchmark
 
-    spec = _spec(tmp_path)
-    out, packed = tmp_path / "out", tmp_path / "packed"
-    run_slam_benchmark(spec, out, serial=True)  # type: ignore[arg-type]
+    spec, out = bench
+    packed = tmp_path / "packed"
     res = CliRunner().invoke(main, ["benchmark", "pack", str(out), str(packed)])
     assert res.exit_code == 0, res.output
     assert res.output.startswith("packed 2 cells: ")
@@ -57,7 +64,7 @@ def test_a_packed_benchmark_resumes_without_scenes_or_logs(tmp_path: Path) -> No
                 "methods/wheel.json"):
         assert (cell / rel).is_file(), rel
 
-    again = run_slam_benchmark(spec, packed, serial=True, resume=True)  # type: ignore[arg-type]
+    again = run_slam_benchmark(spec, packed, serial=True, resume=True)
     assert not list(packed.rglob("scene"))  # reused as packed: nothing built, nothing driven
     assert [c["status"] for c in again.cells] == ["skipped", "skipped"]
     for name in ("results.csv", "table.md", "report.md"):
@@ -65,20 +72,20 @@ def test_a_packed_benchmark_resumes_without_scenes_or_logs(tmp_path: Path) -> No
     assert (packed / "traj_s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
     (cell / "methods" / "wheel.json").unlink()  # a row missing: that cell runs again
-    run_slam_benchmark(spec, packed, serial=True, resume=True)  # type: ignore[arg-type]
+    run_slam_benchmark(spec, packed, serial=True, resume=True)
     assert (cell / "scene" / "mjcf" / "scene.xml").is_file()
     assert not (packed / "cells" / "scene=s__tau=0.5__seed=1" / "scene").exists()
     assert _scores(packed) == _scores(out)  # the same scores (its timing is new)
 
 
-def test_a_thinned_pack_keeps_the_rows_and_plots_fewer_poses(tmp_path: Path) -> None:
+def test_a_thinned_pack_keeps_the_rows_and_plots_fewer_poses(bench: tuple[Any, Path],
+                                                             tmp_path: Path) -> None:
     from marsscene.benchmark.slam.pack import pack_benchmark
     from marsscene.benchmark.slam.run import run_slam_benchmark
     from marsscene.runs.tum import read_tum
 
-    spec = _spec(tmp_path)
-    out, thin = tmp_path / "out", tmp_path / "thin"
-    run_slam_benchmark(spec, out, serial=True)  # type: ignore[arg-type]
+    spec, out = bench
+    thin = tmp_path / "thin"
     pack_benchmark(out, thin, max_rate_hz=2.0)
     cell = "cells/scene=s__tau=0.5__seed=1"
     est, gt = (read_tum(thin / cell / rel) for rel in ("estimates/wheel.tum", "drive/gt.tum"))
@@ -88,7 +95,7 @@ def test_a_thinned_pack_keeps_the_rows_and_plots_fewer_poses(tmp_path: Path) -> 
     assert len(gt) < len(full) / 10
     assert "thinned by marsscene benchmark pack" in (thin / cell / "drive" / "gt.tum").read_text(
         encoding="utf-8")
-    run_slam_benchmark(spec, thin, serial=True, resume=True)  # type: ignore[arg-type]
+    run_slam_benchmark(spec, thin, serial=True, resume=True)
     assert not list(thin.rglob("scene"))
     for name in ("results.csv", "table.md", "report.md"):
         assert (thin / name).read_bytes() == (out / name).read_bytes(), name
