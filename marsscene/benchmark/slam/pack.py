@@ -105,8 +105,8 @@ def _poses(path: Path) -> tuple[list[str], list[str], NDArray[np.float64]]:
     return head, poses, np.array([float(ln.split()[0]) for ln in poses], dtype=np.float64)
 
 
-def _write_thinned(path: Path, target: Path, keep: NDArray[np.bool_], rate_hz: float) -> None:
-    head, poses, _ = _poses(path)
+def _write_thinned(head: list[str], poses: list[str], target: Path, keep: NDArray[np.bool_],
+                   rate_hz: float) -> None:
     note = f"# thinned by marsscene benchmark pack to about {rate_hz:g} pose(s) a second"
     target.parent.mkdir(parents=True, exist_ok=True)
     target.write_text("\n".join([*head, note, *(p for p, k in zip(poses, keep, strict=True)
@@ -119,21 +119,21 @@ def _thin_cell(cell_dir: Path, dest: Path, rate_hz: float) -> None:
     estimate (what the plots align them by)."""
     kept: list[NDArray[np.float64]] = []
     for est in sorted((cell_dir / "estimates").glob("*.tum")):
-        _, _, t = _poses(est)
+        head, poses, t = _poses(est)
         keep = np.r_[True, np.diff(np.floor(t * rate_hz)) != 0] if len(t) else t > 0
-        _write_thinned(est, dest / est.relative_to(cell_dir), keep, rate_hz)
+        _write_thinned(head, poses, dest / est.relative_to(cell_dir), keep, rate_hz)
         kept.append(t[keep])
     near = np.sort(np.concatenate(kept)) if kept else np.zeros(0)
     for rel in ("drive/gt.tum", "drive/tum_rgbd/groundtruth.txt"):
         if not (cell_dir / rel).is_file():
             continue
-        _, _, t = _poses(cell_dir / rel)
+        head, poses, t = _poses(cell_dir / rel)
         keep = np.r_[True, np.diff(np.floor(t * rate_hz)) != 0] if len(t) else t > 0
         if len(t) and len(near):
             hi = np.clip(np.searchsorted(t, near), 1, len(t) - 1)
             nearest = np.where(near - t[hi - 1] <= t[hi] - near, hi - 1, hi)
             keep[nearest] = True
-        _write_thinned(cell_dir / rel, dest / rel, keep, rate_hz)
+        _write_thinned(head, poses, dest / rel, keep, rate_hz)
 
 
 def pack_benchmark(bench_dir: str | Path, dest: str | Path, *,
