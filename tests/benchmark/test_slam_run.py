@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import csv
+import json
 import os
+import re
 import shutil
 from pathlib import Path
 
@@ -118,6 +120,21 @@ def test_table_plot_and_report_are_written(bench: tuple[Path, Path, str]) -> Non
     n_ok = sum(r["status"] == "ok" for r in _rows(out).values())
     assert f"Scenes tiny × τ 0.5, 6 × seeds 3: 2 cells, 7 methods; {n_ok} of 13 runs tracked." \
         in report
+    # the cost section adds up each cell's stored stage times
+    hours = 0.0
+    for c in sorted((out / "cells").glob("scene=*")):
+        p = json.loads((c / "result.json").read_text(encoding="utf-8"))["params"]
+        drive = json.loads((c / "drive" / "benchmark_drive.json").read_text(encoding="utf-8"))
+        t_methods = sum(json.loads(m.read_text(encoding="utf-8"))["row"].get("t_method_s") or 0.0
+                        for m in (c / "methods").glob("*.json"))
+        line = next(ln for ln in report.splitlines()
+                    if ln.startswith(f"| tiny τ {p['tau']:g} seed {p['seed']} |"))
+        cols = [v.strip().replace(",", "") for v in line.strip("|").split("|")]
+        assert float(cols[2]) == pytest.approx(drive["summary"]["t_drive_s"], abs=0.5)
+        assert float(cols[4]) == pytest.approx(t_methods, abs=0.5)
+        hours += float(cols[5])
+    total = re.search(r"2 cells: ([0-9.]+) h of stage time", report)
+    assert total is not None and float(total.group(1)) == pytest.approx(hours, abs=0.011)
     cells = (out / "cells" / "results.csv").read_text(encoding="utf-8").splitlines()
     assert len(cells) == 3 and cells[0].startswith("cell_id,scene,tau,seed,status")
     cell = out / "cells" / "scene=tiny__tau=0.5__seed=3"

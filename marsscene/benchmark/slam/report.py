@@ -23,7 +23,7 @@ from marsscene.benchmark.slam.table import FAIL, ate_table_markdown, table_colum
 from marsscene.errors import MarsSceneError, missing_dependency
 from marsscene.runs.tum import read_tum
 
-__all__ = ["write_report"]
+__all__ = ["cost_lines", "write_report"]
 
 _COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
            "#17becf", "#bcbd22", "#7f7f7f")
@@ -166,6 +166,38 @@ def _fmt(v: Any, spec: str = ".2f") -> str:
     return format(v, spec) if isinstance(v, int | float) and math.isfinite(v) else "–"
 
 
+def _seconds(v: Any) -> float:
+    return float(v) if isinstance(v, int | float) and math.isfinite(v) else 0.0
+
+
+def cost_lines(rows: list[dict[str, Any]], cell_rows: list[dict[str, Any]]) -> list[str]:
+    """The report's ``## Cost`` section: each cell's stage times as stored with it (a resumed
+    cell keeps the times of the run that made it), and their sum over the benchmark."""
+    lines = ["## Cost", "",
+             "Each stage's own wall time, as stored with the cell (a resumed cell keeps the "
+             "times of the run that made it). The live LiDAR odometry runs beside the drive in "
+             "a process of its own; a cell's methods run side by side on `--method-workers` "
+             "threads. So stage time is work done, not the time a cell took.", "",
+             "| cell | build (s) | drive (s) | live LiDAR (s) | methods (s) | stage time (h) |",
+             "|---|---:|---:|---:|---:|---:|"]
+    total_s = 0.0
+    for c in cell_rows:
+        p = c.get("params", {})
+        build_s = _seconds(c.get("t_total_s"))
+        drive_s = _seconds(c.get("t_drive_s"))
+        live_s = sum(_seconds(v) for v in (c.get("drive") or {}).get("t_live_s", {}).values())
+        method_s = sum(_seconds(r.get("t_method_s")) for r in rows
+                       if r.get("cell_id") == c["cell_id"])
+        cell_s = build_s + drive_s + live_s + method_s
+        total_s += cell_s
+        lines.append(f"| {p.get('scene')} τ {_fmt(p.get('tau'), 'g')} seed {p.get('seed')} | "
+                     f"{build_s:,.0f} | {drive_s:,.0f} | {live_s:,.0f} | {method_s:,.0f} | "
+                     f"{cell_s / 3600:.2f} |")
+    lines += ["", f"{len(cell_rows)} cells: {total_s / 3600:.2f} h of stage time (build, "
+              "drive, live LiDAR odometry and methods).", ""]
+    return lines
+
+
 def write_report(spec: SlamSpec, rows: list[dict[str, Any]], cell_rows: list[dict[str, Any]],
                  out_dir: Path) -> list[Path]:
     """Write ``table.md``, ``ate_summary.png``, ``traj_<scene>.png`` and ``report.md``."""
@@ -208,6 +240,7 @@ def write_report(spec: SlamSpec, rows: list[dict[str, Any]], cell_rows: list[dic
     if failed:
         lines += ["## Failed cells", ""] + [f"* `{c['cell_id']}`: {c.get('error')}"
                                              for c in failed] + [""]
+    lines += cost_lines(rows, cell_rows)
     lines += ["Rows: `results.csv`; cells: `cells/<cell_id>/` (scene, drive with TUM RGB-D / "
               "EuRoC exports, estimates); see docs/benchmark.md.", ""]
     report = out_dir / "report.md"

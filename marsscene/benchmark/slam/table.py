@@ -100,12 +100,13 @@ def ate_table_markdown(rows: list[dict[str, Any]], spec: SlamSpec) -> str:
                  for v, t in cells]
         route = f"{sum(routes) / len(routes):.0f}" if routes else "–"
         lines.append("| " + " | ".join([scene.name, route, *texts]) + " |")
-    seeds = ", ".join(str(s) for s in spec.seeds)
+    seeds = (f"seed {spec.seeds[0]}" if len(spec.seeds) == 1
+             else f"mean over seeds {', '.join(str(s) for s in spec.seeds)}")
     more = "; ".join(f"{m.name} over seeds {', '.join(map(str, m.seeds))} (mean ± sd)"
                      for m in spec.methods if m.seeds is not None and m.seeds != spec.seeds)
     lines += ["", f"ATE RMSE in m after Umeyama alignment (SE(3); Sim(3) for "
               f"{', '.join(m.name for m in spec.methods if m.align == 'sim3') or 'none'}), "
-              f"mean over seeds {seeds}{'; ' + more if more else ''}; route of seed "
+              f"{seeds}{'; ' + more if more else ''}; route of seed "
               f"{spec.seeds[0]}. Per-row best in **bold**; {FAIL} = tracking failure "
               "(no usable trajectory or tracked on less than "
               f"{100 * spec.min_tracked_fraction:.0f} % of the frames)."]
