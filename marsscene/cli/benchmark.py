@@ -27,13 +27,16 @@ def benchmark() -> None:
 @click.option("--method-workers", type=click.IntRange(1, 16), default=2, show_default=True,
               help="Methods of one cell run side by side on this many threads (KISS-ICP and "
               "command methods are processes of their own; results do not depend on it).")
+@click.option("--method-processes", type=click.IntRange(1, 64), default=1, show_default=True,
+              help="Processes that share a method's work where it splits: Open3D RGB-D's "
+              "frame pairs (for cores no cell uses; results do not depend on it).")
 @click.option("--length-m", type=click.FloatRange(min=5.0), default=None,
               help="A quick check: every automatic route shortened to this length (m).")
 @click.option("--scene", "scenes", multiple=True,
               help="Only this scene of the spec (repeat for several).")
 def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | None,
-         serial: bool, resume: bool, method_workers: int, length_m: float | None,
-         scenes: tuple[str, ...]) -> None:
+         serial: bool, resume: bool, method_workers: int, method_processes: int,
+         length_m: float | None, scenes: tuple[str, ...]) -> None:
     """Run the SLAM benchmark SPEC_TOML into OUT.
 
     Every cell (scene x tau x seed) is built, driven along its route with the camera (and, in
@@ -71,7 +74,8 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
         click.echo(f"benchmark slam: {n} cells x {len(spec.methods)} methods {where}", err=True)
         res = run_slam_benchmark(spec, out_dir, workers=workers, scheduler=scheduler,
                                  serial=serial, resume=resume, progress=show,
-                                 method_workers=method_workers)
+                                 method_workers=method_workers,
+                                 method_processes=method_processes)
     click.echo(f"methods: {res.count('ok')} ok, {res.count('lost')} lost, "
                f"{res.count('failed')} failed, {res.count('missing')} missing")
     for f in res.files:

@@ -9,6 +9,7 @@ import pytest
 
 from marsscene.benchmark.slam.methods import CellData, estimate
 from marsscene.benchmark.slam.metrics import score_estimate
+from marsscene.benchmark.slam.rgbd_odometry import RgbdOdometry, rgbd_odometry
 from marsscene.benchmark.slam.spec import MethodSpec
 
 
@@ -32,6 +33,19 @@ def cell(gentle_scene: Path, tmp_path_factory: pytest.TempPathFactory) -> CellDa
         pytest.skip(f"no headless OpenGL here: {err}")
     export_dataset(root / "drive", "tum-rgbd", root / "drive" / "tum_rgbd")
     return CellData(root, "gentle", 0.5, 3)
+
+
+@pytest.fixture(scope="module")
+def fused(cell: CellData) -> RgbdOdometry:
+    """Open3D RGB-D with the wheel odometry as guess and fallback, in this process."""
+    pytest.importorskip("open3d")
+    return rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, wheel_prior=True)
+
+
+def _steps(poses):  # type: ignore[no-untyped-def]
+    import numpy as np
+
+    return np.linalg.inv(poses[:-1]) @ poses[1:]
 
 
 def _score(cell: CellData, kind: str, align: str, tmp_path: Path):  # type: ignore[no-untyped-def]
@@ -60,16 +74,16 @@ def test_open3d_rgbd_odometry_tracks(cell: CellData, tmp_path: Path) -> None:
     assert score.ate_rmse_m < 0.08 * path_m  # measured 4.4 % on this texture-only ground
 
 
-def test_open3d_rgbd_with_the_wheel_odometry_as_guess_and_fallback(cell: CellData) -> None:
+def test_open3d_rgbd_with_the_wheel_odometry_as_guess_and_fallback(
+        cell: CellData, fused: RgbdOdometry) -> None:
     """The RTAB-Map-style variant: each pair starts from the wheel odometry's step and falls
     back to it; with no departure allowed it *is* the wheel odometry (in the camera frame)."""
     pytest.importorskip("open3d")
     import numpy as np
 
-    from marsscene.benchmark.slam.rgbd_odometry import rgbd_odometry, wheel_camera_steps
+    from marsscene.benchmark.slam.rgbd_odometry import wheel_camera_steps
 
     folder = cell.run_dir / "tum_rgbd"
-    fused = rgbd_odometry(folder, cell.run_dir, wheel_prior=True)
     # on this texture-only ground Open3D's steps err by ~1 cm of 3 cm: the gate (2 cm, 1 deg)
     # replaces some (measured 16 of 100); most are kept
     assert 0 < fused.fallbacks <= 0.3 * (len(fused.poses) - 1)
@@ -100,12 +114,12 @@ def test_open3d_rgbd_on_halved_images(cell: CellData) -> None:
     pytest.importorskip("open3d")
     import numpy as np
 
-    from marsscene.benchmark.slam.rgbd_odometry import _halve, rgbd_odometry
+    from marsscene.benchmark.slam.rgbd_pairs import halve
 
     depth = np.array([[1000, 1002, 0, 7], [1004, 1006, 5, 9]], np.uint16)
-    np.testing.assert_array_equal(_halve(depth, 1), [[1003, 0]])
+    np.testing.assert_array_equal(halve(depth, 1), [[1003, 0]])
     rgb = np.arange(4 * 4 * 3, dtype=np.uint8).reshape(4, 4, 3)
-    quarter = _halve(rgb, 2)  # halved twice
+    quarter = halve(rgb, 2)  # halved twice
     assert quarter.shape == (1, 1, 3) and abs(int(quarter[0, 0, 0]) - rgb[..., 0].mean()) <= 1
     res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, decimate=2)
     gt = cell.ground_truth("camera")
@@ -114,17 +128,17 @@ def test_open3d_rgbd_on_halved_images(cell: CellData) -> None:
 
 
 def test_open3d_rgbd_continues_from_its_checkpoint(cell: CellData, tmp_path: Path,
+                                                   fused: RgbdOdometry,
                                                    monkeypatch: pytest.MonkeyPatch) -> None:
-    """A scoring stopped part-way continues from the poses it saved: the pairs before the last
-    save are not run again, and the steps are those of an uninterrupted run; a checkpoint of
-    other inputs is not used."""
+    """A scoring stopped part-way continues from the chunks of pairs it saved: those pairs are
+    not run again, and the steps are those of an uninterrupted run; a checkpoint of other
+    inputs is not used."""
     o3d = pytest.importorskip("open3d")
     import numpy as np
 
-    from marsscene.benchmark.slam.rgbd_odometry import rgbd_odometry
 
-    folder, ckpt = cell.run_dir / "tum_rgbd", tmp_path / "o3d.partial.npz"
-    full = rgbd_odometry(folder, cell.run_dir, wheel_prior=True)
+    folder, ckpt = cell.run_dir / "tum_rgbd", tmp_path / "o3d.pairs"
+    full = fused
     real, calls = o3d.pipelines.odometry.compute_rgbd_odometry, []
 
     class Stop(Exception):
@@ -141,19 +155,16 @@ def test_open3d_rgbd_continues_from_its_checkpoint(cell: CellData, tmp_path: Pat
     with pytest.raises(Stop):
         rgbd_odometry(folder, cell.run_dir, wheel_prior=True, checkpoint=ckpt,
                       checkpoint_key="a", checkpoint_every=10)
-    assert ckpt.is_file()  # saved after pairs 10, 20 and 30
+    assert len(list(ckpt.glob("*.npz"))) == 3  # pairs 0-9, 10-19 and 20-29
     monkeypatch.setattr(odometry, "compute_rgbd_odometry", counted)
     calls.clear()
     resumed = rgbd_odometry(folder, cell.run_dir, wheel_prior=True, checkpoint=ckpt,
                             checkpoint_key="a", checkpoint_every=10)
     pairs = len(full.poses) - 1
-    assert len(calls) == pairs - 30 and not ckpt.is_file()
-    def steps(poses):  # type: ignore[no-untyped-def]
-        return np.linalg.inv(poses[:-1]) @ poses[1:]
-
+    assert len(calls) == pairs - 30 and not ckpt.exists()
     # each pair's result; one near Open3D's or the gate's threshold may end either way run to
     # run (the module doc; measured here: pair 54 of 100 ends 1.5 cm apart in some runs)
-    same = np.abs(steps(resumed.poses) - steps(full.poses)).max(axis=(1, 2)) < 1e-6
+    same = np.abs(_steps(resumed.poses) - _steps(full.poses)).max(axis=(1, 2)) < 1e-6
     assert same.sum() >= pairs - 2 and same[30]  # pair 30: the first after the save
     assert (resumed.visual[1:] == full.visual[1:])[same].all()
     monkeypatch.setattr(odometry, "compute_rgbd_odometry", lambda *a: counted(*a, stop_at=15))
@@ -166,6 +177,31 @@ def test_open3d_rgbd_continues_from_its_checkpoint(cell: CellData, tmp_path: Pat
     rgbd_odometry(folder, cell.run_dir, wheel_prior=True, checkpoint=ckpt, checkpoint_key="b")
     assert len(calls) == pairs  # another key: from the first pair
 
+
+
+def test_open3d_rgbd_pairs_shared_out_over_processes(cell: CellData, tmp_path: Path,
+                                                     fused: RgbdOdometry) -> None:
+    """``processes = 2``: child processes compute the chunks of pairs, with the steps of one
+    process; a chunk already saved under the key is used as it is, not computed again."""
+    import numpy as np
+
+
+    folder, ckpt = cell.run_dir / "tum_rgbd", tmp_path / "o3d.pairs"
+    pairs = len(fused.poses) - 1
+    assert pairs == 100
+    # a saved chunk, pairs 25-49, in which Open3D failed every pair: the odometry's steps
+    ckpt.mkdir()
+    np.savez(ckpt / "0000025.npz", key=np.array("k"), n_rows=np.array(pairs + 1),
+             first=np.array(25), success=np.zeros(25, bool), trans=np.tile(np.eye(4), (25, 1, 1)))
+    two = rgbd_odometry(folder, cell.run_dir, wheel_prior=True, checkpoint_every=25,
+                        processes=2, checkpoint=ckpt, checkpoint_key="k")
+    assert not ckpt.exists() and not two.visual[26:51].any()
+    # the other three chunks, from two child processes: one process's steps (a pair near a
+    # threshold may end either way run to run, the module doc)
+    others = np.r_[0:25, 50:100]
+    same = np.abs(_steps(two.poses) - _steps(fused.poses)).max(axis=(1, 2))[others] < 1e-6
+    assert same.sum() >= len(others) - 2
+    assert (two.visual[1:][others] == fused.visual[1:][others])[same].all()
 
 
 def test_the_rgbd_prior_turns_with_the_gyro(cell: CellData) -> None:

@@ -147,7 +147,7 @@ def _needs_images(spec: SlamSpec, methods: list[MethodSpec], cell_dir: Path) -> 
 
 
 def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_hash: str,
-           force: bool) -> dict[str, Any]:
+           force: bool, processes: int = 1) -> dict[str, Any]:
     """The method's row, from ``methods/<name>.json`` when its inputs did not change."""
     path, key = method_file(spec, method, data.cell_dir, drive_hash)
     done = None if force or method.kind == "tum-file" else read_json(path)
@@ -155,7 +155,7 @@ def _score(spec: SlamSpec, method: MethodSpec, *, data: CellData, drive_hash: st
         return dict(done["row"])
     t0 = time.perf_counter()
     out_tum = data.cell_dir / "estimates" / f"{method.name}.tum"
-    est = estimate(method, data, out_tum)
+    est = estimate(method, data, out_tum, processes=processes)
     try:
         gt = data.ground_truth(str(method.frame))
         if est.trajectory is None:
@@ -206,14 +206,16 @@ def _with_drive(row: dict[str, Any], drv: dict[str, Any]) -> dict[str, Any]:
 
 
 def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = False,
-                  method_workers: int = 1) -> dict[str, Any]:
+                  method_workers: int = 1, method_processes: int = 1) -> dict[str, Any]:
     """Build, drive and score one cell into ``out_dir/<cell_id>/``; return its row.
 
     The row has the sweep's build row (``status``, ``error``, timings ...) plus ``drive``
     (route and drive summary) and ``methods``: one score row per method that runs in this cell
     (LiDAR and wheel odometry only in the ``lidar_tau`` cell). A failed build or drive gives
     ``status = "failed"`` and a ``failed`` row for every method. ``method_workers`` threads
-    score the methods side by side (rows in the spec's order whatever the finishing order).
+    score the methods side by side (rows in the spec's order whatever the finishing order);
+    ``method_processes`` processes share a method's work where it splits (Open3D RGB-D's
+    frame pairs). Neither changes a row.
     """
     scene = next(s for s in spec.scenes if s.name == cell.params["scene"])
     tau, seed = float(cell.params["tau"]), int(cell.params["seed"])
@@ -241,7 +243,7 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
         stored = read_json(cell_dir / "drive" / DRIVE_FILE) or {}
         data = CellData(cell_dir, scene.name, tau, seed)
         score = partial(_score_or_fail, spec, data=data, drive_hash=str(stored.get("key")),
-                        force=force)
+                        force=force, processes=method_processes)
         if method_workers <= 1 or len(methods) <= 1:
             row["methods"] += [score(m) for m in methods]
         else:

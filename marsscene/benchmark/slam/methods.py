@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation
 from marsscene.benchmark.slam.odometry_prior import PRIOR_MODEL
 from marsscene.benchmark.slam.spec import MethodSpec
 from marsscene.errors import MarsSceneError, MissingDependencyError
+from marsscene.runs.export.datasets import tum_associations
 from marsscene.runs.runlog import RunLog, read_image, run_rover
 from marsscene.runs.tum import Trajectory, read_tum
 
@@ -83,7 +84,7 @@ class CellData:
     def frames(self, sensor: str) -> int:
         """Sensor frames of the run: camera images, LiDAR scans, or ground-truth poses."""
         if sensor == "camera":
-            return len(_associations(self.run_dir / "tum_rgbd"))
+            return len(tum_associations(self.run_dir / "tum_rgbd"))
         if sensor == "lidar":
             stamps = RunLog(self.run_dir).lidar_stamps_s  # the scans may be in the bag only
             return 0 if stamps is None else len(stamps)
@@ -100,11 +101,6 @@ class Estimate:
     note: str = ""
 
 
-def _associations(folder: Path) -> list[list[str]]:
-    text = (folder / "associations.txt").read_text(encoding="utf-8")
-    return [ln.split() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
-
-
 def _intrinsics(folder: Path) -> dict[str, float]:
     return json.loads((folder / "camera" / "intrinsics.json").read_text(encoding="utf-8"))
 
@@ -114,7 +110,7 @@ def _trajectory(stamps_s: NDArray[np.float64], poses: NDArray[np.float64]) -> Tr
     return Trajectory(stamps_s, poses[:, :3, 3], Rotation.from_matrix(poses[:, :3, :3]).as_quat())
 
 
-def _open3d_rgbd(cell: CellData, method: MethodSpec) -> Estimate:
+def _open3d_rgbd(cell: CellData, method: MethodSpec, processes: int) -> Estimate:
     from marsscene.benchmark.slam.rgbd_odometry import rgbd_odometry
 
     opts = {k: method.options[k] for k in ("depth_trunc_m", "wheel_prior", "max_step_dev_m",
@@ -126,8 +122,8 @@ def _open3d_rgbd(cell: CellData, method: MethodSpec) -> Estimate:
          **({"prior": PRIOR_MODEL} if opts.get("wheel_prior") else {})},
         sort_keys=True).encode()).hexdigest()
     res = rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, checkpoint_key=key,
-                        checkpoint=cell.cell_dir / "estimates" / f".{method.name}.partial.npz",
-                        **opts)
+                        checkpoint=cell.cell_dir / "estimates" / f".{method.name}.pairs",
+                        processes=processes, **opts)
     note = (f"{res.fallbacks} of {len(res.poses) - 1} steps from the odometry"
             if opts.get("wheel_prior") else "")
     return Estimate(_trajectory(res.stamps_s, res.poses), frames_tracked=int(res.visual.sum()),
@@ -138,7 +134,7 @@ def _opencv_mono(cell: CellData, method: MethodSpec) -> Estimate:
     from marsscene.benchmark.slam.mono_vo import mono_vo
 
     folder = cell.run_dir / "tum_rgbd"
-    rows = _associations(folder)
+    rows = tum_associations(folder)
     i = _intrinsics(cell.run_dir)
     k = np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
     weights = np.array([0.299, 0.587, 0.114])
@@ -201,10 +197,13 @@ def _external(cell: CellData, method: MethodSpec, out_tum: Path) -> Estimate:
     return Estimate(read_tum(out_tum))
 
 
-def estimate(method: MethodSpec, cell: CellData, out_tum: Path) -> Estimate:
+def estimate(method: MethodSpec, cell: CellData, out_tum: Path, *,
+             processes: int = 1) -> Estimate:
     """Run ``method`` on ``cell``; built-in estimates are also written to ``out_tum``.
 
-    A missing dependency gives ``missing``, any other error ``failed`` (with the reason).
+    ``processes``: how many processes a method that splits its work may use (Open3D RGB-D's
+    frame pairs); the estimate does not depend on it. A missing dependency gives
+    ``missing``, any other error ``failed`` (with the reason).
     """
     from marsscene.runs.tum import write_tum
 
@@ -216,7 +215,7 @@ def estimate(method: MethodSpec, cell: CellData, out_tum: Path) -> Estimate:
         elif method.kind == "kiss-icp":
             est = _kiss_icp(cell, method)
         elif method.kind == "open3d-rgbd":
-            est = _open3d_rgbd(cell, method)
+            est = _open3d_rgbd(cell, method, processes)
         else:
             est = _opencv_mono(cell, method)
     except MissingDependencyError as err:

@@ -99,6 +99,7 @@ def run_slam_benchmark(
     progress: Callable[[Any], None] | None = None,
     report: bool = True,
     method_workers: int = 2,
+    method_processes: int = 1,
 ) -> SlamBenchmarkResult:
     """Run the benchmark ``spec`` into ``out_dir``.
 
@@ -123,6 +124,10 @@ def run_slam_benchmark(
         Threads that run the methods of one cell side by side once its drive is done (a cell
         whose neighbour finished early then uses the idle core; KISS-ICP and ``command``
         methods are separate processes). Rows and files do not depend on it.
+    method_processes : int
+        Processes that share a method's work where it splits: Open3D RGB-D's frame pairs, in
+        chunks (for cores no cell is using, e.g. one long cell on a many-core machine). Rows
+        do not depend on it.
     """
     from marsscene.sweep.run import map_cells
     from marsscene.sweep.table import write_results
@@ -131,7 +136,7 @@ def run_slam_benchmark(
     _claim(root, spec, resume)
     cells_dir = root / "cells"
     task = partial(run_slam_cell, out_dir=str(cells_dir), spec=spec,
-                   method_workers=method_workers)
+                   method_workers=method_workers, method_processes=method_processes)
     cell_rows = map_cells(slam_cells(spec), task, cells_dir, workers=workers,
                           scheduler=scheduler, serial=serial, progress=progress)
     for row in cell_rows:  # a cell lost with its worker has no method rows: give them

@@ -39,7 +39,7 @@ from marsscene.runs.logs import png_bytes
 from marsscene.runs.runlog import CameraStream, RunLog, read_image
 
 __all__ = ["FORMATS", "RUN_DEPTH_PER_M", "TUM_DEPTH_PER_M", "export_dataset",
-           "tum_depth_per_m"]
+           "tum_associations", "tum_depth_per_m"]
 
 FORMATS = DATASET_FORMATS
 #: TUM RGB-D reference depth PNG scale: 5000 counts per metre (max 13.1 m; farther is stored
@@ -154,6 +154,13 @@ def tum_depth_per_m(folder: str | os.PathLike[str]) -> float:
             if line.startswith("RGBD.DepthMapFactor:"):
                 return float(line.split(":", 1)[1])
     return float(TUM_DEPTH_PER_M)
+
+
+def tum_associations(folder: str | os.PathLike[str]) -> list[list[str]]:
+    """The rows of a TUM RGB-D folder's ``associations.txt``: colour stamp and file, depth
+    stamp and file."""
+    text = (Path(folder) / "associations.txt").read_text(encoding="utf-8")
+    return [ln.split() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
 
 
 def camera_trajectory(
