@@ -58,12 +58,13 @@ def main(argv: list[str]) -> None:
             res = rgbd_odometry(folder, run_dir, wheel_prior=True, checkpoint_every=chunk,
                                 processes=n)
             wall = time.perf_counter() - t0
+            done = len(res.poses) - 1
             steps = np.linalg.inv(res.poses[:-1]) @ res.poses[1:]
             if first is None:
                 first = (wall, steps)
             same = int((np.abs(steps - first[1]).max(axis=(1, 2)) < 1e-6).sum())
-            print(f"processes {n}: {wall:7.1f} s wall, {wall / pairs:.3f} s a pair, "
-                  f"speed-up {first[0] / wall:.2f}x, {same} of {pairs} steps as with "
+            print(f"processes {n}: {wall:7.1f} s wall, {wall / done:.3f} s a pair, "
+                  f"speed-up {first[0] / wall:.2f}x, {same} of {done} steps as with "
                   f"{counts[0]}, {res.fallbacks} from the odometry")
 
 

@@ -29,7 +29,8 @@ def benchmark() -> None:
               "command methods are processes of their own; results do not depend on it).")
 @click.option("--method-processes", type=click.IntRange(1, 64), default=1, show_default=True,
               help="Processes that share a method's work where it splits: Open3D RGB-D's "
-              "frame pairs (for cores no cell uses; results do not depend on it).")
+              "frame pairs, per RGB-D row (for cores no cell uses; results do not depend on "
+              "it).")
 @click.option("--length-m", type=click.FloatRange(min=5.0), default=None,
               help="A quick check: every automatic route shortened to this length (m).")
 @click.option("--scene", "scenes", multiple=True,

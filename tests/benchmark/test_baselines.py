@@ -174,16 +174,24 @@ def test_open3d_rgbd_continues_from_its_checkpoint(cell: CellData, tmp_path: Pat
                       checkpoint_key="a", checkpoint_every=10)
     monkeypatch.setattr(odometry, "compute_rgbd_odometry", counted)
     calls.clear()
-    rgbd_odometry(folder, cell.run_dir, wheel_prior=True, checkpoint=ckpt, checkpoint_key="b")
+    rgbd_odometry(folder, cell.run_dir, wheel_prior=True, checkpoint=ckpt, checkpoint_key="b",
+                  checkpoint_every=10)
     assert len(calls) == pairs  # another key: from the first pair
 
 
 
 def test_open3d_rgbd_pairs_shared_out_over_processes(cell: CellData, tmp_path: Path,
-                                                     fused: RgbdOdometry) -> None:
+                                                     fused: RgbdOdometry,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """``processes = 2``: child processes compute the chunks of pairs, with the steps of one
     process; a chunk already saved under the key is used as it is, not computed again."""
     import numpy as np
+    import open3d as o3d
+
+    def not_here(*_):  # type: ignore[no-untyped-def]
+        raise AssertionError("a pair was computed in the parent process")
+
+    monkeypatch.setattr(o3d.pipelines.odometry, "compute_rgbd_odometry", not_here)
 
 
     folder, ckpt = cell.run_dir / "tum_rgbd", tmp_path / "o3d.pairs"
@@ -202,6 +210,28 @@ def test_open3d_rgbd_pairs_shared_out_over_processes(cell: CellData, tmp_path: P
     same = np.abs(_steps(two.poses) - _steps(fused.poses)).max(axis=(1, 2))[others] < 1e-6
     assert same.sum() >= len(others) - 2
     assert (two.visual[1:][others] == fused.visual[1:][others])[same].all()
+
+
+def test_a_failing_child_process_fails_the_row_in_one_line(cell: CellData,
+                                                           tmp_path: Path) -> None:
+    """A chunk whose child process fails (here: a depth image gone) is an error naming its
+    pairs and the child's exit code."""
+    import os
+
+    from marsscene.errors import RuntimeSimError
+
+    src, folder = cell.run_dir / "tum_rgbd", tmp_path / "tum_rgbd"
+    rows = [ln for ln in (src / "associations.txt").read_text(encoding="utf-8").splitlines()
+            if ln.strip() and not ln.startswith("#")][:31]
+    for sub in ("rgb", "depth"):
+        (folder / sub).mkdir(parents=True)
+    (folder / "associations.txt").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    for k, ln in enumerate(rows):
+        for rel in ln.split()[1::2]:
+            if not (k == 25 and rel.startswith("depth")):
+                os.symlink(src / rel, folder / rel)
+    with pytest.raises(RuntimeSimError, match=r"pairs 20-30: exit code 1"):
+        rgbd_odometry(folder, cell.run_dir, checkpoint_every=10, processes=2)
 
 
 def test_the_rgbd_prior_turns_with_the_gyro(cell: CellData) -> None:

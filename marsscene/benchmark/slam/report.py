@@ -176,9 +176,10 @@ def cost_lines(rows: list[dict[str, Any]], cell_rows: list[dict[str, Any]]) -> l
     lines = ["## Cost", "",
              "Each stage's own wall time, as stored with the cell (a resumed cell keeps the "
              "times of the run that made it). The live LiDAR odometry registers each scan "
-             "during the drive, so its time is part of the drive's; a cell's methods run side "
-             "by side on `--method-workers` threads, so stage time is work done, not the time "
-             "a cell took.", "",
+             "during the drive, so its time is part of the drive's; the exports (TUM RGB-D, "
+             "EuRoC, bag) are in no column. A cell's methods run side by side on "
+             "`--method-workers` threads, so stage time is work done, not the time a cell "
+             "took.", "",
              "| cell | build (s) | drive (s) | of which live LiDAR (s) | methods (s) | "
              "stage time (h) |",
              "|---|---:|---:|---:|---:|---:|"]

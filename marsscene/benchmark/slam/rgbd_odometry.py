@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.benchmark.slam.rgbd_pairs import PairJob, pair_results
+from marsscene.benchmark.slam.rgbd_pairs import PairJob, pair_results, require_open3d
 from marsscene.errors import RuntimeSimError
 from marsscene.runs.export.datasets import tum_associations
 from marsscene.runs.runlog import RunLog
@@ -134,7 +134,10 @@ def rgbd_odometry(folder: Path, run_dir: Path, *, depth_trunc_m: float = 12.0,
     if processes < 1 or checkpoint_every < 1:
         raise RuntimeSimError(f"open3d-rgbd processes = {processes!r}, checkpoint_every = "
                               f"{checkpoint_every!r}; expected at least 1")
+    require_open3d()
     rows = tum_associations(folder)
+    if not rows:
+        raise RuntimeSimError(f"{folder}: associations.txt lists no frames")
     i = json.loads((run_dir / "camera" / "intrinsics.json").read_text(encoding="utf-8"))
     d = float(decimate)
     job = PairJob(str(folder), {1: 0, 2: 1, 4: 2}[decimate], float(depth_trunc_m),

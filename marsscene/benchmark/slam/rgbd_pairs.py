@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import io
 import json
+import logging
+import os
 import subprocess
 import sys
 import tempfile
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -32,6 +34,8 @@ from marsscene.runs.export.datasets import tum_associations, tum_depth_per_m
 from marsscene.runs.runlog import read_image
 
 __all__ = ["PairJob", "halve", "pair_results", "require_open3d"]
+
+log = logging.getLogger("marsscene")
 
 _INIT_FILE = "init.npy"
 _JOB_FILE = "job.json"
@@ -126,14 +130,44 @@ def _load_chunk(path: Path, job: PairJob, n_rows: int, first: int, last: int
     return saved["success"].astype(bool), saved["trans"].astype(np.float64)
 
 
+def _child_env() -> dict[str, str]:
+    """This process's environment, with this ``marsscene`` first on the child's path (the
+    child runs the parent's code whatever its working folder or installed copy)."""
+    import marsscene
+
+    root = str(Path(marsscene.__file__).resolve().parent.parent)
+    rest = os.environ.get("PYTHONPATH", "")
+    return {**os.environ, "PYTHONPATH": root + (os.pathsep + rest if rest else "")}
+
+
 def _run_child(folder: Path, first: int, last: int) -> None:
     cmd = [sys.executable, "-m", "marsscene.benchmark.slam.rgbd_pairs", str(folder),
            str(first), str(last)]
-    done = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    if done.returncode != 0:
-        tail = (done.stderr or done.stdout).strip().splitlines()[-1:] or [""]
+    with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                          env=_child_env()) as proc:
+        try:
+            out, _ = proc.communicate()
+        except BaseException:  # this process stops: so does the child
+            proc.kill()
+            raise
+    if proc.returncode != 0:
+        tail = out.strip().splitlines()[-1:] or [""]
         raise RuntimeSimError(f"open3d-rgbd pairs {first}-{last}: exit code "
-                              f"{done.returncode}: {tail[0][:200]}")
+                              f"{proc.returncode}: {tail[0][:200]}")
+
+
+def _in_children(folder: Path, todo: list[tuple[int, int]], processes: int) -> None:
+    """The chunks ``todo`` computed by child processes, ``processes`` at a time, each saved in
+    ``folder``; the first failure cancels the chunks not yet started."""
+    with ThreadPoolExecutor(min(processes, len(todo))) as pool:
+        futures = {pool.submit(_run_child, folder, a, b): (a, b) for a, b in todo}
+        try:
+            for fut in as_completed(futures):
+                fut.result()
+                log.info("open3d-rgbd: pairs %d-%d done", *futures[fut])
+        except BaseException:
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
 
 
 def pair_results(job: PairJob, init: NDArray[np.float64], *, checkpoint: Path | None = None,
@@ -155,11 +189,15 @@ def pair_results(job: PairJob, init: NDArray[np.float64], *, checkpoint: Path | 
         folder.mkdir(parents=True, exist_ok=True)
         done = {a: _load_chunk(_chunk_file(folder, a), job, n, a, b) for a, b in spans}
         todo = [(a, b) for a, b in spans if done[a] is None]
+        if len(todo) < len(spans):
+            log.info("open3d-rgbd: %d of %d chunks of pairs saved before, in %s",
+                     len(spans) - len(todo), len(spans), folder)
         if processes > 1 and len(todo) > 1:
-            np.save(folder / _INIT_FILE, init)
+            buf = io.BytesIO()
+            np.save(buf, init)
+            write_atomic(folder / _INIT_FILE, buf.getvalue())
             write_atomic(folder / _JOB_FILE, json.dumps(asdict(job)))
-            with ThreadPoolExecutor(min(processes, len(todo))) as pool:
-                list(pool.map(lambda s: _run_child(folder, *s), todo))
+            _in_children(folder, todo, processes)
             done.update({a: _load_chunk(_chunk_file(folder, a), job, n, a, b) for a, b in todo})
         else:
             for a, b in todo:
@@ -167,9 +205,10 @@ def pair_results(job: PairJob, init: NDArray[np.float64], *, checkpoint: Path | 
                 if checkpoint is not None:
                     _save_chunk(_chunk_file(folder, a), job, n, a, result)
                 done[a] = result
-        if any(v is None for v in done.values()):
-            raise RuntimeSimError(f"open3d-rgbd: a child process left no pairs in {folder}")
-    chunks = [done[a] for a, _ in spans]
+                log.info("open3d-rgbd: pairs %d-%d done", a, b)
+        chunks = [done[a] for a, _ in spans]
+    if any(c is None for c in chunks):
+        raise RuntimeSimError(f"open3d-rgbd: a child process left no pairs in {folder}")
     if not chunks:
         return np.zeros(0, dtype=bool), np.zeros((0, 4, 4))
     return (np.concatenate([c[0] for c in chunks if c is not None]),
