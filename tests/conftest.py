@@ -25,6 +25,36 @@ from marsscene.terrain.heightfield import Heightfield
 SHARED_REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
 
+# The parallel run (pytest-xdist, ``-n auto --dist loadfile``) hands each file to one worker, so a
+# module's fixtures are built once; these folders go to one worker whole, since their files share
+# a session fixture (the sweep's Dask scheduler) or loopback DDS and wall-clock pacing (ROS 2).
+_FOLDER_GROUPS = ("ros2", "sweep")
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object | None:
+    """``--dist loadfile``, with the folders of ``_FOLDER_GROUPS`` as one unit each."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class _FilesAndFolders(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = nodeid.split("::", 1)[0]
+            parts = path.split("/")
+            if len(parts) > 2 and parts[0] == "tests" and parts[1] in _FOLDER_GROUPS:
+                return "/".join(parts[:2])
+            return path
+
+    return _FilesAndFolders(config, log)
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """``-n auto``: one worker a core this process may use, at most 8 (the longest file is
+    already about a tenth of the serial run)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return max(1, min(8, cores or 1))
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
