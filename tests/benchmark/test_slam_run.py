@@ -6,6 +6,8 @@ import csv
 import json
 import os
 import shutil
+import socket
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -222,6 +224,39 @@ def test_methods_of_a_cell_run_side_by_side(bench: tuple[Path, Path, str]) -> No
     assert [m["method"] for m in row["methods"]] == [m.name for m in spec.methods]  # spec order
     assert by_name["left"]["status"] == by_name["right"]["status"] == "ok", by_name["left"]
     assert by_name["truth"]["status"] == "ok" and by_name["broken"]["status"] == "failed"
+
+
+def test_a_drive_killed_in_its_exports_keeps_the_drive(bench: tuple[Path, Path, str]) -> None:
+    """A worker killed while writing the drive's dataset folders (the drive itself finished and
+    marked): the resumed cell writes the missing folders, reuses the drive, and scores the
+    camera methods on them to the same rows."""
+    from marsscene.benchmark.slam.cell import run_slam_cell
+    from marsscene.benchmark.slam.run import slam_cells
+    from marsscene.benchmark.slam.spec import SlamSpec
+
+    spec_path, out, _ = bench
+    spec = SlamSpec.from_toml(spec_path)
+    cell = next(c for c in slam_cells(spec) if c.params["tau"] == 6.0)  # a camera-only cell
+    drive = out / "cells" / cell.cell_id / "drive"
+    stamp = (drive / "benchmark_drive.json").stat().st_mtime_ns
+    before = json.loads((drive.parent / "methods" / "rgbd.json").read_text(encoding="utf-8"))
+    truth = (drive / "tum_rgbd" / "groundtruth.txt").read_bytes()
+    shutil.rmtree(drive / "tum_rgbd")  # killed in the TUM RGB-D export: nothing of it kept,
+    stale = drive / ".tum_rgbd.dead0001.tmp"  # ... but its killed writer's part
+    (stale / "new" / "tum_rgbd").mkdir(parents=True)
+    gone = subprocess.Popen(["true"])
+    gone.wait()
+    (stale / "owner.json").write_text(json.dumps(
+        {"pid": gone.pid, "host": socket.gethostname(), "start": None}), encoding="utf-8")
+    shutil.rmtree(drive / "euroc")  # and EuRoC never started
+    (drive.parent / "methods" / "rgbd.json").unlink()  # its camera methods not yet scored
+    row = run_slam_cell(cell, out_dir=str(out / "cells"), spec=spec)
+    assert (drive / "benchmark_drive.json").stat().st_mtime_ns == stamp  # not driven again
+    assert (drive / "tum_rgbd" / "groundtruth.txt").read_bytes() == truth
+    assert (drive / "euroc" / "mav0" / "cam0" / "data.csv").is_file()
+    assert not list(drive.glob(".tum_rgbd.*.tmp"))  # its owner gone: swept
+    rgbd = next(m for m in row["methods"] if m["method"] == "rgbd")
+    assert rgbd["ate_rmse_m"] == before["row"]["ate_rmse_m"]
 
 
 def test_a_long_thin_route_gets_stacked_wide_panels() -> None:

@@ -4,7 +4,8 @@ A cell folder ``DIR/cells/<cell_id>/`` holds::
 
     config.toml, scene/, result.json   the build, by :func:`marsscene.sweep.run_cell`
     drive/                             the run folder (gt.tum, odom.tum, camera/, lidar/ ...),
-                                       route.tum, tum_rgbd/ and euroc/ exports, bag/ (if needed)
+                                       route.tum, bag/ (if needed)
+    drive/tum_rgbd/, drive/euroc/      the camera's dataset exports, written after the drive
     drive/live/<method>.tum            KISS-ICP's estimate, made during the drive
     estimates/<method>.tum             each method's raw estimate
 
@@ -16,7 +17,8 @@ scored (a resumed benchmark that must run a camera method again drives the cell 
     methods/<method>.json              each method's score row (written last: marks it done)
 
 Every stage is atomic and keyed by a hash of its inputs (:mod:`.keys`), so a resumed benchmark
-redoes only what changed or never finished; a cell whose rows are all current is reused from
+redoes only what changed or never finished (a drive killed while exporting its datasets keeps
+the drive and writes the missing dataset folders); a cell whose rows are all current is reused from
 its result files alone (:mod:`.pack`: no scene or logs needed). Errors never escape
 :func:`run_slam_cell`.
 """
@@ -79,6 +81,7 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
     run = spec.run_config(lidar=lidar, camera=camera)
     done = None if force else read_json(final / DRIVE_FILE)
     if done is not None and done.get("key") == key:
+        _export_datasets(final, camera=run.camera is not None)
         return dict(done["summary"])
     import marsscene as ms
     from marsscene.benchmark.slam.kiss_icp import LiveKissIcp, lidar_mount
@@ -97,8 +100,7 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
             config=run, out_dir=tmp, seed=spec.noise_seed, listeners=list(odometry.values()),
             options=ms.DriveOptions(max_slope_deg=scene.route.max_slope_deg,
                                     route_note=f"route of scene {scene.name}: {{length_m:.1f}} m"),
-            export=ms.ExportOptions(bag=bag_options,
-                                    datasets=("tum-rgbd", "euroc") if run.camera else (),
+            export=ms.ExportOptions(bag=bag_options,  # the datasets: a stage of their own
                                     lidar_files=bag or bool(spec.sensors.get("lidar_files"))))
         for name, odo in odometry.items():
             traj = odo.trajectory()
@@ -114,7 +116,25 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
                    **{k: drv.summary.get(k) for k in ("path_length_m", "sim_time_s",
                                                       "goal_reached", "cross_track_rms_m")}}
         write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
+    _export_datasets(final, camera=run.camera is not None)
     return summary
+
+
+def _export_datasets(run_dir: Path, camera: bool) -> None:
+    """Write the drive's missing dataset folders (TUM RGB-D, EuRoC) that the camera methods and
+    command templates read. Each is atomic, so one that exists is whole; none after the images
+    were deleted."""
+    if not camera or (run_dir / IMAGES_REMOVED).is_file():
+        return
+    from marsscene.runs.export.datasets import export_dataset
+    from marsscene.runs.export.options import dataset_folder
+
+    for fmt in ("tum-rgbd", "euroc"):
+        if not (run_dir / dataset_folder(fmt)).is_dir():
+            t0 = time.perf_counter()
+            export_dataset(run_dir, fmt)
+            log.info("%s: %s written in %.0f s", run_dir, dataset_folder(fmt),
+                     time.perf_counter() - t0)
 
 
 def _remove_images(run_dir: Path) -> int:
