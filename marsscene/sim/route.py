@@ -31,6 +31,7 @@ from scipy.sparse.csgraph import dijkstra
 from marsscene._validate import check_range
 from marsscene.errors import MarsSceneWarning, RuntimeSimError
 from marsscene.runs.tum import Trajectory
+from marsscene.sim.cross_track import cross_track_m
 from marsscene.terrain.heightfield import Heightfield
 
 log = logging.getLogger("marsscene")
@@ -104,21 +105,6 @@ def resample_xy(xy: ArrayLike, spacing_m: float) -> NDArray[np.float64]:
     n = max(math.ceil(s[-1] / spacing_m), 1)
     t = np.linspace(0.0, s[-1], n + 1)
     return np.column_stack([np.interp(t, s, p[:, 0]), np.interp(t, s, p[:, 1])])
-
-
-def cross_track_m(route: Route, xy: ArrayLike) -> NDArray[np.float64]:
-    """Distance (in m) from each point (M, 2) to the route polyline."""
-    p = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-    a, b = route.xy_m[:-1], route.xy_m[1:]
-    ab = b - a
-    denom = np.maximum((ab**2).sum(1), 1e-12)
-    out = np.zeros(len(p))
-    for k in range(0, len(p), 256):  # chunks bound memory to 256 x segments
-        q = p[k : k + 256, None, :]
-        t = np.clip(((q - a) * ab).sum(-1) / denom, 0.0, 1.0)
-        d = np.linalg.norm(q - (a + t[..., None] * ab), axis=-1)
-        out[k : k + 256] = d.min(axis=1)
-    return out
 
 
 def _blocked_grid(
