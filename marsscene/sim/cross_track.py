@@ -10,16 +10,20 @@ few points where it is not are measured against every segment.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-if TYPE_CHECKING:
-    from marsscene.sim.route import Route
-
 __all__ = ["cross_track_m"]
+
+
+class _Polyline(Protocol):
+    """A route: its vertices ``xy_m`` (N, 2) in m (:class:`marsscene.sim.route.Route`)."""
+
+    @property
+    def xy_m(self) -> NDArray[np.float64]: ...
 
 _CANDIDATES = 8  # nearest segment midpoints measured exactly for each point
 _CHUNK = 256  # points a chunk against every segment (memory: chunk x segments)
@@ -42,7 +46,7 @@ def _to_all_segments_m(p: NDArray[np.float64], a: NDArray[np.float64],
     return out
 
 
-def cross_track_m(route: Route, xy: ArrayLike) -> NDArray[np.float64]:
+def cross_track_m(route: _Polyline, xy: ArrayLike) -> NDArray[np.float64]:
     """Distance (in m) from each point (M, 2) to the route polyline."""
     p = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     vertices = np.asarray(route.xy_m, dtype=np.float64).reshape(-1, 2)
