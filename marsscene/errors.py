@@ -76,8 +76,13 @@ class ExtrapolationWarning(MarsSceneWarning):
     """A model is evaluated outside its published validity range."""
 
 
-def missing_dependency(module: str, extra: str) -> MissingDependencyError:
-    """Build the error raised when an optional dependency cannot be imported."""
+def missing_dependency(module: str, extra: str | None) -> MissingDependencyError:
+    """Build the error raised when a dependency cannot be imported: one of an ``extra``, or
+    (``extra=None``) a core one, missing from an install made before it became core."""
+    if extra is None:
+        return MissingDependencyError(
+            f"{module!r} is not installed, though marsscene needs it; reinstall marsscene "
+            "(pip install marsscene, or pip install -e . in a checkout)")
     return MissingDependencyError(
         f"{module!r} is not installed; install it with: pip install \"marsscene[{extra}]\""
     )

@@ -54,7 +54,7 @@ def _to_manifold_trim(vertices: NDArray[np.float64], faces: NDArray[np.int64],
     try:
         import manifold3d
     except ImportError as err:  # pragma: no cover - installed with the collision extra
-        raise missing_dependency("manifold3d", "collision") from err
+        raise missing_dependency("manifold3d", None) from err
     mesh = manifold3d.Mesh(
         vert_properties=np.ascontiguousarray(vertices, dtype=np.float32),
         tri_verts=np.ascontiguousarray(faces, dtype=np.uint32),

@@ -80,7 +80,7 @@ def validate_mjcf(path: str | Path, *, seconds: float = 1.0) -> Any:
     try:
         import mujoco
     except ImportError as err:
-        raise missing_dependency("mujoco", "sim") from err
+        raise missing_dependency("mujoco", None) from err
     try:
         model = mujoco.MjModel.from_xml_path(str(path))
     except ValueError as err:

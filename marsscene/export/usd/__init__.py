@@ -40,7 +40,7 @@ def _pxr() -> None:
     try:
         import pxr  # noqa: F401
     except ImportError as err:
-        raise missing_dependency("usd-core", "usd") from err
+        raise missing_dependency("usd-core", None) from err
 
 
 class _StreamedAssets(dict[str, Any]):
