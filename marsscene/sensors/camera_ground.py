@@ -139,18 +139,20 @@ def next_window_origin(hf: Heightfield, nr: int, nc: int, step: int,
     """The far window's new origin for a camera at ``xy_m``, or ``None`` to keep ``current``.
 
     The window is re-placed once the camera is ``step`` posts or more from the window centred
-    on it, measured before clamping to the heightfield: near the heightfield's edge the clamped
-    origin moves less than the camera, and a rule on the clamped origin alone would leave the
-    camera to drive out of its window. An unchanged clamped origin is never re-placed."""
+    on it along an axis whose clamped origin would change, measured before clamping to the
+    heightfield: near the heightfield's edge the clamped origin moves less than the camera, and
+    a rule on the clamped origin alone would leave the camera to drive out of its window. An
+    axis already clamped where the camera wants it counts for nothing: driving along the edge,
+    the window moves every ``step`` posts, not every post. An unchanged clamped origin is never
+    re-placed."""
     target = _window_origin(hf, nr, nc, xy_m)
     if current is None:
         return target
     if target == current:
         return None
     free = _window_origin(hf, nr, nc, xy_m, clamp=False)
-    if max(abs(free[0] - current[0]), abs(free[1] - current[1])) >= step:
-        return target
-    return None
+    moved = max(abs(f - c) for f, c, t in zip(free, current, target, strict=True) if t != c)
+    return target if moved >= step else None
 
 
 def far_window_bounds(hf: Heightfield, window_m: float, xy_m: NDArray[np.float64]
