@@ -5,6 +5,7 @@ slope, a short run with every sensor); those skip without mujoco."""
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 # Headless offscreen rendering: must be set before anything imports mujoco (any test module).
@@ -21,6 +22,13 @@ import marsscene as ms
 from marsscene.scene import Provenance, Scene
 from marsscene.terrain.from_dem import GeoFrame
 from marsscene.terrain.heightfield import Heightfield
+
+# Bytecode caches on: an environment that sets PYTHONDONTWRITEBYTECODE (some CI images do) would
+# recompile every marsscene and test module (and re-rewrite the tests' asserts) in each xdist
+# worker and in each child process a test starts; they inherit this environment, and the modules
+# imported from here on are cached. __pycache__/ is ignored by git.
+sys.dont_write_bytecode = False
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 
 SHARED_REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
