@@ -1,4 +1,8 @@
-"""Export configuration (``[export]`` table)."""
+"""Export configuration (``[export]`` table).
+
+The smallest contact rock is the rock layer's fact (:mod:`marsscene.rocks.config`, which the
+MJCF rock rule also defaults to); the exporters' defaults use it.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +10,7 @@ from dataclasses import dataclass
 
 from marsscene._validate import check_choice, check_range
 from marsscene.errors import ConfigError
+from marsscene.rocks.config import CONTACT_MIN_DIAMETER_M
 
 __all__ = ["CONTACT_MIN_DIAMETER_M", "EXPORT_FORMATS", "OBSTACLE_MIN_DIAMETER_M",
            "ROCK_CATALOGUES", "USD_FORMATS", "ExportConfig"]
@@ -13,11 +18,6 @@ __all__ = ["CONTACT_MIN_DIAMETER_M", "EXPORT_FORMATS", "OBSTACLE_MIN_DIAMETER_M"
 EXPORT_FORMATS = ("usd", "mjcf")
 USD_FORMATS = ("usda", "usdc", "usdz")
 ROCK_CATALOGUES = ("csv", "parquet", "both")
-#: Rocks at least this wide are physics colliders by default, in MJCF and USD alike (m). With an
-#: exposed height of 0.35-0.65 D (``rocks.height_ratio``), a 0.2 m rock stands 0.07-0.13 m tall:
-#: under half the Perseverance-class wheel radius (0.2625 m), a sixth of the chassis' 0.75 m ride
-#: height; smaller rocks are gravel that the wheel rolls over (rendered only).
-CONTACT_MIN_DIAMETER_M = 0.2
 #: Rocks at least this wide are obstacles (m): about 0.25 m tall, as tall as the wheel radius,
 #: a step the rocker-bogie climbs rather than rolls over; USD gives each its own collider prim.
 OBSTACLE_MIN_DIAMETER_M = 0.5

@@ -9,7 +9,9 @@ Pipeline order, as :mod:`marsscene.pipeline` calls them:
 3. :func:`focus_heightfield` — the focus square at full resolution, tile by tile
    (:func:`~marsscene.terrain.tiles.tile_terrain`);
 4. :func:`focus_rocks` — rocks per tile, each tile from its own random stream, and
-   :func:`outer_rocks` (rocks of at least ``rocks.outer_d_min_m`` outside the focus).
+   :func:`outer_rocks` (rocks of at least the cut-off outside the focus,
+   :mod:`marsscene.rocks.budget`); a one-grid scene whose rocks need two levels gets its rock
+   focus square from :func:`rock_focus`.
 
 :func:`build_tile` builds one focus tile (terrain and rocks) alone; it equals the same tile of a
 full build (tested), which is what makes tiles independent of each other.
@@ -37,11 +39,17 @@ from marsscene.seeding import stage_key, stage_rng, tile_rng
 from marsscene.terrain import resample, synthesize
 from marsscene.terrain.config import TerrainConfig
 from marsscene.terrain.heightfield import Heightfield
-from marsscene.terrain.lod import FocusPlan, OuterTerrain, concat_tables, merge_craters, plan_focus
+from marsscene.terrain.lod import (
+    TAPER_POSTS,
+    FocusPlan,
+    concat_tables,
+    merge_craters,
+    plan_focus,
+)
 from marsscene.terrain.tiles import FocusTiling, TileDetail, detail_rms_m, tile_terrain
 
-__all__ = ["LodWorld", "focus_heightfield", "focus_rocks", "lod_craters",
-           "lod_world", "outer_rocks"]
+__all__ = ["LodWorld", "focus_heightfield", "focus_rocks", "focus_window", "lod_craters",
+           "lod_world", "outer_rocks", "rock_focus"]
 
 log = logging.getLogger("marsscene")
 
@@ -97,20 +105,39 @@ def _average_to(base: Heightfield, post_m: float, notes: list[str]) -> Heightfie
     return Heightfield(z.astype(np.float32), f * base.cell_size_m, base.origin_xy_m)
 
 
-def _plan(coarse: Heightfield, tcfg: TerrainConfig, notes: list[str]) -> FocusPlan:
+def _plan(coarse: Heightfield, tcfg: TerrainConfig, notes: list[str], *,
+          fine_post_m: float | None = None) -> FocusPlan:
+    fine = tcfg.focus_post_m if fine_post_m is None else fine_post_m
     try:
         return plan_focus(coarse, center_xy_m=tcfg.focus_xy_m, size_m=tcfg.focus_size_m,
-                          fine_post_m=tcfg.focus_post_m)
+                          fine_post_m=fine)
     except ConfigError:
         if tcfg.focus_xy_m is not None:
             raise
     # the default focus (centred) does not fit: use the largest centred square that does
     side_m = (min(coarse.shape) - 6) * coarse.cell_size_m
-    plan = plan_focus(coarse, center_xy_m=None, size_m=side_m, fine_post_m=tcfg.focus_post_m)
+    plan = plan_focus(coarse, center_xy_m=None, size_m=side_m, fine_post_m=fine)
     side = plan.cells * plan.coarse_post_m
     notes.append(f"terrain: the {tcfg.focus_size_m:g} m focus square does not fit the "
                  f"footprint; using the central {side:g} m")
     return plan
+
+
+def rock_focus(hf: Heightfield, tcfg: TerrainConfig, notes: list[str]) -> FocusTiling | None:
+    """The focus square of a one-grid scene's rocks (``terrain.focus_xy_m``,
+    ``terrain.focus_size_m``) on ``hf``'s own posts, cut into ``terrain.tile_m`` tiles as a
+    level-of-detail focus is; ``None`` for a footprint too small to hold one."""
+    if min(hf.shape) < 2 * TAPER_POSTS + 7:
+        return None
+    plan = _plan(hf, tcfg, notes, fine_post_m=hf.cell_size_m)
+    return FocusTiling.of(plan, tcfg.tile_m)
+
+
+def focus_window(hf: Heightfield, plan: FocusPlan) -> Heightfield:
+    """The focus square of a one-grid heightfield (a view: ``plan`` on ``hf``'s posts)."""
+    n = plan.cells
+    return Heightfield(hf.z_m[plan.row0:plan.row0 + n + 1, plan.col0:plan.col0 + n + 1],
+                       hf.cell_size_m, plan.bounds_xy_m[:2])
 
 
 def _check_focus_posts(plan: FocusPlan) -> None:
@@ -216,15 +243,16 @@ def focus_rocks(hf: Heightfield, tiling: FocusTiling, craters: CraterTable, rcfg
     return parts[0] if len(parts) == 1 else concat_tables(*parts)
 
 
-def outer_rocks(rocks: RockTable, outer: OuterTerrain, craters: CraterTable, rcfg: RockConfig,
-                seed: int) -> RockTable:
-    """Add rocks of at least ``rocks.outer_d_min_m`` outside the focus square."""
-    d_min = max(rcfg.d_min_m, rcfg.outer_d_min_m)
-    if d_min >= rcfg.d_max_m:
+def outer_rocks(rocks: RockTable, terrain: Heightfield,
+                focus_bounds_xy_m: tuple[float, float, float, float], craters: CraterTable,
+                rcfg: RockConfig, seed: int, *, d_min_m: float) -> RockTable:
+    """Add rocks of at least ``d_min_m`` (the cut-off, :mod:`marsscene.rocks.budget`) on
+    ``terrain`` outside the focus square."""
+    if d_min_m >= rcfg.d_max_m:
         return rocks
-    cfg = dataclasses.replace(rcfg, d_min_m=d_min)
-    far = place_rocks(outer.heightfield, craters, cfg, rng=stage_rng(seed, "rocks_outer"))
-    x0, y0, x1, y1 = outer.focus_bounds_xy_m
+    cfg = dataclasses.replace(rcfg, d_min_m=d_min_m)
+    far = place_rocks(terrain, craters, cfg, rng=stage_rng(seed, "rocks_outer"))
+    x0, y0, x1, y1 = focus_bounds_xy_m
     x, y = far.position_xyz_m[:, 0], far.position_xyz_m[:, 1]
     result: RockTable = concat_tables(rocks, far.take(~((x >= x0) & (x <= x1) & (y >= y0)
                                                         & (y <= y1))))

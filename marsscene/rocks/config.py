@@ -11,13 +11,18 @@ from dataclasses import dataclass
 
 from marsscene._validate import check_choice, check_range
 from marsscene.errors import ConfigError
-from marsscene.export.config import CONTACT_MIN_DIAMETER_M
 
-__all__ = ["COLLISION_MODES", "PLACEMENTS", "SMALL_ROCK_RULES", "RockConfig"]
+__all__ = ["COLLISION_MODES", "CONTACT_MIN_DIAMETER_M", "PLACEMENTS", "SMALL_ROCK_RULES",
+           "RockConfig"]
 
 PLACEMENTS = ("uniform", "clustered", "ejecta")
 COLLISION_MODES = ("convex_hull", "coacd")
 SMALL_ROCK_RULES = ("drop", "bake")
+#: Rocks at least this wide are physics colliders by default, in MJCF and USD alike (m). With an
+#: exposed height of 0.35-0.65 D (``rocks.height_ratio``), a 0.2 m rock stands 0.07-0.13 m tall:
+#: under half the Perseverance-class wheel radius (0.2625 m), a sixth of the chassis' 0.75 m ride
+#: height; smaller rocks are gravel that the wheel rolls over (rendered only).
+CONTACT_MIN_DIAMETER_M = 0.2
 
 
 def _range_pair(key: str, value: float | tuple[float, float], lo: float, hi: float) -> None:
@@ -50,8 +55,10 @@ class RockConfig:
     d_max_m: float = 3.0
     """Largest sampled rock diameter (in m)."""
     outer_d_min_m: float = 1.0
-    """Smallest rock outside the focus square of a level-of-detail terrain (in m; the focus
-    square gets the full size-frequency distribution from ``d_min_m``)."""
+    """Smallest rock outside the focus square of a two-level scene (in m; the focus square gets
+    the full size-frequency distribution from ``d_min_m``): the rocks orbital mapping and a
+    distant camera resolve. Raised where the budget (``max_rocks``) needs it, and stated in the
+    manifest; ``<= d_min_m``: every rock everywhere (:mod:`marsscene.rocks.budget`)."""
     height_ratio: float | tuple[float, float] = (0.35, 0.65)
     """Exposed height / diameter: number or [low, high] (default mean 0.5; convention, [U])."""
     burial_fraction: float | tuple[float, float] = (0.0, 0.5)
@@ -104,7 +111,9 @@ class RockConfig:
     mjcf_small_rocks: str = "drop"
     """Rocks not exported as MJCF geoms are "drop"ped or "bake"d into the hfield as bumps."""
     max_rocks: int = 2_000_000
-    """Safety limit on the expected rock count; raise it explicitly for denser scenes."""
+    """The rock budget: most rocks expected in a scene (~1 GiB while placing at the default).
+    A whole footprint over it gets two levels (:mod:`marsscene.rocks.budget`); raise it to
+    place the full population everywhere."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.enabled, bool):

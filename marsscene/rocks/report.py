@@ -14,8 +14,10 @@ from marsscene.terrain.heightfield import Heightfield
 
 if TYPE_CHECKING:
     from marsscene.craters.table import CraterTable
+    from marsscene.rocks.budget import RockLevels
 
-__all__ = ["EJECTA_CITATION", "mjcf_rock_selection", "rock_notes", "rock_summary"]
+__all__ = ["EJECTA_CITATION", "level_summary", "mjcf_rock_selection", "rock_notes",
+           "rock_summary"]
 
 EJECTA_CITATION = (
     "rocky rims and ejecta around fresh craters (Golombek et al. 2008, doi:10.1029/2007JE003065); "
@@ -93,4 +95,22 @@ def rock_summary(
         "prototypes": len(prototypes),
         "collision": cfg.collision,
         "mjcf_rocks": len(mjcf_rock_selection(rocks, cfg)),
+    }
+
+
+def level_summary(levels: RockLevels, rocks: RockTable) -> dict[str, Any]:
+    """The manifest's account of a two-level rock population: the focus square, the cut-off
+    outside it (and whether the budget raised it), expected and placed counts."""
+    assert levels.focus_bounds_xy_m is not None
+    x0, y0, x1, y1 = levels.focus_bounds_xy_m
+    x, y = rocks.position_xyz_m[:, 0], rocks.position_xyz_m[:, 1]
+    inside = int(np.count_nonzero((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)))
+    return {
+        "focus_bounds_xy_m": [round(float(v), 6) for v in levels.focus_bounds_xy_m],
+        "outer_d_min_m": levels.outer_d_min_m,
+        "outer_d_min_raised": levels.raised,
+        "focus_count": inside,
+        "outer_count": len(rocks) - inside,
+        "expected_focus": round(levels.focus_expected, 1),
+        "expected_outer": round(levels.outer_expected, 1),
     }

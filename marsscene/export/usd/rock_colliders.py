@@ -5,7 +5,7 @@ The render rocks stay one ``UsdGeom.PointInstancer`` (:mod:`marsscene.export.usd
 OpenUSD's physics parser (``UsdPhysics.LoadUsdPhysicsFromRange``, used by Newton and anything
 built on it) skips ``PointInstancer`` subtrees, so collision lives apart, in
 ``assets/rock_colliders.usdc`` payloaded at ``/World/RockColliders``, in two tiers chosen by
-the rover's wheel (:data:`marsscene.export.config.CONTACT_MIN_DIAMETER_M`,
+the rover's wheel (:data:`marsscene.rocks.config.CONTACT_MIN_DIAMETER_M`,
 :data:`~marsscene.export.config.OBSTACLE_MIN_DIAMETER_M`)::
 
     /RockColliders                   Xform, kind component, marsscene:rockCount
