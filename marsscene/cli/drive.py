@@ -15,14 +15,16 @@ from marsscene.cli.bag import BAG_OPTION_NAMES, bag_options, bag_options_of, ech
 from marsscene.cli.options_run import RUN_OPTION_NAMES, run_config, run_options
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RunConfig
 from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES, DATASET_IMAGES_HELP
+from marsscene.sim.mission import DriveOptions
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
+_D = DriveOptions()  # the drive's defaults (and their bounds) live in DriveOptions only
 
 
 def _read_waypoints(path: Path) -> Any:
-    import numpy as np
-
-    from marsscene.errors import RuntimeSimError
+    """The waypoints of a file of ``x y`` (m) lines (``#`` comments, commas allowed)."""
+    from marsscene.errors import ConfigError
+    from marsscene.sim.route import check_waypoints
 
     rows = []
     for lineno, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
@@ -33,12 +35,8 @@ def _read_waypoints(path: Path) -> Any:
         try:
             rows.append([float(parts[0]), float(parts[1])])
         except (ValueError, IndexError):
-            raise RuntimeSimError(
-                f"{path}:{lineno}: expected 'x y' in m, got {text[:80]!r}"
-            ) from None
-    if len(rows) < 2:
-        raise RuntimeSimError(f"{path}: need at least 2 waypoints, got {len(rows)}")
-    return np.asarray(rows)
+            raise ConfigError(f"{path}:{lineno}: expected 'x y' in m, got {text[:80]!r}") from None
+    return check_waypoints(rows, str(path))
 
 
 _HELP = f"""Drive the rover along a route with pure pursuit (v <= {V_MAX_M_S} m/s,
@@ -88,16 +86,16 @@ Examples:
 @click.option(
     "--lookahead-m",
     "lookahead",
-    type=click.FloatRange(min=0.05),
-    default=1.0,
+    type=float,
+    default=_D.pursuit.lookahead_m,
     show_default=True,
     help="Pure-pursuit lookahead (m).",
 )
 @click.option(
     "--max-slope-deg",
     "max_slope",
-    type=click.FloatRange(0, 90, min_open=True),
-    default=20.0,
+    type=float,
+    default=_D.max_slope_deg,
     show_default=True,
     help="Route authoring: steepest slope allowed (deg).",
 )
@@ -105,8 +103,8 @@ Examples:
 @click.option(
     "--corridor-m",
     "corridor",
-    type=click.FloatRange(min=1.0),
-    default=15.0,
+    type=float,
+    default=_D.corridor_m,
     show_default=True,
     help="Only MJCF rocks within this distance of the route are simulated (m); widened to "
     "the LiDAR range / camera window when those sensors are on.",
@@ -150,15 +148,14 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
     bag_values = {k: opts.pop(k) for k in list(opts) if k in BAG_OPTION_NAMES}
     with user_errors():
         run = run_config(opts)
-        options = ms.DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
-                                  pursuit=PursuitConfig(lookahead_m=lookahead))
+        options = DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
+                               pursuit=PursuitConfig(lookahead_m=lookahead))
         export = ExportOptions(bag=bag_options_of(bag_values) if write_bag else None,
                                datasets=datasets, overwrite=overwrite,
                                dataset_images=dataset_images,
                                keep_lidar_files=keep_lidar_files)
         waypoints = _read_waypoints(waypoints_path) if waypoints_path else None
-        controller = (_load_controller(controller_ref, route_path, waypoints, scene_dir,
-                                       options) if controller_ref else None)
+        controller = _load_controller(controller_ref) if controller_ref else None
         if write_rover_xml:
             click.echo(f"   rover: {_write_rover_xml(scene_dir, run)}")
     with ExitStack() as stack, sigterm_interrupts():
@@ -183,15 +180,15 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
     _report(res, out_dir)
 
 
-def _load_controller(ref: str, route_path: Path | None, waypoints: Any, scene_dir: Path,
-                     options: Any) -> Any:
-    """The controller named ``MODULE:NAME`` (a class is instantiated, with the route if its
-    constructor takes one)."""
+def _load_controller(ref: str) -> Any:
+    """The controller named ``MODULE:NAME``: a callable, or a class instantiated once the drive
+    is prepared, with the drive's route (authored or given) if its constructor takes one."""
     import importlib
     import inspect
     import os
 
     from marsscene.errors import ConfigError
+    from marsscene.sim.control import OnStart
 
     module_name, _, name = ref.partition(":")
     if not module_name or not name:
@@ -206,23 +203,9 @@ def _load_controller(ref: str, route_path: Path | None, waypoints: Any, scene_di
         if not callable(obj):
             raise ConfigError(f"--controller {ref!r} is not callable")
         return obj
-    params = inspect.signature(obj).parameters
-    if "route" not in params:
+    if "route" not in inspect.signature(obj).parameters:
         return obj()
-    route = None
-    if route_path is not None or waypoints is not None:
-        from marsscene.runs.tum import read_tum
-        from marsscene.sim.route import Route, author_route
-        from marsscene.sim.world import load_world
-
-        if route_path is not None:
-            route = Route.from_trajectory(read_tum(route_path))
-        else:
-            world = load_world(scene_dir)
-            route = author_route(waypoints, world.heightfield, obstacles=world.obstacles,
-                                 max_slope_deg=options.max_slope_deg)
-    factory: Any = obj
-    return factory(route=route)
+    return OnStart(lambda sim, route: obj(route=route))
 
 
 def _exit_interrupted(message: str) -> None:

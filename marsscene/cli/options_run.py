@@ -26,6 +26,7 @@ from marsscene.rover.config import (
     noise_profiles,
 )
 from marsscene.rover.lidar import lidar_models
+from marsscene.rover.rates import PHYSICS_HZ
 from marsscene.rover.terramechanics import soils
 
 __all__ = ["RUN_OPTION_NAMES", "camera_size", "run_config", "run_option", "run_options"]
@@ -42,7 +43,7 @@ _SPECS: dict[str, tuple[tuple[str, ...], dict[str, Any]]] = {
         help="Camera image size in pixels.")),
     "camera_hz": (("--camera-hz",), dict(
         type=float, default=_CAM.rate_hz, show_default=True,
-        help="Camera rate (must divide 500 Hz).")),
+        help=f"Camera rate (must divide {PHYSICS_HZ:g} Hz).")),
     "stereo": (("--stereo",), dict(
         is_flag=True, help="Also log a rectified Navcam-like stereo pair "
         f"({_CAM.stereo_baseline_m} m baseline).")),

@@ -78,8 +78,6 @@ _ros_options = compose(
               "--rover-xy.")
 @click.option("--yaw-deg", type=click.FloatRange(-360.0, 360.0), default=0.0,
               show_default=True, help="Start heading (degrees, counter-clockwise from east).")
-@click.option("--yaw", "yaw_rad", type=float, default=None, metavar="RAD",
-              help="Deprecated: the start heading in radians; use --yaw-deg.")
 @click.option("--seconds", type=click.FloatRange(min=0, min_open=True), default=None,
               help="Sim-time limit (default: until Ctrl-C).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
@@ -88,11 +86,9 @@ _ros_options = compose(
               "--out).")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Seed of the sensor noise.")
-@click.option("--ros2", "ros2_flag", is_flag=True, hidden=True,
-              help="Accepted and ignored (serve always speaks ROS 2); to be removed.")
 def serve(scene_dir: Path, start: tuple[float, float] | None, yaw_deg: float,
-          yaw_rad: float | None, seconds: float | None, out_dir: Path | None, record: bool,
-          seed: int, ros2_flag: bool, **opts: Any) -> None:
+          seconds: float | None, out_dir: Path | None, record: bool, seed: int,
+          **opts: Any) -> None:
     """Run the rover live: sensors published, /cmd_vel obeyed, sim time on /clock.
 
     \b
@@ -104,14 +100,7 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw_deg: float,
     import marsscene as ms
     from marsscene.runs.export.options import BagOptions
 
-    if ros2_flag:
-        click.echo("marsscene: --ros2 is not needed (serve always speaks ROS 2) and will be "
-                   "removed; drop it", err=True)
     yaw = math.radians(yaw_deg)
-    if yaw_rad is not None:
-        click.echo("marsscene: --yaw (radians) will be removed; use --yaw-deg (degrees, as "
-                   "build --rover-yaw-deg)", err=True)
-        yaw = yaw_rad
     with user_errors():
         from marsscene.ros2 import serve as serve_live  # MissingDependencyError: one line
 

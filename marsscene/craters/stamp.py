@@ -241,13 +241,6 @@ class _Params:
         return rows, np.diff(rows, axis=1, append=0.0)
 
 
-def _profile(p: _Params, i: int, rho: np.ndarray) -> np.ndarray:
-    """Profile height (in m) of crater ``i`` at normalised radii ``rho``."""
-    k, fr = _index(p, rho)
-    rows, slope = p.rows(np.array([i]))
-    return np.asarray(rows[0][k] + fr * slope[0][k])
-
-
 def _lookup(p: _Params, ids: np.ndarray, k: np.ndarray, fr: np.ndarray) -> np.ndarray:
     rows, slope = p.rows(ids)
     flat = k + (np.arange(ids.size) * rows.shape[1])[:, None, None]

@@ -15,13 +15,13 @@ from typing import Any
 from marsscene._validate import check_choice, check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError
 from marsscene.rover.lidar import LidarConfig
+from marsscene.rover.rates import check_rate
 
 __all__ = [
     "GOAL_TOLERANCE_M", "OMEGA_MAX_RAD_S", "V_MAX_M_S", "CameraConfig", "LidarConfig",
     "NoiseConfig", "RoverConfig", "RunConfig", "noise_profiles",
 ]
 
-_PHYSICS_HZ = 500.0  # scene.xml timestep 0.002 s
 #: The MarsLab protocol's bounds on ``cmd_vel``: forward speed (m/s) and yaw rate (rad/s). The
 #: route follower and the environments' actions are held to them.
 V_MAX_M_S = 0.5
@@ -39,15 +39,6 @@ def _read_doc(path: str | Path, what: str) -> Any:
         return json.loads(text) if p.suffix == ".json" else tomllib.loads(text)
     except (OSError, ValueError) as err:
         raise ConfigError(f"cannot read {what} {p}: {err}") from None
-
-
-def _check_rate(key: str, rate_hz: float, physics_hz: float = _PHYSICS_HZ) -> None:
-    check_range(key, rate_hz, 0.0, physics_hz, lo_open=True)
-    ratio = physics_hz / rate_hz
-    if abs(ratio - round(ratio)) > 1e-9:
-        examples = ", ".join(f"{physics_hz / n:g}" for n in (50, 10, 5, 2) if physics_hz >= n)
-        raise ConfigError(f"{key} = {rate_hz!r} must divide the {physics_hz:g} Hz physics rate "
-                          f"(e.g. {examples})")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -244,7 +235,7 @@ class CameraConfig:
     fovy_deg: float = 60.0
     """Vertical field of view in degrees (pinhole, no distortion)."""
     rate_hz: float = 10.0
-    """Frame rate in Hz (must divide the 500 Hz physics rate)."""
+    """Frame rate in Hz (must divide the physics rate)."""
     depth: bool = True
     """Also log a metric depth image (uint16 mm PNG) registered to the colour image."""
     shadows: bool = True
@@ -312,14 +303,15 @@ class CameraConfig:
         check_range("camera.irradiance_scale", self.irradiance_scale, 0.0, 1e3, lo_open=True)
         if self.trigger_distance_m is not None:
             check_range("camera.trigger_distance_m", self.trigger_distance_m, 0.01, 1e4)
-        _check_rate("camera.rate_hz", self.rate_hz)
+        check_rate("camera.rate_hz", self.rate_hz)
 
 
 @dataclass(frozen=True, kw_only=True)
 class RunConfig:
     """Rates of the physics, the control loop and the logs, the sensors and their noise.
 
-    Every rate divides the physics rate: the scene's 500 Hz (a 2 ms step), or ``physics_hz``.
+    Every rate divides the physics rate: the scene's (:data:`~marsscene.rover.rates.PHYSICS_HZ`,
+    a 2 ms step), or ``physics_hz``.
     A coarser physics step is faster and stays close to the 2 ms reference: 100 Hz (10 ms) runs
     about 4x faster and drives the same route to within a few centimetres over 20 s
     (:doc:`/runtime`, "Physics rate").
@@ -337,7 +329,7 @@ class RunConfig:
     """IMU and wheel-odometry noise; the default is the ``none`` profile (noise-free: an
     optimistic odometry; the SLAM benchmark uses ``ln200s``)."""
     physics_hz: float | None = None
-    """Physics rate (Hz); None: the scene's (``scene.xml`` timestep 2 ms, 500 Hz)."""
+    """Physics rate (Hz); None: the scene's (:data:`~marsscene.rover.rates.PHYSICS_HZ`)."""
     soil: str | None = None
     """Deformable soil under the wheels, by name (``marsscene.rover.terramechanics.soils``:
     slip, sinkage and their forces, :doc:`/science/terramechanics`); None: the terrain's
@@ -349,8 +341,8 @@ class RunConfig:
 
             soil(self.soil)  # one-line error for an unknown name
         if self.physics_hz is None:
-            _check_rate("run.control_hz", self.control_hz)
-            _check_rate("run.imu_hz", self.imu_hz)
+            check_rate("run.control_hz", self.control_hz)
+            check_rate("run.imu_hz", self.imu_hz)
             return
         check_range("run.physics_hz", self.physics_hz, 50.0, 2000.0)
         rates = {"run.control_hz": self.control_hz, "run.imu_hz": self.imu_hz}
@@ -359,7 +351,7 @@ class RunConfig:
         if self.camera is not None and self.camera.trigger_distance_m is None:
             rates["camera.rate_hz"] = self.camera.rate_hz
         for key, rate in rates.items():
-            _check_rate(key, rate, self.physics_hz)
+            check_rate(key, rate, self.physics_hz)
 
     @classmethod
     def from_toml(cls, path: str | Path) -> RunConfig:

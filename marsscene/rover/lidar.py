@@ -33,12 +33,12 @@ from numpy.typing import NDArray
 
 from marsscene._validate import check_choice, check_range
 from marsscene.errors import ConfigError
+from marsscene.rover.rates import check_rate
 
 __all__ = ["DEFAULT_LIDAR_MODEL", "LidarConfig", "LidarSpec", "lidar_models"]
 
 #: The model of ``LidarConfig()`` and ``marsscene drive --lidar``.
 DEFAULT_LIDAR_MODEL = "os1-128"
-_PHYSICS_HZ = 500.0
 _VLP16_LASER_S = 2.304e-6  # one laser's slot inside a VLP-16 firing sequence
 _FIRING_OFFSETS = ("none", "velodyne")
 
@@ -199,11 +199,7 @@ def _check(spec: LidarSpec) -> None:
     rmin, rmax = spec.range_m
     check_range("lidar.range_m[0]", rmin, 0.0, 10.0)
     check_range("lidar.range_m[1]", rmax, rmin, 1000.0, lo_open=True)
-    check_range("lidar.rate_hz", spec.rate_hz, 0.0, _PHYSICS_HZ, lo_open=True)
-    ratio = _PHYSICS_HZ / spec.rate_hz
-    if abs(ratio - round(ratio)) > 1e-9:
-        raise ConfigError(f"lidar.rate_hz = {spec.rate_hz!r} must divide the 500 Hz physics "
-                          "rate (e.g. 10, 20, 50)")
+    check_rate("lidar.rate_hz", spec.rate_hz)
     check_range("lidar.range_noise_sigma_m", spec.range_noise_sigma_m, 0.0, 1.0)
     check_range("lidar.dropout_probability", spec.dropout_probability, 0.0, 1.0)
     check_range("lidar.dust_extinction_per_m", spec.dust_extinction_per_m, 0.0, 1.0)

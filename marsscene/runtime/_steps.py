@@ -4,6 +4,7 @@ JPEG cache, and the exports after it (private: ``drive`` is the one caller)."""
 
 from __future__ import annotations
 
+import inspect
 import logging
 import os
 import tempfile
@@ -90,11 +91,16 @@ def write_route(out: Path | None, sim: Any, path: Route | None, options: DriveOp
                       header=(options.route_note or ROUTE_NOTE).format(length_m=path.length_m))
 
 
-def started(controller: Any, sim: Any) -> tuple[Any, tuple[Any, ...]]:
-    """The drive's controller (made now from an :class:`OnStart`) and the listeners it adds."""
+def started(controller: Any, sim: Any, route: Route | None) -> tuple[Any, tuple[Any, ...]]:
+    """The drive's controller (made now from an :class:`OnStart`: ``make(sim)``, or
+    ``make(sim, route=route)`` when ``make`` takes a ``route``, the drive's authored or given
+    route) and the listeners it adds."""
     if not isinstance(controller, OnStart):
         return controller, ()
-    made = controller.make(sim)
+    if "route" in inspect.signature(controller.make).parameters:
+        made = controller.make(sim, route=route)
+    else:
+        made = controller.make(sim)
     return made, ((made,) if controller.listen else ())
 
 

@@ -163,7 +163,8 @@ def drive(
         (:mod:`marsscene.sim.control`); with a route it steers instead of pure pursuit (the
         route then sets the start, the rock corridor and the cross-track summary). Its
         optional ``done`` attribute ends the drive. An :class:`~marsscene.sim.control.OnStart`
-        makes it from the prepared simulator (the live ROS 2 bridge).
+        makes it from the prepared simulator (the live ROS 2 bridge), and from the drive's
+        route too when its ``make`` takes a ``route`` (``marsscene drive --controller``).
     command : (v, omega) or callable t -> (v, omega), optional
         An open-loop command instead.
     seconds : float, optional
@@ -239,7 +240,7 @@ def drive(
         sim, path = prepare_drive(scene_path, config, route=_route(route),
                                   waypoints_xy_m=waypoints, options=options)
         write_route(out, sim, path, options)
-        ctrl, heard = started(controller, sim)
+        ctrl, heard = started(controller, sim, path)
         with jpeg_cache(out, export, config) as cache:
             session = SessionOptions(keep_sensors=keep_sensors, lidar_files=export.lidar_files,
                                      listeners=(*listeners, *heard), jpeg_cache=cache)

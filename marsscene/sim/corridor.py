@@ -7,7 +7,11 @@ import xml.etree.ElementTree as ET
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["cull_scene_xml", "distance_to_polyline"]
+__all__ = ["CORRIDOR_M", "cull_scene_xml", "distance_to_polyline"]
+
+#: Default half width of the rock corridor in m: only the MJCF rocks this close to the route
+#: are simulated (``DriveOptions.corridor_m`` reads it from here).
+CORRIDOR_M = 15.0
 
 
 def distance_to_polyline(p: NDArray[np.float64], line: NDArray[np.float64]) -> NDArray[np.float64]:

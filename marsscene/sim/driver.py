@@ -27,8 +27,9 @@ from marsscene.runs.runlog import read_numeric_csv
 from marsscene.runs.tum import Trajectory, read_tum, write_tum
 from marsscene.sensors.imu import ImuNoise
 from marsscene.sim.control import Controller, OpenLoop
+from marsscene.sim.cross_track import cross_track_m
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
-from marsscene.sim.route import Route, cross_track_m
+from marsscene.sim.route import Route
 from marsscene.sim.run_writer import GT_HEADER, ODOM_HEADER
 from marsscene.sim.session import DriveSession, SessionOptions
 

@@ -19,8 +19,9 @@ from numpy.typing import ArrayLike
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError, RuntimeSimError
 from marsscene.rover.config import RunConfig
+from marsscene.sim.corridor import CORRIDOR_M
 from marsscene.sim.pursuit import PursuitConfig
-from marsscene.sim.route import Route, author_route
+from marsscene.sim.route import MAX_SLOPE_DEG, Route, author_route
 
 __all__ = ["DriveOptions", "prepare_drive"]
 
@@ -55,8 +56,8 @@ class DriveOptions:
         without exports.
     """
 
-    max_slope_deg: float = 20.0
-    corridor_m: float = 15.0
+    max_slope_deg: float = MAX_SLOPE_DEG
+    corridor_m: float = CORRIDOR_M
     settle_s: float = 3.0
     pursuit: PursuitConfig = field(default_factory=PursuitConfig)
     start_xy_m: tuple[float, float] | None = None
@@ -123,30 +124,35 @@ def prepare_drive(
     route : Route or None
     """
     from marsscene.sim.rover_sim import RoverSim
-    from marsscene.sim.world import scene_obstacles
 
     opt = options if options is not None else DriveOptions()
     if route is not None and waypoints_xy_m is not None:
         raise RuntimeSimError("give a route or waypoints, not both")
-    sim = RoverSim(scene_dir, run=run, settle_s=0.0)
-    if route is None and waypoints_xy_m is None:
-        sim.settle_s = opt.settle_s
+    if waypoints_xy_m is not None:  # planned on the scene alone; the rover's sim is built once
+        from marsscene.sim.world import load_world
+
+        world = load_world(scene_dir)
+        route = author_route(np.asarray(waypoints_xy_m, dtype=np.float64), world.heightfield,
+                             max_slope_deg=opt.max_slope_deg, obstacles=world.obstacles)
+    corridor = {} if route is None else {"contact_corridor_xy_m": route.xy_m,
+                                         "contact_corridor_m": _corridor_m(opt, run)}
+    sim = RoverSim(scene_dir, run=run, settle_s=0.0, **corridor)
+    sim.settle_s = opt.settle_s
+    if route is None:
         sim.reset(xy_m=opt.start_xy_m, yaw_rad=opt.start_yaw_rad)
         return sim, None
-    if route is not None:
-        _check_inside(route, sim.heightfield)
-    else:
-        route = author_route(np.asarray(waypoints_xy_m, dtype=np.float64), sim.heightfield,
-                             max_slope_deg=opt.max_slope_deg, obstacles=scene_obstacles(sim))
-    if sim.rocks_kept[1]:  # simulate only the rocks the rover can meet or sense
-        corridor_m = opt.corridor_m
-        if run.lidar is not None:
-            corridor_m = max(corridor_m, run.lidar.spec.range_m[1])
-        if run.camera is not None:
-            corridor_m = max(corridor_m, run.camera.terrain_window_m / 2.0)
-        sim = RoverSim(scene_dir, run=run, settle_s=0.0, contact_corridor_xy_m=route.xy_m,
-                       contact_corridor_m=corridor_m)
+    _check_inside(route, sim.heightfield)
     a, b = route.xy_m[0], route.xy_m[min(5, len(route.xy_m) - 1)]
-    sim.settle_s = opt.settle_s
     sim.reset(xy_m=(float(a[0]), float(a[1])), yaw_rad=math.atan2(b[1] - a[1], b[0] - a[0]))
     return sim, route
+
+
+def _corridor_m(opt: DriveOptions, run: RunConfig) -> float:
+    """Half width of the rock corridor: ``opt.corridor_m``, widened to what the sensors see (the
+    LiDAR's range, half the camera's terrain window); only the rocks inside are simulated."""
+    corridor_m = opt.corridor_m
+    if run.lidar is not None:
+        corridor_m = max(corridor_m, run.lidar.spec.range_m[1])
+    if run.camera is not None:
+        corridor_m = max(corridor_m, run.camera.terrain_window_m / 2.0)
+    return corridor_m

@@ -36,6 +36,7 @@ from marsscene.export.usd.rock_colliders import COLLIDERS_PATH
 from marsscene.export.usd.rock_colliders_read import merged_rocks, rock_instances
 from marsscene.rover.config import RoverConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
+from marsscene.rover.rates import PHYSICS_HZ
 from marsscene.transforms import yaw_of_quat
 
 __all__ = ["NewtonRover", "rock_instances"]
@@ -85,7 +86,7 @@ class NewtonRover:
 
     def __init__(self, scene_usd: str | Path, *, rover: RoverConfig | None = None,
                  rocks_within_m: float | None = 30.0, rock_rows: Any = None,
-                 dt_s: float = 0.002,
+                 dt_s: float = 1.0 / PHYSICS_HZ,
                  control_hz: float = 50.0, edit_builder: Callable[[Any], None] | None = None,
                  device: str = "cpu") -> None:
         newton, _ = _newton()

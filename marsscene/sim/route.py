@@ -29,24 +29,27 @@ from scipy.ndimage import (
 from scipy.sparse.csgraph import dijkstra
 
 from marsscene._validate import check_range
-from marsscene.errors import MarsSceneWarning, RuntimeSimError
+from marsscene.errors import ConfigError, MarsSceneWarning, RuntimeSimError
 from marsscene.runs.tum import Trajectory
-from marsscene.sim.cross_track import cross_track_m
 from marsscene.terrain.heightfield import Heightfield
 
 log = logging.getLogger("marsscene")
 
 __all__ = [
+    "MAX_SLOPE_DEG",
     "Obstacles",
     "Route",
     "RouteWarning",
     "author_route",
-    "cross_track_m",
+    "check_waypoints",
     "resample_xy",
     "traversable_grid",
 ]
 
 _MAX_NODES = 250_000
+#: Route authoring's default slope limit in degrees (``DriveOptions.max_slope_deg``, the
+#: benchmarks' routes and the navigation task read it from here).
+MAX_SLOPE_DEG = 20.0
 
 
 class RouteWarning(MarsSceneWarning):
@@ -92,6 +95,34 @@ class Route:
     @classmethod
     def from_trajectory(cls, traj: Trajectory) -> Route:
         return cls(traj.xyz_m[:, :2].copy())
+
+
+def check_waypoints(value: object, key: str = "waypoints") -> NDArray[np.float64]:
+    """Waypoints as an array (K, 2) in m: at least two finite ``[x, y]`` pairs of numbers, or
+    a one-line :class:`ConfigError` naming ``key``.
+
+    Examples
+    --------
+    >>> check_waypoints([[0, 0], [5, 2]]).shape
+    (2, 2)
+    >>> try:
+    ...     check_waypoints([[0, 0]], "drive.waypoints")
+    ... except ConfigError as err:
+    ...     print(err)
+    drive.waypoints = [[0, 0]]; need at least 2 [x, y] pairs in m
+    """
+    def number(v: object) -> bool:
+        return isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool)
+
+    pairs = list(value) if isinstance(value, list | tuple | np.ndarray) else []
+    ok = len(pairs) >= 2 and all(
+        isinstance(p, list | tuple | np.ndarray) and len(p) == 2 and all(map(number, p))
+        for p in pairs)
+    wp = np.asarray(pairs, dtype=np.float64) if ok else np.zeros((0, 2))
+    if not ok or not np.isfinite(wp).all():
+        shown = [list(p) if isinstance(p, tuple) else p for p in pairs] if pairs else value
+        raise ConfigError(f"{key} = {shown!r}; need at least 2 [x, y] pairs in m")
+    return wp
 
 
 def resample_xy(xy: ArrayLike, spacing_m: float) -> NDArray[np.float64]:
@@ -219,7 +250,7 @@ def traversable_grid(
     hf: Heightfield,
     *,
     cell_m: float = 0.5,
-    max_slope_deg: float = 20.0,
+    max_slope_deg: float = MAX_SLOPE_DEG,
     obstacles: Obstacles | None = None,
     max_obstacle_height_m: float = 0.3,
     clearance_m: float = 1.5,
@@ -244,7 +275,7 @@ def author_route(
     *,
     spacing_m: float = 0.1,
     smooth_m: float = 1.0,
-    max_slope_deg: float = 20.0,
+    max_slope_deg: float = MAX_SLOPE_DEG,
     obstacles: Obstacles | None = None,
     max_obstacle_height_m: float = 0.3,
     clearance_m: float = 1.5,
@@ -277,9 +308,7 @@ def author_route(
     check_range("spacing_m", spacing_m, 0.01, 10.0)
     check_range("smooth_m", smooth_m, 0.0, 100.0)
     check_range("max_slope_deg", max_slope_deg, 0.0, 90.0, lo_open=True)
-    wp = np.asarray(waypoints_xy_m, dtype=np.float64)
-    if wp.ndim != 2 or wp.shape[1] != 2 or len(wp) < 2:
-        raise RuntimeSimError(f"waypoints must be an array of shape (K>=2, 2); got {wp.shape}")
+    wp = check_waypoints(waypoints_xy_m)
     x0, y0, x1, y1 = hf.bounds_xy_m
     bad = ~(
         (wp[:, 0] >= x0 + margin_m)

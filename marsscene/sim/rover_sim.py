@@ -23,7 +23,7 @@ from marsscene.errors import RuntimeSimError
 from marsscene.rover.config import RoverConfig, RunConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
 from marsscene.rover.spawn import spawn_pose
-from marsscene.sim.corridor import cull_scene_xml
+from marsscene.sim.corridor import CORRIDOR_M, cull_scene_xml
 from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.terrain import scene_heightfield
 from marsscene.sim.wheel_soil import WheelSoil, soften_terrain, soil_map_of
@@ -40,7 +40,7 @@ def load_scene_spec(
     scene_dir: str | Path,
     *,
     corridor_xy_m: Any = None,
-    corridor_m: float = 15.0,
+    corridor_m: float = CORRIDOR_M,
 ) -> tuple[Any, Path, tuple[int, int]]:
     """Open ``scene_dir/mjcf/scene.xml`` as an ``MjSpec`` (clear error if it is missing).
 
@@ -59,7 +59,7 @@ def load_scene_spec(
     text = xml.read_text(encoding="utf-8")
     total = text.count('<geom name="rock_')
     try:
-        if corridor_xy_m is None:
+        if corridor_xy_m is None or total == 0:
             return mujoco.MjSpec.from_file(str(xml)), xml, (total, total)
         culled, kept, total = cull_scene_xml(text, corridor_xy_m, corridor_m)
         files = set(re.findall(r'file="([^"]+)"', culled))
@@ -140,7 +140,7 @@ class RoverSim:
         edit_spec: Callable[[Any], None] | None = None,
         settle_s: float = 3.0,
         contact_corridor_xy_m: Any = None,
-        contact_corridor_m: float = 15.0,
+        contact_corridor_m: float = CORRIDOR_M,
         soil: Any = None,
     ) -> None:
         self.rover = rover if rover is not None else RoverConfig()

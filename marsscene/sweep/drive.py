@@ -10,7 +10,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from marsscene.sim.pursuit import PursuitConfig
 from marsscene.sweep.spec import DriveSpec
 
 __all__ = ["drive_cell"]
@@ -35,11 +34,8 @@ def drive_cell(scene_dir: Path, spec: DriveSpec, out_dir: Path) -> dict[str, Any
         route=spec.route,
         waypoints=spec.waypoints if spec.route is None else None,
         seconds=spec.seconds,
-        config=ms.RunConfig(lidar=ms.LidarConfig() if spec.lidar else None,
-                            camera=ms.CameraConfig() if spec.camera else None,
-                            noise=ms.NoiseConfig(profile=spec.noise_profile)),
-        options=ms.DriveOptions(max_slope_deg=spec.max_slope_deg, corridor_m=spec.corridor_m,
-                                pursuit=PursuitConfig(lookahead_m=spec.lookahead_m)),
+        config=spec.run_config(),
+        options=spec.options,
         export=ms.ExportOptions(bag=ms.BagOptions() if spec.bag else None),
         out_dir=out_dir,
         seed=spec.noise_seed,

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import json
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,14 +28,28 @@ from typing import Any
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.config import SceneConfig, read_config_toml
 from marsscene.errors import ConfigError
-from marsscene.rover.config import noise_profiles
+from marsscene.rover.config import CameraConfig, LidarConfig, NoiseConfig, RunConfig
+from marsscene.sim.mission import DriveOptions
+from marsscene.sim.route import check_waypoints
 
 __all__ = ["DriveSpec", "SweepSpec"]
 
 
+#: The ``[drive]`` keys of the sweep itself; every other key is a :class:`DriveOptions` key.
+_SWEEP_DRIVE_KEYS = ("waypoints", "route", "seconds", "camera", "lidar", "noise_seed",
+                     "noise_profile", "bag")
+#: Keys that moved, with where they went (a one-line error names the new key).
+_MOVED = {"lookahead_m": "pursuit.lookahead_m ([drive.pursuit] lookahead_m = ...)"}
+
+
 @dataclass(frozen=True, kw_only=True)
 class DriveSpec:
-    """How every cell is driven (the ``[drive]`` table; see ``marsscene drive``)."""
+    """How every cell is driven (the ``[drive]`` table; see ``marsscene drive``).
+
+    The table holds the sweep's own keys (below) and any :class:`~marsscene.DriveOptions` key
+    (``max_slope_deg``, ``corridor_m``, ``settle_s``, a ``pursuit`` table, ...), read by
+    ``DriveOptions.from_dict``: their defaults and bounds are the drive's.
+    """
 
     waypoints: tuple[tuple[float, float], ...] | None = None
     """Waypoints (x, y) in m; a smooth route avoiding slopes and rocks is authored through them."""
@@ -43,65 +58,99 @@ class DriveSpec:
     seconds: float | None = None
     """Sim-time limit in s (default: until the goal)."""
     camera: bool = False
-    """Log the mast RGB-D camera with its defaults (:class:`~marsscene.runtime.CameraConfig`:
-    640 x 480 at 10 Hz)."""
+    """Log the mast RGB-D camera with its defaults (:class:`~marsscene.runtime.CameraConfig`)."""
     lidar: bool = False
-    """Log the LiDAR with its defaults (:class:`~marsscene.runtime.LidarConfig`: Ouster OS1-128
-    at 10 Hz)."""
+    """Log the LiDAR with its defaults (:class:`~marsscene.runtime.LidarConfig`)."""
     noise_seed: int = 0
     """Seed of the sensor-noise stream (the same in every cell unless swept)."""
-    noise_profile: str = "none"
-    """IMU and wheel-odometry noise profile (:class:`~marsscene.runtime.NoiseConfig`):
-    ``"none"`` (noise-free, as ``marsscene drive``), ``"ln200s"`` (the benchmarks' default) or
-    ``"adis16495"``."""
-    lookahead_m: float = 1.0
-    """Pure-pursuit lookahead."""
-    max_slope_deg: float = 20.0
-    """Route authoring: steepest slope allowed."""
-    corridor_m: float = 15.0
-    """Only MJCF rocks within this distance of the route are simulated."""
+    noise_profile: str | None = None
+    """IMU and wheel-odometry noise profile (:class:`~marsscene.runtime.NoiseConfig`; default:
+    its default, noise-free as ``marsscene drive``), e.g. ``"ln200s"`` (the benchmarks')."""
     bag: bool = False
     """Also write the drive as a ROS 2 bag (``drive/bag``, MCAP; see ``marsscene bag``)."""
+    options: DriveOptions = field(default_factory=DriveOptions)
+    """The drive's set-up: the table's :class:`~marsscene.DriveOptions` keys."""
 
     def __post_init__(self) -> None:
         if (self.waypoints is None) == (self.route is None):
             raise ConfigError("[drive] needs exactly one of waypoints or route")
         if self.waypoints is not None:
-            pts = self.waypoints
-            ok = len(pts) >= 2 and all(
-                len(p) == 2 and all(isinstance(v, int | float) for v in p) for p in pts
-            )
-            if not ok:
-                raise ConfigError(
-                    f"drive.waypoints = {list(pts)!r}; need at least 2 [x, y] pairs in m"
-                )
-            object.__setattr__(
-                self, "waypoints", tuple((float(p[0]), float(p[1])) for p in pts)
-            )
+            wp = check_waypoints(self.waypoints, "drive.waypoints")
+            object.__setattr__(self, "waypoints", tuple((float(x), float(y)) for x, y in wp))
         if self.seconds is not None:
             check_range("drive.seconds", self.seconds, 0.0, 1e6, lo_open=True)
         if isinstance(self.noise_seed, bool) or not isinstance(self.noise_seed, int):
             raise ConfigError(f"drive.noise_seed = {self.noise_seed!r}; must be an integer >= 0")
         check_range("drive.noise_seed", self.noise_seed, 0)
-        check_range("drive.lookahead_m", self.lookahead_m, 0.05, 100.0)
-        check_range("drive.max_slope_deg", self.max_slope_deg, 0.0, 90.0, lo_open=True)
-        check_range("drive.corridor_m", self.corridor_m, 1.0, 1e4)
         for key in ("camera", "lidar", "bag"):
             if not isinstance(getattr(self, key), bool):
                 raise ConfigError(f"drive.{key} = {getattr(self, key)!r}; must be true or false")
-        profiles = noise_profiles()
-        if not isinstance(self.noise_profile, str) or self.noise_profile not in profiles:
-            raise ConfigError(f"drive.noise_profile = {self.noise_profile!r} is unknown; known "
-                              f"profiles: {', '.join(profiles)}")
+        try:
+            self.run_config()
+        except ConfigError as err:
+            raise ConfigError(f"drive.noise_profile: {err}") from None
+
+    @classmethod
+    def from_dict(cls, mapping: Any) -> DriveSpec:
+        """From a ``[drive]`` table: the sweep's keys, the rest to ``DriveOptions.from_dict``."""
+        if not isinstance(mapping, dict):
+            raise ConfigError(f"[drive] must be a table; got {mapping!r}")
+        for old, new in _MOVED.items():
+            if old in mapping:
+                raise ConfigError(f"drive.{old} = {mapping[old]!r}: now drive.{new}, as in "
+                                  "DriveOptions")
+        allowed = {*_SWEEP_DRIVE_KEYS, *(f.name for f in dataclasses.fields(DriveOptions))}
+        for key, value in mapping.items():
+            if key not in allowed:
+                raise ConfigError(f"unknown key drive.{key} = {value!r}; allowed keys: "
+                                  f"{sorted(allowed)}")
+        options = DriveOptions.from_dict(
+            {k: v for k, v in mapping.items() if k not in _SWEEP_DRIVE_KEYS})
+        own = {k: v for k, v in mapping.items() if k in _SWEEP_DRIVE_KEYS}
+        return dataclasses.replace(dataclass_from_mapping(cls, own, "drive"), options=options)
+
+    def run_config(self) -> RunConfig:
+        """The drive's sensors and noise."""
+        noise = NoiseConfig() if self.noise_profile is None else NoiseConfig(
+            profile=self.noise_profile)
+        return RunConfig(lidar=LidarConfig() if self.lidar else None,
+                         camera=CameraConfig() if self.camera else None, noise=noise)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain dict (JSON-serialisable; ``None`` values dropped)."""
-        out = {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
-        if out.get("noise_profile") == "none":  # the default: keeps older sweeps' config hashes
+        """Plain dict (JSON-serialisable; ``None`` values dropped), the cell's config hash: a
+        default noise profile is left out and ``lookahead_m``, ``max_slope_deg``, ``corridor_m``
+        are written flat as they were (older sweeps keep their hashes); other drive options
+        only where they differ from the default, under ``options``."""
+        out = {k: getattr(self, k) for k in _SWEEP_DRIVE_KEYS if getattr(self, k) is not None}
+        if out.get("noise_profile") == NoiseConfig().profile:
             del out["noise_profile"]
         if "waypoints" in out:
             out["waypoints"] = [list(p) for p in out["waypoints"]]
+        opt = self.options
+        out.update(lookahead_m=opt.pursuit.lookahead_m, max_slope_deg=opt.max_slope_deg,
+                   corridor_m=opt.corridor_m)
+        changed = _changed(dataclasses.asdict(opt), dataclasses.asdict(DriveOptions()))
+        changed.pop("max_slope_deg", None)
+        changed.pop("corridor_m", None)
+        if changed.get("pursuit", {}).pop("lookahead_m", None) is not None and \
+                not changed["pursuit"]:
+            del changed["pursuit"]
+        if changed:
+            out["options"] = json.loads(json.dumps(changed))  # tuples as lists
         return out
+
+
+def _changed(doc: dict[str, Any], default: dict[str, Any]) -> dict[str, Any]:
+    """The entries of ``doc`` that differ from ``default`` (nested tables compared by key)."""
+    out: dict[str, Any] = {}
+    for key, value in doc.items():
+        if isinstance(value, dict):
+            sub = _changed(value, default[key])
+            if sub:
+                out[key] = sub
+        elif value != default[key]:
+            out[key] = value
+    return out
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -237,5 +286,5 @@ def _spec_from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
             route = Path(drive_table["route"])
             if base_dir is not None and not route.is_absolute():
                 drive_table["route"] = str((base_dir / route).resolve())
-        drive = dataclass_from_mapping(DriveSpec, drive_table, "drive")
+        drive = DriveSpec.from_dict(drive_table)
     return SweepSpec(base=data, axes=tuple(axes), drive=drive, source=source)

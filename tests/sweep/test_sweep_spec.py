@@ -144,9 +144,9 @@ def test_drive_noise_profile_is_checked_and_reaches_the_drive(
 
     base = {"sweep": {"seed": [1]}, "drive": {"waypoints": [[0, 0], [1, 1]]}}
     default = SweepSpec.from_dict(base).drive
-    assert default is not None and default.noise_profile == "none"
+    assert default is not None and default.run_config().noise == ms.NoiseConfig()
     assert "noise_profile" not in default.to_dict()  # older sweeps keep their config hashes
-    with pytest.raises(ConfigError, match=r"drive\.noise_profile = 'ln200' is unknown"):
+    with pytest.raises(ConfigError, match=r"drive\.noise_profile: noise\.profile = 'ln200' is"):
         SweepSpec.from_dict({**base, "drive": {**base["drive"], "noise_profile": "ln200"}})
     spec = SweepSpec.from_dict({**base, "drive": {**base["drive"], "noise_profile": "ln200s"}})
     assert spec.drive is not None and spec.drive.to_dict()["noise_profile"] == "ln200s"

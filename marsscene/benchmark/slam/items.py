@@ -11,6 +11,7 @@ from typing import Any
 
 from marsscene._validate import check_choice, check_range
 from marsscene.errors import ConfigError
+from marsscene.sim.route import MAX_SLOPE_DEG, check_waypoints
 
 __all__ = ["BENCHMARK_NOISE_PROFILE", "METHOD_KINDS", "MethodSpec", "RouteSpec", "SceneSpec"]
 
@@ -52,7 +53,7 @@ class RouteSpec:
     """Direction of the first leg (counter-clockwise from +x = east)."""
     width_m: float = 6.0
     """Distance between the out and the back lane of an ``out-and-back``."""
-    max_slope_deg: float = 20.0
+    max_slope_deg: float = MAX_SLOPE_DEG
     """Steepest slope the route may cross."""
 
     def __post_init__(self) -> None:
@@ -60,11 +61,7 @@ class RouteSpec:
         if len(given) != 1:
             raise ConfigError(f"route needs exactly one of waypoints, file or shape; got {given}")
         if self.waypoints is not None:
-            pts = self.waypoints
-            if len(pts) < 2 or not all(len(p) == 2 and all(
-                    isinstance(v, int | float) and not isinstance(v, bool) for v in p)
-                    for p in pts):
-                raise ConfigError(f"route.waypoints = {list(pts)!r}; need >= 2 [x, y] pairs in m")
+            pts = check_waypoints(self.waypoints, "route.waypoints")
             object.__setattr__(self, "waypoints", tuple((float(x), float(y)) for x, y in pts))
         if self.shape is not None:
             check_choice("route.shape", self.shape, ("loop", "out-and-back"))

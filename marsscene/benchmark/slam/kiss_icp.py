@@ -58,8 +58,6 @@ from marsscene.runs.tum import Trajectory, read_tum
 __all__ = ["GATES", "SIDE_SLIP_RATIO", "LidarOdometryScore", "LiveKissIcp", "lidar_ground_truth",
            "lidar_mount", "passes_gate", "run_kiss_icp", "score_lidar_odometry"]
 
-KISS_ICP_CITATION = ("Vizzo, Guadagnino, Mersch, Wiesmann, Behley, Stachniss 2023, KISS-ICP, "
-                     "IEEE RA-L 8(2), doi:10.1109/LRA.2023.3236571")
 TOPIC = "/rover/lidar/points"
 #: The wheel prior's gates (module doc).
 GATES = ("step", "slip")

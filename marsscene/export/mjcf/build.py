@@ -19,6 +19,7 @@ from marsscene.export.mjcf.hfield import hfield_spec
 from marsscene.export.mjcf.lighting import add_lighting
 from marsscene.export.mjcf.rocks import add_rocks
 from marsscene.export.mjcf.terrain_lod import add_outer_terrain
+from marsscene.rover.rates import PHYSICS_HZ
 from marsscene.units import MARS_GRAVITY_M_S2
 
 __all__ = ["build_mjcf", "fmt"]
@@ -28,7 +29,7 @@ def build_mjcf(scene: Any) -> tuple[ET.Element, dict[str, bytes]]:
     root = ET.Element("mujoco", model="marsscene")
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
     ET.SubElement(
-        root, "option", timestep="0.002", gravity=fmt((0.0, 0.0, -MARS_GRAVITY_M_S2)),
+        root, "option", timestep=fmt(1.0 / PHYSICS_HZ), gravity=fmt((0.0, 0.0, -MARS_GRAVITY_M_S2)),
         integrator=INTEGRATOR,
     )
     size_info = ET.SubElement(root, "custom")
