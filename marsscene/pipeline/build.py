@@ -22,7 +22,7 @@ from marsscene.pipeline.craters import crater_stage
 from marsscene.pipeline.lighting import lighting_stage
 from marsscene.pipeline.lod import LodWorld
 from marsscene.pipeline.record import BuildRecord
-from marsscene.pipeline.rocks import rock_stage
+from marsscene.pipeline.rocks import check_rock_budget, rock_stage
 from marsscene.pipeline.terrain import TerrainStage, resolve_lod, terrain_stage
 from marsscene.scene import ModelRef, Provenance, Scene
 from marsscene.seeding import stage_rng
@@ -84,6 +84,7 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     if lod_note:
         log.warning(lod_note)
         rec.notes.append(lod_note)
+    check_rock_budget(config)  # a rock plan that cannot fit is refused before the terrain
     with rec.stage("terrain"):
         terrain = terrain_stage(config, seed, dem, rec.models, rec.notes, rec.summary)
     world = terrain.world

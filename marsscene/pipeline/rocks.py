@@ -28,7 +28,7 @@ from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.lod import OuterTerrain
 from marsscene.terrain.tiles import FocusTiling
 
-__all__ = ["rock_levels", "rock_stage"]
+__all__ = ["check_rock_budget", "rock_levels", "rock_stage"]
 
 log = logging.getLogger("marsscene")
 
@@ -47,6 +47,23 @@ def rock_levels(config: SceneConfig, hf: Heightfield, world: LodWorld | None,
     levels = plan_levels(rcfg, hf.bounds_xy_m,
                          tiling.plan.bounds_xy_m if tiling is not None else None)
     return levels, tiling if levels.two_level else None
+
+
+def check_rock_budget(config: SceneConfig) -> None:
+    """Refuse, before the terrain is built, a procedural scene whose rocks cannot fit
+    ``rocks.max_rocks`` (the stage's own refusal, a minute earlier on a large scene).
+
+    The footprint and focus square are taken 8 posts smaller than the terrain can make them
+    (snapping, a focus that does not fit), so this refuses nothing the stage would accept.
+    """
+    rcfg, tcfg = config.rocks, config.terrain
+    if not rcfg.enabled or tcfg.source != "procedural":
+        return
+    w, h = tcfg.effective_size_m
+    margin = 8.0 * (tcfg.post_m if tcfg.post_m is not None else 0.25)
+    side = max(0.0, min(tcfg.focus_size_m, w, h) - margin)
+    plan_levels(rcfg, (0.0, 0.0, max(0.0, w - margin), max(0.0, h - margin)),
+                (0.0, 0.0, side, side), two_level_terrain=tcfg.lod is True)
 
 
 def _place(config: SceneConfig, seed: int, hf: Heightfield, craters: CraterTable,
@@ -86,12 +103,12 @@ def rock_stage(config: SceneConfig, seed: int, hf: Heightfield, craters: CraterT
             rec.models.append(ModelRef("rocks", "crater-ejecta rock weighting",
                                        EJECTA_CITATION))
         rec.notes.extend(rock_notes(hf, crater_table, rcfg, rocks))
-        rec.summary["rocks"] = rock_summary(hf, rcfg, rocks, prototypes)
+        summary = rock_summary(hf, rcfg, rocks, prototypes)
+        rec.summary["rocks"] = summary
         if levels.two_level:
-            summary = level_summary(levels, rocks)
-            rec.summary["rocks"]["levels"] = summary
+            counts = summary["levels"] = level_summary(levels, rocks)
             rec.notes.append(line)
             log.info("[rocks] %d rocks in the focus square (from %g m), %d outside it (from a "
-                     "cut-off of %g m)", summary["focus_count"], rcfg.d_min_m,
-                     summary["outer_count"], levels.outer_d_min_m)
+                     "cut-off of %g m)", counts["focus_count"], rcfg.d_min_m,
+                     counts["outer_count"], levels.outer_d_min_m)
     return rocks, prototypes

@@ -20,7 +20,7 @@ from marsscene.rocks.sfd import cumulative_number_density_per_m2
 OPTION = re.compile(r"\b(rocks|terrain)\.[a-z_]+\b|--[a-z-]+")
 
 
-def _square(side_m: float, cx: float = 0.0, cy: float = 0.0) -> tuple[float, ...]:
+def _square(side_m: float, cx: float = 0.0, cy: float = 0.0) -> tuple[float, float, float, float]:
     return (cx - side_m / 2, cy - side_m / 2, cx + side_m / 2, cy + side_m / 2)
 
 

@@ -69,17 +69,17 @@ def _check(cfg: SceneConfig, seed: int = 3) -> None:
 
 sizes = st.floats(100.0, 4000.0)
 rock_options = st.fixed_dictionaries({
-    "d_min_m": st.sampled_from([0.15, 0.3, 0.6]),
-    "outer_d_min_m": st.sampled_from([0.1, 1.0, 1.5]),
+    "d_min_m": st.sampled_from([0.3, 0.6, 1.0]),
+    "outer_d_min_m": st.sampled_from([0.1, 1.2, 1.5, 2.0, 2.5]),  # 0.1: every rock everywhere
     "k": st.floats(0.03, 0.2),
     "placement": st.sampled_from(["uniform", "ejecta", "clustered"]),
-    "max_rocks": st.integers(2_000, 40_000),
+    "max_rocks": st.integers(5_000, 60_000),
 })
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(w=sizes, h=sizes, rocks=rock_options, lod=st.sampled_from(["auto", True]),
-       focus=st.floats(60.0, 1500.0), offset=st.booleans())
+       focus=st.floats(60.0, 600.0), offset=st.booleans())
 def test_procedural_scenes_build_or_are_refused_in_one_line(
         w: float, h: float, rocks: dict[str, object], lod: object, focus: float,
         offset: bool) -> None:
@@ -112,17 +112,31 @@ def strip_dtm(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @settings(max_examples=6, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(w=sizes, h=sizes, rocks=rock_options, lod=st.sampled_from(["auto", True]),
-       focus=st.floats(60.0, 1500.0))
+       focus=st.floats(60.0, 600.0))
 def test_dem_crops_build_or_are_refused_in_one_line(
         strip_dtm: Path, w: float, h: float, rocks: dict[str, object], lod: object,
         focus: float) -> None:
     terrain: dict[str, object] = {"source": "dem", "dem_path": str(strip_dtm), "size_m": [w, h],
-                                  "lod": lod, "focus_size_m": focus, "tile_m": 250.0,
-                                  "lod_blend_m": 20.0}
+                                  "lod": lod, "focus_size_m": focus, "focus_post_m": 2.0,
+                                  "tile_m": 250.0, "lod_blend_m": 20.0}
     cfg = SceneConfig.from_dict({"terrain": terrain, "rocks": rocks,
                                  "craters": {"d_min_m": 10.0, "d_max_m": 200.0},
                                  "lighting": {"enabled": False}})
     _check(cfg)
+
+
+def test_a_procedural_rock_plan_that_cannot_fit_is_refused_before_the_terrain(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    import marsscene.pipeline.build as build
+
+    def no_terrain(*_: object) -> None:
+        raise AssertionError("the terrain was built")
+
+    monkeypatch.setattr(build, "terrain_stage", no_terrain)
+    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [3000.0, 3000.0]},
+                                 "rocks": {"k": 0.3}})
+    with pytest.raises(ConfigError, match=r"^rocks: about 4.\d+e\+06 rocks .* focus square"):
+        ms.build_scene(cfg, seed=1)
 
 
 def _stage(hf: Heightfield, cfg: SceneConfig) -> ms.RockTable:
@@ -178,5 +192,35 @@ def test_a_raised_budget_places_every_rock_and_the_log_states_its_memory(
     with caplog.at_level("INFO", logger="marsscene"):
         full = ms.build_scene(everything, seed=2)
     assert "levels" not in full.provenance.extra["rocks"]
-    assert len(full.rocks) > 3_000 and full.rocks.diameter_m.min() < 1.0  # type: ignore[union-attr]
+    assert full.rocks is not None
+    assert len(full.rocks) > 3_000 and full.rocks.diameter_m.min() < 1.0
     assert re.search(r"rocks: one level, about .* GiB while placing", caplog.text)
+
+
+@pytest.mark.slow
+def test_the_issues_1500m_scene_builds_with_its_defaults() -> None:
+    """The issue's case: ``marsscene build --procedural --size-m 1500 1500 --seed 7``."""
+    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [1500, 1500]}})
+    scene = ms.build_scene(cfg, seed=7)
+    levels = scene.provenance.extra["rocks"]["levels"]
+    assert levels["focus_bounds_xy_m"] == [-500.0, -500.0, 500.0, 500.0]
+    assert levels["outer_d_min_m"] == 1.0 and not levels["outer_d_min_raised"]
+    assert 0.9e6 < levels["focus_count"] < 1.1e6 and levels["outer_count"] > 100
+
+
+@pytest.mark.slow
+def test_a_2km_crop_of_a_1m_dtm_builds_with_its_defaults(tmp_path: Path) -> None:
+    """A 2 km crop of a 1 m HiRISE-shaped DTM (slanted strip, MISSING_CONSTANT outside)."""
+    n = 2600
+    x = np.arange(n, dtype=np.float32)
+    y = np.arange(n, dtype=np.float32)[:, None]
+    z = -2500.0 + 15.0 * np.sin(x / 300.0) * np.cos(y / 400.0) + 0 * x
+    z[np.abs(x - n / 2 - 0.1 * (y - n / 2)) > 1150] = np.nan
+    path = write_pds3_dtm(tmp_path / "DTEEC_1M_U01.IMG", z.astype(np.float32), map_scale_m=1.0)
+    cfg = SceneConfig.from_dict({"terrain": {"source": "dem", "dem_path": str(path),
+                                             "size_m": [2000.0, 2000.0]}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = ms.build_scene(cfg, seed=7)
+    levels = scene.provenance.extra["rocks"]["levels"]
+    assert levels["outer_d_min_m"] == 1.0 and 0.9e6 < levels["focus_count"] < 1.1e6
