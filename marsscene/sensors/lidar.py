@@ -21,14 +21,28 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.rover.lidar import LidarConfig
+from marsscene.rover.lidar import LidarConfig, LidarSpec
 from marsscene.sensors.raycast import TerrainCaster, embree_available
 from marsscene.sensors.rock_mesh import static_geom_mesh
 from marsscene.terrain.heightfield import Heightfield
 
-__all__ = ["Lidar", "rotation_about"]
+__all__ = ["Lidar", "beam_geometry", "rotation_about"]
 
 _GRAZE = 0.05  # |cos(incidence)| floor of the rock plane correction (motion distortion)
+
+
+def beam_geometry(spec: LidarSpec) -> tuple[NDArray[np.float64], NDArray[np.uint16],
+                                             NDArray[np.float64]]:
+    """Every ray of one revolution in firing order (``column * channels + beam``): its unit
+    direction in the sensor frame (n, 3), its ring (n,) and its firing time after the scan's
+    stamp in s (n,). The CPU :class:`Lidar` and the batched one
+    (:mod:`marsscene.sensors.batch`) cast these."""
+    elev = np.radians(np.asarray(spec.vertical_angles_deg))
+    a, e = np.meshgrid(spec.column_azimuth_rad(), elev, indexing="ij")  # (columns, beams)
+    dirs = np.stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)],
+                    axis=-1).reshape(-1, 3)
+    ring = np.tile(spec.rings(), spec.horizontal_samples).astype(np.uint16)
+    return dirs, ring, spec.firing_time_s().T.reshape(-1)
 
 
 def rotation_about(omega_t: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -58,12 +72,7 @@ class Lidar:
         self.rng = rng
         elev = np.radians(np.asarray(spec.vertical_angles_deg))
         azim = spec.column_azimuth_rad()
-        a, e = np.meshgrid(azim, elev, indexing="ij")  # (columns, beams): firing order
-        self.dirs_sensor = np.stack(
-            [np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)], axis=-1
-        ).reshape(-1, 3)
-        self.ring = np.tile(spec.rings(), spec.horizontal_samples).astype(np.uint16)
-        self.t_s = spec.firing_time_s().T.reshape(-1)
+        self.dirs_sensor, self.ring, self.t_s = beam_geometry(spec)
         n = len(self.dirs_sensor)
         # a column's world directions are cos(e) R [cos a, sin a, 0] + sin(e) R [0, 0, 1]
         self._cos_sin_azim = np.stack([np.cos(azim), np.sin(azim)], axis=1)  # (columns, 2)

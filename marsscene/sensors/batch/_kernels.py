@@ -1,0 +1,131 @@
+"""Warp kernels of the batched sensors: LiDAR ray generation (motion distortion included), the
+returns (range gate, dropouts, range noise, intensity, sensor-frame points) and the LiDAR
+site's twist from MuJoCo Warp's body velocities.
+
+Layout: world ``w``, ray ``j`` (firing order, ``column * channels + beam``). Every random draw
+of world ``w``'s scan ``k`` comes from ``rand_init(mix(seed[w], k), j)``: a world's noise
+depends on its seed and scan count alone, never on the batch size or on the other worlds.
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+wp.set_module_options({"enable_backward": False})
+
+
+@wp.func
+def _rotation_about(v: wp.vec3) -> wp.mat33:
+    """The rotation by the rotation vector ``v`` (Rodrigues)."""
+    theta = wp.length(v)
+    if theta < 1.0e-12:
+        return wp.identity(n=3, dtype=float)
+    k = v / theta
+    kx = wp.mat33(0.0, -k[2], k[1], k[2], 0.0, -k[0], -k[1], k[0], 0.0)
+    return wp.identity(n=3, dtype=float) + wp.sin(theta) * kx + (1.0 - wp.cos(theta)) * (kx @ kx)
+
+
+@wp.kernel
+def world_rays(
+    site_xpos: wp.array2d(dtype=wp.vec3),
+    site_xmat: wp.array2d(dtype=wp.mat33),
+    site: int,
+    dirs_sensor: wp.array(dtype=wp.vec3),
+    t_ray: wp.array(dtype=float),
+    t_column: wp.array(dtype=float),
+    twist: wp.array2d(dtype=float),
+    distort: int,
+    pnt_out: wp.array2d(dtype=wp.vec3),
+    vec_out: wp.array2d(dtype=wp.vec3),
+):
+    """Origin and unit direction of every ray in the world frame: from the site's pose, or with
+    ``distort`` from the pose at each ray's firing time (the twist, angular then linear in the
+    world frame, held for the sweep: the column's rotation, the ray's own translation)."""
+    w, j = wp.tid()
+    rot = site_xmat[w, site]
+    origin = site_xpos[w, site]
+    if distort != 0:
+        omega = wp.vec3(twist[w, 0], twist[w, 1], twist[w, 2])
+        vel = wp.vec3(twist[w, 3], twist[w, 4], twist[w, 5])
+        rot = _rotation_about(t_column[j] * omega) @ rot
+        origin = origin + t_ray[j] * vel
+    pnt_out[w, j] = origin
+    vec_out[w, j] = wp.normalize(rot @ dirs_sensor[j])
+
+
+@wp.func
+def _scan_seed(seed: int, count: int) -> int:
+    """One world's seed of one scan."""
+    return int(wp.rand_init(seed, count))
+
+
+@wp.kernel
+def returns(
+    dist: wp.array2d(dtype=float),
+    normal: wp.array2d(dtype=wp.vec3),
+    vec: wp.array2d(dtype=wp.vec3),
+    dirs_sensor: wp.array(dtype=wp.vec3),
+    range_min_m: float,
+    range_max_m: float,
+    sigma_m: float,
+    dropout: float,
+    alpha_per_m: float,
+    seed: wp.array(dtype=int),
+    count: wp.array(dtype=int),
+    range_out: wp.array2d(dtype=float),
+    xyz_out: wp.array2d(dtype=wp.vec3),
+    intensity_out: wp.array2d(dtype=float),
+    valid_out: wp.array2d(dtype=wp.bool),
+):
+    """The CPU LiDAR's returns (:meth:`marsscene.sensors.lidar.Lidar._returns`) on every ray:
+    a hit within range that survives its dropout draw (one per ray, hit or not) returns its
+    range plus Gaussian noise (floored at 0); intensity is ``|cos(incidence)| exp(-2 alpha r)``.
+    Rays without a return hold range 0, point 0, intensity 0."""
+    w, j = wp.tid()
+    state = wp.rand_init(_scan_seed(seed[w], count[w]), j)
+    d = dist[w, j]
+    ok = d >= range_min_m and d <= range_max_m
+    if dropout > 0.0:
+        if wp.randf(state) < dropout:
+            ok = False
+    r = wp.float32(0.0)
+    inten = wp.float32(0.0)
+    if ok:
+        r = d
+        if sigma_m > 0.0:
+            r = wp.max(r + sigma_m * wp.randn(state), 0.0)
+        cos_inc = wp.abs(wp.dot(normal[w, j], vec[w, j]))
+        inten = wp.min(cos_inc, 1.0) * wp.exp(-2.0 * alpha_per_m * r)
+    range_out[w, j] = r
+    xyz_out[w, j] = dirs_sensor[j] * r
+    intensity_out[w, j] = inten
+    valid_out[w, j] = ok
+
+
+@wp.kernel
+def advance(count: wp.array(dtype=int)):
+    """One scan more in every world."""
+    w = wp.tid()
+    count[w] = count[w] + 1
+
+
+@wp.kernel
+def site_twist(
+    cvel: wp.array2d(dtype=wp.spatial_vector),
+    subtree_com: wp.array2d(dtype=wp.vec3),
+    site_xpos: wp.array2d(dtype=wp.vec3),
+    body_rootid: wp.array(dtype=int),
+    body: int,
+    site: int,
+    twist_out: wp.array2d(dtype=float),
+):
+    """The site's angular and linear velocity in the world frame (``mj_objectVelocity``'s
+    order, ``flg_local=0``): the body's com-based velocity moved to the site."""
+    w = wp.tid()
+    v = cvel[w, body]
+    omega = wp.vec3(v[0], v[1], v[2])
+    lin = wp.vec3(v[3], v[4], v[5])
+    lin = lin + wp.cross(omega, site_xpos[w, site] - subtree_com[w, body_rootid[body]])
+    for i in range(3):
+        twist_out[w, i] = omega[i]
+        twist_out[w, 3 + i] = lin[i]

@@ -1,0 +1,223 @@
+"""A spinning LiDAR on every world of a MuJoCo Warp batch: the CPU LiDAR's beam models
+(:func:`marsscene.sensors.lidar.beam_geometry` of a :class:`~marsscene.rover.lidar.LidarConfig`),
+cast by ``mujoco_warp.rays`` through a render context's BVH, with the CPU LiDAR's returns.
+
+One :meth:`BatchLidar.scan` casts one revolution in every world from the LiDAR site's pose in
+that world's ``Data`` (or, with ``twist``, from the pose each ray has at its firing time, as the
+CPU LiDAR's ``motion_distortion`` does). It returns dense device arrays, one row a world and
+one column a ray in firing order (``column * channels + beam``, the CPU scan's ``ray``): the
+range, the point in the sensor frame of its firing time, the intensity and whether the ray
+returned. The CPU LiDAR keeps returns only; :meth:`BatchScan.returns` gives one world's scan in
+that form. Range noise and dropouts are the CPU model's (the datasheet sigma, the dropout
+probability), drawn on the device from each world's own seed and scan count
+(:mod:`._kernels`): the same seed gives the same bytes, whatever the batch size.
+
+``rays`` without a render context tests every geom (about 6,000 times slower), so the LiDAR
+builds one (BVHs of the geoms of ``geom_groups``; the heightfield's mesh is built in Python,
+seconds on a large tiled heightfield) unless it is given one. Static geoms need no refit; where
+the BVH holds moving geoms the LiDAR refits it before each scan.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from marsscene.errors import ConfigError
+from marsscene.rover.lidar import LidarConfig, LidarSpec
+from marsscene.sensors.lidar import beam_geometry
+
+__all__ = ["BatchLidar", "BatchScan", "world_seeds"]
+
+#: The LiDAR's site in a model with the rover attached (``marsscene.sim.rover_sim.PREFIX``).
+LIDAR_SITE = "rover/lidar"
+#: Geom groups a LiDAR sees by default: the CPU LiDAR's (terrain, rocks, static geoms; the
+#: rover's own geoms are group 2).
+LIDAR_GROUPS = (0, 1)
+
+
+def world_seeds(seed: int, n: int) -> NDArray[np.int32]:
+    """Seed of each of ``n`` worlds: world ``w``'s depends on ``(seed, w)`` only."""
+    states = [np.random.SeedSequence([int(seed), w]).generate_state(1)[0] for w in range(n)]
+    return np.asarray(states, dtype=np.uint32).view(np.int32)
+
+
+@dataclass(frozen=True, eq=False)
+class BatchScan:
+    """One revolution in every world: Warp arrays on the batch's device, (N, R) with R the
+    rays of one revolution (``xyz_m`` (N, R, 3)). Each buffer is the LiDAR's own and is
+    overwritten by its next scan; ``wp.to_torch`` views them without a copy.
+
+    Attributes
+    ----------
+    range_m, intensity : float32 (N, R)
+        0 where the ray did not return.
+    xyz_m : float32 (N, R, 3)
+        The point in the sensor frame of its firing time (0 where none).
+    valid : bool (N, R)
+        The ray returned (a hit within range that survived its dropout draw).
+    spec : LidarSpec
+    t_s, ring : ndarray (R,)
+        Firing time after the scan's stamp (float64) and ring (uint16) of each ray.
+    """
+
+    range_m: Any
+    xyz_m: Any
+    intensity: Any
+    valid: Any
+    spec: LidarSpec
+    t_s: NDArray[np.float64]
+    ring: NDArray[np.uint16]
+
+    def returns(self, world: int) -> dict[str, NDArray[Any]]:
+        """World ``world``'s scan as :meth:`marsscene.sensors.lidar.Lidar.scan` returns it
+        (returns only, in firing order; a host copy)."""
+        valid = self.valid.numpy()[world]
+        idx = np.flatnonzero(valid)
+        return {
+            "xyz_m": self.xyz_m.numpy()[world].reshape(-1, 3)[idx],
+            "intensity": self.intensity.numpy()[world][idx],
+            "ring": self.ring[idx],
+            "t_s": self.t_s[idx],
+            "range_m": self.range_m.numpy()[world][idx],
+            "ray": idx.astype(np.int32),
+        }
+
+
+class BatchLidar:
+    """One spinning LiDAR per world of a MuJoCo Warp batch.
+
+    Parameters
+    ----------
+    mj_model : mujoco.MjModel
+        The host model the batch was put from (``BatchNavEnv.mj_model``).
+    model : mujoco_warp.Model
+        Its device copy (``BatchNavEnv.mjw_model``).
+    nworld : int
+        Worlds in the batch.
+    config : LidarConfig, optional
+        The beam model (default ``LidarConfig()``, the OS1-128).
+    site : str or int
+        The LiDAR site (default the rover's ``rover/lidar``).
+    seed : int
+        Seed of the range noise and dropouts (:func:`world_seeds`).
+    geom_groups : tuple of int
+        The geom groups it sees (default: 0 and 1, as the CPU LiDAR).
+    render_context : mujoco_warp.RenderContext, optional
+        A context whose BVH holds those groups (default: one built here, for ``nworld``).
+    """
+
+    def __init__(self, mj_model: Any, model: Any, nworld: int,
+                 config: LidarConfig | None = None, *, site: str | int = LIDAR_SITE,
+                 seed: int = 0, geom_groups: tuple[int, ...] = LIDAR_GROUPS,
+                 render_context: Any = None) -> None:
+        import mujoco_warp as mjw
+        import warp as wp
+
+        self._wp, self._mjw, self.model = wp, mjw, model
+        self.spec = spec = (config if config is not None else LidarConfig()).spec
+        self.nworld = int(nworld)
+        self.site = _site_id(mj_model, site)
+        self.body = int(mj_model.site_bodyid[self.site])
+        dirs, self.ring, self.t_s = beam_geometry(spec)
+        t_col = np.repeat(self.t_s.reshape(spec.horizontal_samples, -1)[:, 0], spec.channels)
+        self.rc = render_context if render_context is not None else mjw.create_render_context(
+            mj_model, nworld=self.nworld, cam_active=[], render_rgb=False, render_depth=False,
+            use_textures=False, enabled_geom_groups=list(geom_groups))
+        enabled = np.isin(mj_model.geom_group, geom_groups)
+        self.refit = bool(np.any(mj_model.body_weldid[mj_model.geom_bodyid[enabled]] != 0))
+        n, rays = self.nworld, len(dirs)
+        self.groups = wp.types.vector(6, wp.float32)(*[float(g in geom_groups) for g in range(6)])
+        with wp.ScopedDevice(model.geom_type.device):
+            self._dirs = wp.array(dirs.astype(np.float32), dtype=wp.vec3)
+            self._t_ray = wp.array(self.t_s.astype(np.float32), dtype=float)
+            self._t_col = wp.array(t_col.astype(np.float32), dtype=float)
+            self._exclude = wp.full(rays, -1, dtype=int)
+            self._no_twist = wp.zeros((1, 6), dtype=float)
+            self.twist = wp.zeros((n, 6), dtype=float)
+            self._pnt, self._vec = (wp.empty((n, rays), dtype=wp.vec3) for _ in range(2))
+            self._dist = wp.empty((n, rays), dtype=float)
+            self._geom = wp.empty((n, rays), dtype=int)
+            self._normal = wp.empty((n, rays), dtype=wp.vec3)
+            self._seed = wp.array(world_seeds(seed, n), dtype=int)
+            self._count = wp.zeros(n, dtype=int)
+            self.out = BatchScan(
+                range_m=wp.zeros((n, rays), dtype=float), xyz_m=wp.zeros((n, rays), dtype=wp.vec3),
+                intensity=wp.zeros((n, rays), dtype=float),
+                valid=wp.zeros((n, rays), dtype=wp.bool), spec=spec, t_s=self.t_s, ring=self.ring)
+
+    @property
+    def rays_per_scan(self) -> int:
+        return len(self.t_s)
+
+    def restart(self, seed: int) -> None:
+        """Restart every world's stream of draws from ``seed`` (scan count 0)."""
+        wp = self._wp
+        wp.copy(self._seed, wp.array(world_seeds(seed, self.nworld), dtype=int,
+                                     device=self._seed.device))
+        self._count.zero_()
+
+    def site_twist(self, data: Any) -> Any:
+        """The LiDAR site's twist in every world (angular, linear; world frame), (N, 6) float
+        (the buffer :meth:`scan` takes as ``twist``; overwritten by the next call)."""
+        wp, m = self._wp, self.model
+        wp.launch(_k().site_twist, dim=self.nworld,
+                  inputs=[data.cvel, data.subtree_com, data.site_xpos, m.body_rootid,
+                          self.body, self.site], outputs=[self.twist], device=self.twist.device)
+        return self.twist
+
+    def scan(self, data: Any, *, twist: Any = None) -> BatchScan:
+        """One revolution in every world from ``data``'s current kinematics (``site_xpos``,
+        ``site_xmat``, ``geom_xpos``: after ``mujoco_warp.step`` or ``kinematics``).
+
+        Parameters
+        ----------
+        data : mujoco_warp.Data
+        twist : warp array (N, 6), optional
+            Each site's angular and linear velocity (world frame), held for the sweep: with
+            the spec's ``motion_distortion`` each ray is cast from the pose at its firing time
+            (:meth:`site_twist` gives it from ``data``). None: every ray from the current pose.
+        """
+        wp, mjw, m, n = self._wp, self._mjw, self.model, self.nworld
+        if data.nworld != n:
+            raise ConfigError(f"BatchLidar was made for {n} worlds; data has {data.nworld}")
+        distort = twist is not None and self.spec.motion_distortion
+        if distort and tuple(twist.shape) != (n, 6):
+            raise ConfigError(f"twist must be ({n}, 6); got {tuple(twist.shape)}")
+        dim, dev, k, spec = (n, self.rays_per_scan), self._dist.device, _k(), self.spec
+        if self.refit:
+            mjw.refit_bvh(m, data, self.rc)
+        wp.launch(k.world_rays, dim=dim, device=dev, inputs=[
+            data.site_xpos, data.site_xmat, self.site, self._dirs, self._t_ray, self._t_col,
+            twist if distort else self._no_twist, int(distort)], outputs=[self._pnt, self._vec])
+        mjw.rays(m, data, self._pnt, self._vec, self.groups, True, self._exclude, self._dist,
+                 self._geom, self._normal, self.rc)
+        o = self.out
+        wp.launch(k.returns, dim=dim, device=dev, inputs=[
+            self._dist, self._normal, self._vec, self._dirs, spec.range_m[0], spec.range_m[1],
+            spec.range_noise_sigma_m, spec.dropout_probability, spec.dust_extinction_per_m,
+            self._seed, self._count], outputs=[o.range_m, o.xyz_m, o.intensity, o.valid])
+        wp.launch(k.advance, dim=n, inputs=[self._count], device=dev)
+        return o
+
+
+def _k() -> Any:
+    from marsscene.sensors.batch import _kernels
+
+    return _kernels
+
+
+def _site_id(mj_model: Any, site: str | int) -> int:
+    import mujoco
+
+    if isinstance(site, str):
+        sid = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, site)
+        if sid < 0:
+            raise ConfigError(f"the model has no site {site!r}")
+        return int(sid)
+    if not 0 <= int(site) < mj_model.nsite:
+        raise ConfigError(f"site id {site} is out of range; the model has {mj_model.nsite}")
+    return int(site)
