@@ -7,7 +7,11 @@ stereo strip, ``MISSING_CONSTANT`` elsewhere; :mod:`marsscene.testing.pds3`), ea
 inside and outside the focus square of a two-level population, with the cut-off outside it.
 Goal: each < 150 s and < 4 GB on the 2-core machine, 1 km unchanged.
 
-Usage: ``python perf/bench_scene_sizes.py [--sizes 1000 1500 ...] [--no-dem]``.
+Then, for comparison, the one-grid sizes again with ``--lod`` (two-level terrain, as 3 km gets
+by itself): what they would cost if the terrain's automatic choice went to two levels sooner.
+
+Usage: ``python perf/bench_scene_sizes.py [--sizes 1000 1500 ...] [--lod-sizes 2000 ...]
+[--no-dem]``.
 """
 
 from __future__ import annotations
@@ -82,6 +86,7 @@ def _row(name: str, args: list[str], tmp: Path) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=list(SIZES_M))
+    ap.add_argument("--lod-sizes", type=int, nargs="*", default=[2000, 2500])
     ap.add_argument("--no-dem", action="store_true", help="skip the 2 km DTM crop")
     opts = ap.parse_args()
     print(f"marsscene build, seed 7, niced; {os.cpu_count()} CPU cores "
@@ -97,6 +102,10 @@ def main() -> None:
             print(f"(wrote a {DTM_SAMPLES:,} x {DTM_LINES:,}-post DTM, "
                   f"{dtm.stat().st_size / 1e6:.0f} MB, in {time.perf_counter() - t0:.0f} s)")
             _row("DTM crop 2000 x 2000 m", ["--dem", str(dtm), "--size-m", "2000", "2000"], tmp)
+            (tmp / dtm.name).unlink()
+        for s in opts.lod_sizes:
+            _row(f"procedural {s} x {s} m --lod", ["--procedural", "--size-m", str(s), str(s),
+                                                   "--lod"], tmp)
     print(f"(load average {os.getloadavg()[0]:.1f} at the end)")
 
 
