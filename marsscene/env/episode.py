@@ -23,20 +23,22 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene.env import judgement
 from marsscene.env.loaded import LoadedWorld
-from marsscene.env.observe import ObsConfig, lidar_image, observation_vector
-from marsscene.env.reward import RewardConfig, compute_reward, goal_reached, goal_terms, step_terms
+from marsscene.env.observe import ObsConfig, lidar_image
+from marsscene.env.reward import RewardConfig, compute_reward
+from marsscene.env.state import RoverState
 from marsscene.env.task import NavTask
-from marsscene.env.terminate import FailureJudge, compute_terminated, compute_truncated, up_z
+from marsscene.env.taskmath import StuckClock, up_z
+from marsscene.env.terminate import compute_terminated, compute_truncated
+from marsscene.env.terms import GOAL, GOAL_TERMS, TERMINATIONS, reward_terms
 from marsscene.errors import ConfigError
 from marsscene.rover.config import RoverConfig
 
-__all__ = ["MOVING_CMD", "RESET_OPTIONS", "NavEpisode"]
+__all__ = ["RESET_OPTIONS", "NavEpisode"]
 
 #: The keys ``reset(options=...)`` takes.
 RESET_OPTIONS = ("world", "start", "yaw", "goal")
-#: A commanded speed (m/s) or yaw rate (rad/s) above this counts as motion (the stuck clock).
-MOVING_CMD = 0.05
 
 
 class NavEpisode:
@@ -65,7 +67,8 @@ class NavEpisode:
         self.start_xy_m = self.goal_xy_m = np.zeros(2)
         self.steps_done, self.last_action = 0, np.zeros(2)
         self.last_distance_m = 0.0  # the goal distance at the last step (the progress term)
-        self._failure: FailureJudge | None = None
+        self.bounds_xy_m = np.zeros(4)
+        self.stuck_clock: StuckClock | None = None
 
     # ---- the start -----------------------------------------------------------------------
     def seed(self, seed: int | None) -> None:
@@ -94,8 +97,7 @@ class NavEpisode:
         self.world, self.start_xy_m, self.goal_xy_m = world, start, goal
         self.steps_done, self.last_action = 0, np.zeros(2)
         self.last_distance_m = float(np.hypot(*(goal - start)))
-        self._failure = FailureJudge(self.task, world.sim.heightfield.bounds_xy_m, start, goal,
-                                     control_hz=self.control_hz)
+        self.restart_judge(world.sim.heightfield.bounds_xy_m)
         return np.random.default_rng(self.rng.integers(2**63))
 
     def _place(self, world: LoadedWorld, opts: dict[str, Any], tries: int = 20
@@ -120,27 +122,43 @@ class NavEpisode:
         where = "the given start" if given else f"{tries} drawn starts"
         raise ConfigError(f"the rover does not stand level and clear of rocks at {where}")
 
+    def restart_judge(self, bounds_xy_m: Any) -> None:
+        """Start judging an episode on a terrain of ``bounds_xy_m`` (``x0, y0, x1, y1``): the
+        stuck clock restarts."""
+        self.bounds_xy_m = np.asarray(bounds_xy_m, dtype=np.float64)
+        self.stuck_clock = StuckClock(np.zeros(1), (1,), self.task.stuck_steps(self.control_hz),
+                                      self.task.stuck_m)
+
     # ---- each step -----------------------------------------------------------------------
+    def state(self, obs: Any) -> RoverState:
+        """The rover's :class:`~marsscene.env.state.RoverState` (N = 1) at ``obs``."""
+        return RoverState.of_observation(obs, self.rover, self.obs_config.pose_source)
+
     def step(self, obs: Any, action: NDArray[np.float64], v_m_s: float, omega_rad_s: float
              ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
         """Judge the step that ``action`` (normalised; ``v_m_s``, ``omega_rad_s`` as applied)
-        led to: observation, reward, terminated, truncated, info."""
-        assert self.world is not None and self._failure is not None, "begin() before step()"
+        led to (:func:`~marsscene.env.judgement.judge_step` of one rover): observation, reward,
+        terminated, truncated, info."""
+        assert self.world is not None and self.stuck_clock is not None, "begin() first"
         self.steps_done += 1
-        ag, dg = self._goals(obs)
-        moving = abs(v_m_s) > MOVING_CMD or abs(omega_rad_s) > MOVING_CMD
-        reached = bool(goal_reached(ag, dg, self.task.goal_tolerance_m))
-        reason = "goal" if reached else self._failure(obs, moving)
-        distance = float(np.linalg.norm(ag.astype(np.float64) - self.goal_xy_m, axis=-1))
-        terms = step_terms(action, self.last_action, collided=self.world.collided(),
-                           strayed=reason == "strayed", steps_total=self.steps_total,
-                           cfg=self.reward_config, progress_m=self.last_distance_m - distance)
-        self.last_distance_m = distance
-        info = self.info(obs, terms, reason)
-        reward = sum(info["reward_terms"].values())  # = compute_reward(ag, dg, info)
+        state = self.state(obs)
+        j = judgement.judge_step(
+            state, start_xy_m=self.start_xy_m[None], goal_xy_m=self.goal_xy_m[None],
+            bounds_xy_m=self.bounds_xy_m[None],
+            steps_left=np.array([self.steps_total - self.steps_done]),
+            action=np.asarray(action, dtype=np.float64)[None],
+            last_action=np.asarray(self.last_action, dtype=np.float64)[None],
+            last_distance_m=np.array([self.last_distance_m]),
+            collided=np.array([self.world.collided()]),
+            moving=self.task.moving(np.array([v_m_s]), np.array([omega_rad_s])),
+            stuck_clock=self.stuck_clock, task=self.task, reward=self.reward_config,
+            steps_total=self.steps_total)
+        self.last_distance_m = float(j.distance_m[0])
+        terms = {k: float(v[0]) for k, v in j.terms.items()}
+        info = self.info(obs, terms, TERMINATIONS[int(j.code[0])])
         self.last_action = action
-        truncated = not reason and info["steps_left"] <= 0  # = compute_truncated(ag, dg, info)
-        return self.observe(obs), float(reward), bool(reason), truncated, info
+        obs_dict = self.observe(obs, state)
+        return obs_dict, float(j.reward[0]), bool(j.terminated[0]), bool(j.truncated[0]), info
 
     def _goals(self, obs: Any) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """``achieved_goal`` and ``desired_goal``: the rover's and the goal's x, y."""
@@ -148,31 +166,40 @@ class NavEpisode:
 
     def info(self, obs: Any, terms: dict[str, float], reason: str, **extra: Any
              ) -> dict[str, Any]:
-        """The step's info: goals, distance, heading, steps left, every reward term, why the
-        episode ended (``termination``; ``""``: it goes on) and ``extra``."""
+        """The step's info: goals, distance, heading, steps left, every reward term (``terms``:
+        the step's, each a float, in table order; ``{}``: the goal terms only, at a reset), why
+        the episode ended (``termination``; ``""``: it goes on) and ``extra``."""
         ag, dg = self._goals(obs)
         left = self.steps_total - self.steps_done
-        goal = goal_terms(ag, self.goal_xy_m, yaw_rad=obs.gt_yaw_rad, steps_left=left,
-                          steps_total=self.steps_total, tolerance_m=self.task.goal_tolerance_m,
-                          cfg=self.reward_config)
+        if not terms:
+            q = judgement.goal_quantities(
+                np.asarray(obs.gt_xyz_m[:2], dtype=np.float64)[None],
+                np.array([obs.gt_yaw_rad], dtype=np.float64), self.goal_xy_m[None],
+                np.array([left]), tolerance_m=self.task.goal_tolerance_m,
+                steps_total=self.steps_total)
+            terms = {k: float(v[0])
+                     for k, v in reward_terms(q, self.reward_config, goal=True).items()}
+        goal_free = [v for k, v in terms.items() if k not in GOAL_TERMS]
         return {"achieved_goal": ag, "desired_goal": dg,
                 "distance_m": float(np.hypot(*(ag - self.goal_xy_m))),
                 "yaw_rad": float(obs.gt_yaw_rad), "steps_left": left,
-                "reward_other": float(sum(terms.values())),
-                "reward_terms": {**{k: float(v) for k, v in goal.items()}, **terms},
-                "is_success": reason == "goal", "termination": reason, "t_s": obs.t_s,
-                **extra}
+                "reward_other": float(sum(goal_free)),
+                "reward_terms": terms,
+                "is_success": reason == TERMINATIONS[GOAL], "termination": reason,
+                "t_s": obs.t_s, **extra}
 
-    def observe(self, obs: Any) -> dict[str, np.ndarray]:
-        """The observation dict: the vector, the goals, the height scan, and the camera frame
-        and LiDAR scan the session took at ``obs``."""
+    def observe(self, obs: Any, state: RoverState | None = None) -> dict[str, np.ndarray]:
+        """The observation dict: the vector (of ``state``, the rover's at ``obs`` by default),
+        the goals, the height scan, and the camera frame and LiDAR scan the session took at
+        ``obs``."""
         world = self.world
         assert world is not None
         ag, dg = self._goals(obs)
-        out: dict[str, np.ndarray] = {
-            "observation": observation_vector(obs, self.rover, self.goal_xy_m,
-                                              self.obs_config.pose_source, self.last_action),
-            "achieved_goal": ag, "desired_goal": dg}
+        state = state if state is not None else self.state(obs)
+        vector = state.observation_vector(self.goal_xy_m[None],
+                                          np.asarray(self.last_action, dtype=np.float64)[None])
+        out: dict[str, np.ndarray] = {"observation": vector[0], "achieved_goal": ag,
+                                      "desired_goal": dg}
         if world.scanner is not None:
             out["height_scan"] = world.scanner(obs.gt_xyz_m, obs.gt_yaw_rad)
         if self.obs_config.camera is not None:

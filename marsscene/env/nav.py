@@ -1,10 +1,10 @@
 """``RoverNavEnv``: drive the MuJoCo rover to a goal on generated Mars worlds (Gymnasium).
 
 Each step applies one ``cmd_vel`` (normalised to [-1, 1] by default: up to
-:data:`~marsscene.rover.config.V_MAX_M_S` and :data:`~marsscene.rover.config.OMEGA_MAX_RAD_S`,
-the rover's route-following bounds) for one control period (``control_hz``, 5 Hz by default)
-of physics at ``physics_hz`` (100 Hz by default: the same route within centimetres of the
-500 Hz reference, ~4x faster; :doc:`/gym`).
+``NavTask.ACTION_SCALE``, :data:`~marsscene.rover.config.V_MAX_M_S` and
+:data:`~marsscene.rover.config.OMEGA_MAX_RAD_S`, the rover's route-following bounds) for one
+control period (``control_hz``, 5 Hz by default) of physics at ``physics_hz`` (100 Hz by
+default: the same route within centimetres of the 500 Hz reference, ~4x faster; :doc:`/gym`).
 
 The class is an adapter between Gymnasium and two parts, as dm_control's ``composer`` and
 Gymnasium-Robotics split an environment: the **physics** -- a world loaded and kept compiled
@@ -34,7 +34,7 @@ from marsscene.env.reward import RewardConfig
 from marsscene.env.task import NavTask
 from marsscene.env.worlds import WorldSampler, world_paths
 from marsscene.errors import ConfigError
-from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, NoiseConfig, RoverConfig, RunConfig
+from marsscene.rover.config import NoiseConfig, RoverConfig, RunConfig
 from marsscene.sim.session import DriveSession, SessionOptions
 from marsscene.sim.wheel_soil import soil_map_of
 
@@ -137,7 +137,7 @@ class RoverNavEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.render_mode, self.normalized = render_mode, bool(normalized_actions)
         self.max_worlds_loaded = int(max_worlds_loaded)
         self.observation_space = spaces.Dict(self.obs_config.spaces())  # type: ignore[assignment]
-        self._scale = np.array([V_MAX_M_S, OMEGA_MAX_RAD_S])
+        self._scale = np.array(self.task.ACTION_SCALE)
         self._hi = np.ones(2, np.float32) if self.normalized else self._scale.astype(np.float32)
         self.action_space = spaces.Box(-self._hi, self._hi, dtype=np.float32)
         self._loaded: OrderedDict[int, LoadedWorld] = OrderedDict()

@@ -31,10 +31,8 @@ from marsscene._validate import check_range
 from marsscene.env import taskmath
 from marsscene.errors import ConfigError
 from marsscene.rover.config import CameraConfig, LidarConfig
-from marsscene.rover.geometry import body_twist_from_wheels
-from marsscene.units import MARS_GRAVITY_M_S2
 
-__all__ = ["OBSERVATION_SIZE", "HeightScan", "ObsConfig", "observation_vector"]
+__all__ = ["OBSERVATION_SIZE", "HeightScan", "ObsConfig"]
 
 OBSERVATION_SIZE = 17
 
@@ -152,22 +150,6 @@ class ObsConfig:
             out["lidar_range"] = spaces.Box(0.0, np.inf, lidar_shape, np.float32)
             out["lidar_mask"] = spaces.Box(0, 1, lidar_shape, np.int8)
         return out
-
-
-def observation_vector(obs: Any, rover: Any, goal_xy_m: NDArray[np.float64], source: str,
-                       last_action: NDArray[np.float64]) -> NDArray[np.float32]:
-    """The ``observation`` vector of an :class:`~marsscene.sim.control.Observation`
-    (:func:`marsscene.env.taskmath.observation_vector` of one rover)."""
-    if source == "truth":
-        xy, yaw = obs.gt_xyz_m[:2], obs.gt_yaw_rad
-    else:
-        xy, yaw = obs.odom_xyz_m[:2], obs.odom_yaw_rad
-    twist = body_twist_from_wheels(obs.wheel_rates_rad_s, obs.steer_rad, rover)
-    acc = obs.accel_m_s2 if obs.accel_m_s2 is not None else np.array([0.0, 0.0, MARS_GRAVITY_M_S2])
-    gyr = obs.gyro_rad_s if obs.gyro_rad_s is not None else np.zeros(3)
-    f64 = lambda v: np.asarray(v, dtype=np.float64)  # noqa: E731
-    return taskmath.observation_vector(f64(xy), f64(yaw), f64(goal_xy_m), f64(twist), f64(acc),
-                                       f64(gyr), f64(last_action))
 
 
 #: Finest grid of the rock-augmented terrain of a :class:`HeightScanner` (m), and its size cap.

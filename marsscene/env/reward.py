@@ -34,6 +34,9 @@ is the task's (0.5 m for a 3 m rover, RLRoverLab: 0.18 m for a 1 m rover).
 
 Sparse: ``-1`` per step until the goal, ``0`` at it (Gymnasium-Robotics' convention).
 
+The terms' functions and their order are one table, :data:`marsscene.env.terms.DENSE_TERMS`
+(a term's weight is the :class:`RewardConfig` field of its name).
+
 :func:`compute_reward` recomputes the goal terms from ``achieved_goal`` / ``desired_goal``
 (vectorised, for hindsight relabelling) and adds the goal-free terms kept in ``info``.
 """
@@ -47,68 +50,43 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.env import taskmath
+from marsscene.env.judgement import goal_quantities
+from marsscene.env.terms import WEIGHTS, reward_terms
 from marsscene.errors import ConfigError
 
-__all__ = ["RewardConfig", "compute_reward", "goal_reached", "goal_terms", "info_field",
-           "step_terms"]
-
-TERMS = ("distance", "bearing", "goal", "oscillation", "reverse", "heading_away", "collision",
-         "stray")
+__all__ = ["RewardConfig", "compute_reward", "goal_terms", "info_field"]
 
 
 @dataclass(frozen=True, kw_only=True)
 class RewardConfig:
-    """Reward kind and term weights (defaults: RLRoverLab's)."""
+    """Reward kind and term weights (defaults: RLRoverLab's, from the terms' table,
+    :data:`marsscene.env.terms.DENSE_TERMS`)."""
 
     kind: str = "dense"
-    distance: float = 5.0
-    bearing: float = 5.0
-    goal: float = 5.0
-    oscillation: float = -0.05
-    reverse: float = -0.5
-    heading_away: float = -1.5
-    collision: float = -3.0
-    stray: float = -2.0
-    progress: float = 0.0
+    distance: float = WEIGHTS["distance"]
+    bearing: float = WEIGHTS["bearing"]
+    goal: float = WEIGHTS["goal"]
+    oscillation: float = WEIGHTS["oscillation"]
+    reverse: float = WEIGHTS["reverse"]
+    heading_away: float = WEIGHTS["heading_away"]
+    collision: float = WEIGHTS["collision"]
+    stray: float = WEIGHTS["stray"]
+    progress: float = WEIGHTS["progress"]
 
     def __post_init__(self) -> None:
         if self.kind not in ("dense", "sparse"):
             raise ConfigError(f"reward kind = {self.kind!r}; use dense or sparse")
 
 
-def _distance_m(ag: Any, dg: Any) -> NDArray[np.float64]:
-    return np.linalg.norm(np.asarray(ag, dtype=np.float64) - np.asarray(dg, dtype=np.float64),
-                          axis=-1)
-
-
-def goal_reached(ag: Any, dg: Any, tolerance_m: float) -> NDArray[np.bool_]:
-    """Whether each achieved goal (x, y) is within ``tolerance_m`` of its desired goal."""
-    return np.asarray(_distance_m(ag, dg) < tolerance_m)
-
-
 def goal_terms(ag: Any, dg: Any, *, yaw_rad: Any, steps_left: Any, steps_total: float,
                tolerance_m: float, cfg: RewardConfig) -> dict[str, NDArray[np.float64]]:
-    """The goal-dependent terms (weighted), vectorised over leading dimensions
-    (:func:`marsscene.env.taskmath.goal_terms`)."""
-    ag = np.asarray(ag, dtype=np.float64)
-    dg = np.asarray(dg, dtype=np.float64)
-    b = np.abs(taskmath.bearing_rad(ag, dg, np.asarray(yaw_rad, dtype=np.float64)))
-    return taskmath.goal_terms(_distance_m(ag, dg), b, goal_reached(ag, dg, tolerance_m),
-                               np.asarray(steps_left), steps_total=steps_total, cfg=cfg)
-
-
-def step_terms(action: NDArray[np.float64], last_action: NDArray[np.float64], *,
-               collided: bool, strayed: bool, steps_total: float,
-               cfg: RewardConfig, progress_m: float = 0.0) -> dict[str, float]:
-    """The goal-free terms of one step (weighted); none for a sparse reward
-    (:func:`marsscene.env.taskmath.step_terms` of one rover)."""
-    terms = taskmath.step_terms(np.asarray(action, dtype=np.float64),
-                                np.asarray(last_action, dtype=np.float64),
-                                np.asarray(collided), np.asarray(strayed),
-                                steps_total=steps_total, cfg=cfg,
-                                progress_m=np.asarray(progress_m, dtype=np.float64))
-    return {k: float(v) for k, v in terms.items()}
+    """The goal-dependent terms (weighted) of achieved / desired goal pairs, vectorised over
+    leading dimensions (the goal terms of :data:`~marsscene.env.terms.DENSE_TERMS`, or the
+    sparse reward's)."""
+    q = goal_quantities(np.asarray(ag, dtype=np.float64), np.asarray(yaw_rad, dtype=np.float64),
+                        np.asarray(dg, dtype=np.float64), np.asarray(steps_left),
+                        tolerance_m=tolerance_m, steps_total=steps_total)
+    return reward_terms(q, cfg, goal=True)
 
 
 def info_field(info: Any, key: str, dtype: Any = np.float64) -> NDArray[Any]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,7 +19,7 @@ from scipy import ndimage
 
 from marsscene._validate import check_range
 from marsscene.errors import ConfigError, RuntimeSimError
-from marsscene.rover.config import GOAL_TOLERANCE_M
+from marsscene.rover.config import GOAL_TOLERANCE_M, OMEGA_MAX_RAD_S, V_MAX_M_S
 from marsscene.sim.route import traversable_grid
 
 __all__ = ["NavTask", "TaskMap"]
@@ -57,7 +57,20 @@ class NavTask:
     edge_m : float
         Coming within this distance of the terrain's edge ends it (left the world); less than
         ``margin_m``.
+
+    Attributes
+    ----------
+    ACTION_SCALE : (float, float)
+        A normalised action ``(1, 1)`` commands this ``(v, omega)`` (m/s, rad/s): the rover's
+        route-following bounds, :data:`~marsscene.rover.config.V_MAX_M_S` and
+        :data:`~marsscene.rover.config.OMEGA_MAX_RAD_S`.
+    MOVING_CMD : float
+        A commanded speed (m/s) or yaw rate (rad/s) above this counts as motion (the stuck
+        clock runs).
     """
+
+    ACTION_SCALE: ClassVar[tuple[float, float]] = (V_MAX_M_S, OMEGA_MAX_RAD_S)
+    MOVING_CMD: ClassVar[float] = 0.05
 
     distance_m: tuple[float, float] = (5.0, 20.0)
     goal_tolerance_m: float = GOAL_TOLERANCE_M
@@ -95,6 +108,18 @@ class NavTask:
         """Control steps in ``max_episode_s`` at ``control_hz`` (at least one): the step at
         which an episode is truncated, and the ``max_episode_steps`` of the registered ids."""
         return max(1, round(self.max_episode_s * control_hz))
+
+    def stuck_steps(self, control_hz: float) -> int:
+        """Control steps in ``stuck_s`` at ``control_hz``: the stuck clock's window."""
+        return round(self.stuck_s * control_hz)
+
+    def command(self, action: Any) -> tuple[Any, Any]:
+        """``(v_m_s, omega_rad_s)`` of normalised actions (..., 2) (numpy or PyTorch)."""
+        return action[..., 0] * self.ACTION_SCALE[0], action[..., 1] * self.ACTION_SCALE[1]
+
+    def moving(self, v_m_s: Any, omega_rad_s: Any) -> Any:
+        """Whether each command counts as motion (:attr:`MOVING_CMD`), an array of its shape."""
+        return (abs(v_m_s) > self.MOVING_CMD) | (abs(omega_rad_s) > self.MOVING_CMD)
 
 
 class TaskMap:

@@ -8,8 +8,10 @@ the wheels, the IMU, the goal -- and returns arrays of the same batch shape:
 
 - :func:`observation_vector`: the 17 values of ``observation`` (layout in :mod:`.observe`);
 - :func:`scan_heights`: a height scan sampled from one terrain grid, or from a stack of them;
-- :func:`goal_terms` / :func:`step_terms`: the reward terms (:mod:`.reward`);
-- :func:`failure_code` and :class:`StuckClock`: why an episode ends (:mod:`.terminate`).
+- :func:`failure_code` and :class:`StuckClock`: why an episode ends (the codes of
+  :data:`~marsscene.env.terms.TERMINATIONS`).
+
+The reward terms are :mod:`.terms`' table; :mod:`.judgement` judges a step with both.
 """
 
 from __future__ import annotations
@@ -21,14 +23,10 @@ import numpy as np
 from array_api_compat import device
 
 from marsscene._xp import clip, namespace
+from marsscene.env.terms import FAILURES, GOAL
 
-__all__ = ["FAILURES", "StuckClock", "bearing_rad", "failure_code", "goal_in_body",
-           "goal_terms", "height_scan", "observation_vector", "scan_grid_m", "scan_heights",
-           "step_terms", "up_z"]
-
-#: The reasons an episode ends without the goal, in the order they are judged
-#: (:func:`failure_code` returns 1 + the index; 0: none).
-FAILURES = ("tipped", "left_world", "strayed", "stuck")
+__all__ = ["StuckClock", "bearing_rad", "failure_code", "goal_in_body", "height_scan",
+           "observation_vector", "scan_grid_m", "scan_heights", "up_z"]
 
 
 def up_z(q_wxyz: Any) -> Any:
@@ -123,53 +121,12 @@ def scan_heights(grid_z_m: Any, origin_xy_m: Any, cell_m: float, x_m: Any, y_m: 
     return (z[0] * (1 - fc) + z[1] * fc) * (1 - fr) + (z[2] * (1 - fc) + z[3] * fc) * fr
 
 
-def goal_terms(dist_m: Any, bearing_abs_rad: Any, reached: Any, steps_left: Any, *,
-               steps_total: float, cfg: Any) -> dict[str, Any]:
-    """The goal-dependent reward terms (weighted; :mod:`.reward`), from the goal distance, the
-    absolute bearing, whether the goal is reached, and the steps left."""
-    xp = namespace(dist_m)
-    zero = xp.zeros_like(dist_m)
-    if cfg.kind == "sparse":
-        return {"goal": xp.where(reached, zero, zero - 1.0)}
-    t = float(steps_total)
-    b, d = bearing_abs_rad, dist_m
-    return {
-        "distance": cfg.distance / (1.0 + 0.11 * d * d) / t,
-        "bearing": cfg.bearing / (1.0 + d) / (1.0 + b) / t,
-        "goal": xp.where(reached, cfg.goal * 2.0 * steps_left / t, zero),
-        "heading_away": xp.where(b > 2.0, cfg.heading_away * b / t, zero),
-    }
-
-
-def step_terms(action: Any, last_action: Any, collided: Any, strayed: Any, *,
-               steps_total: float, cfg: Any, progress_m: Any = None) -> dict[str, Any]:
-    """The goal-free reward terms of a step (weighted); none for a sparse reward. ``action``
-    and ``last_action`` (..., 2) normalised; ``collided``, ``strayed`` (...) bool;
-    ``progress_m`` (...) the goal distance gained this step (the ``progress`` term, where its
-    weight is not 0)."""
-    if cfg.kind == "sparse":
-        return {}
-    xp = namespace(action)
-    t = float(steps_total)
-    jump = 3.0 * xp.abs(action - last_action)
-    zero = xp.zeros_like(jump)
-    osc = xp.sum(xp.where(jump > 0.05, jump**2, zero) ** 2, axis=-1)
-    none = xp.zeros_like(osc)
-    terms = {
-        "oscillation": cfg.oscillation * osc / t,
-        "reverse": xp.where(action[..., 0] < 0.0, none + cfg.reverse / t, none),
-        "collision": xp.where(collided, none + cfg.collision / t, none),
-        "stray": xp.where(strayed, none + cfg.stray, none),
-    }
-    if getattr(cfg, "progress", 0.0):
-        terms["progress"] = cfg.progress * progress_m
-    return terms
-
-
 def failure_code(q_wxyz: Any, xy_m: Any, bounds_xy_m: Any, start_xy_m: Any, goal_xy_m: Any,
                  stuck: Any, task: Any) -> Any:
-    """Why each episode fails at this step: 0 none, else 1 + the index in :data:`FAILURES` of the
-    first failure judged. ``bounds_xy_m`` (..., 4) is ``x0, y0, x1, y1`` of each terrain."""
+    """Why each episode fails at this step: 0 none, else the termination code
+    (:data:`~marsscene.env.terms.TERMINATIONS`: ``2 +`` the index in
+    :data:`~marsscene.env.terms.FAILURES`) of the first failure judged. ``bounds_xy_m``
+    (..., 4) is ``x0, y0, x1, y1`` of each terrain."""
     xp = namespace(xy_m)
     x, y = xy_m[..., 0], xy_m[..., 1]
     margin = xp.minimum(xp.minimum(x - bounds_xy_m[..., 0], bounds_xy_m[..., 2] - x),
@@ -183,9 +140,10 @@ def failure_code(q_wxyz: Any, xy_m: Any, bounds_xy_m: Any, start_xy_m: Any, goal
               margin < task.edge_m,
               xp.hypot(off[..., 0], off[..., 1]) > task.max_stray_m,
               stuck]
+    assert len(failed) == len(FAILURES)
     code = xp.zeros(x.shape, dtype=xp.int64, device=device(x))
-    for k in range(len(failed), 0, -1):  # the first failure judged wins
-        code = xp.where(failed[k - 1], xp.ones_like(code) * k, code)
+    for k in range(len(failed) - 1, -1, -1):  # the first failure judged wins
+        code = xp.where(failed[k], xp.ones_like(code) * (GOAL + 1 + k), code)
     return code
 
 

@@ -3,6 +3,11 @@
 The MarsLab protocol: ``0 <= v <= 0.5 m/s``, ``|omega| <= 0.2 rad/s`` at 50 Hz. When the pursuit
 curvature would need a faster turn, ``v`` is reduced so the curvature is kept and
 ``|omega| = omega_max``; a target behind the rover gives a turn in place.
+
+The follower stops within :data:`STOP_RADIUS_M` (0.25 m) of the route's end, half the goal
+tolerance (:data:`~marsscene.rover.config.GOAL_TOLERANCE_M`, 0.5 m): a stopped rover has reached
+the goal by the one goal test (:func:`~marsscene.sim.goal.goal_reached`), with margin. The
+radius is the follower's own, not a second goal tolerance.
 """
 
 from __future__ import annotations
@@ -15,20 +20,30 @@ import numpy as np
 
 from marsscene._validate import check_range
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S
+from marsscene.sim.goal import goal_reached
 from marsscene.sim.route import Route
 
-__all__ = ["PurePursuit", "PursuitConfig"]
+__all__ = ["STOP_RADIUS_M", "PurePursuit", "PursuitConfig"]
+
+#: The pure-pursuit follower stops within this distance (m) of its route's end (its last
+#: lookahead): its stopping radius, inside the goal tolerance (``GOAL_TOLERANCE_M``, 0.5 m).
+STOP_RADIUS_M = 0.25
 
 
 @dataclass(frozen=True, kw_only=True)
 class PursuitConfig:
     """Pure-pursuit parameters (m, m/s, rad/s); it is called at the run's control rate
-    (``RunConfig.control_hz``)."""
+    (``RunConfig.control_hz``).
+
+    ``goal_tolerance_m`` is the follower's stopping radius (:data:`STOP_RADIUS_M`), not the
+    goal tolerance of arrival (``GOAL_TOLERANCE_M``); the name is the one ``run.json`` and the
+    ``[pursuit]`` tables have always carried.
+    """
 
     lookahead_m: float = 1.0
     v_max_m_s: float = V_MAX_M_S
     omega_max_rad_s: float = OMEGA_MAX_RAD_S
-    goal_tolerance_m: float = 0.25
+    goal_tolerance_m: float = STOP_RADIUS_M
     slow_down_m: float = 1.0
 
     def __post_init__(self) -> None:
@@ -73,10 +88,7 @@ class PurePursuit:
         self._advance(x_m, y_m)
         goal = self.route.xy_m[-1]
         to_go = self.s[-1] - self.s[self.index]
-        if (
-            to_go < cfg.lookahead_m
-            and math.hypot(goal[0] - x_m, goal[1] - y_m) < cfg.goal_tolerance_m
-        ):
+        if to_go < cfg.lookahead_m and goal_reached((x_m, y_m), goal, cfg.goal_tolerance_m):
             self.done = True
             return 0.0, 0.0
         j = min(int(np.searchsorted(self.s, self.s[self.index] + cfg.lookahead_m)), len(self.s) - 1)

@@ -13,13 +13,12 @@ import pytest
 
 pytest.importorskip("mujoco_warp")
 
-from marsscene.env import NavEpisode, WorldSampler
+from marsscene.env import NavEpisode, RoverNavEnv, WorldSampler, judgement
 from marsscene.env.batch import BatchNavEnv, BatchVectorEnv, WarpPhysics, WorldBatch
 from marsscene.env.batch.judge import collided
 from marsscene.env.batch.model import tiled_model, warp_model
 from marsscene.env.observe import HeightScanner, ObsConfig
 from marsscene.env.reward import RewardConfig
-from marsscene.env.terminate import FailureJudge
 from marsscene.errors import ConfigError
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RoverConfig
 
@@ -48,20 +47,21 @@ def _cpu_episode(env: BatchNavEnv, i: int, coll: list[bool]) -> NavEpisode:
     ep.world = SimpleNamespace(scanner=scanner, collided=lambda: coll[0], lidar=None)
     ep.start_xy_m, ep.goal_xy_m = env.start_xy_m[i].copy(), env.goal_xy_m[i].copy()
     ep.last_distance_m = float(np.hypot(*(ep.goal_xy_m - ep.start_xy_m)))
-    ep._failure = FailureJudge(env.task, tuple(env.batch.bounds_xy_m[w]), ep.start_xy_m,
-                               ep.goal_xy_m, control_hz=env.control_hz)
+    ep.restart_judge(env.batch.bounds_xy_m[w])
     return ep
 
 
 def _observation(env: BatchNavEnv, i: int, k: int) -> Any:
     """Rover ``i``'s state as the CPU session's Observation holds it (noise-free)."""
-    st = {key: np.asarray(v[i]) for key, v in env._state().items()}
-    w, x, y, z = st["quat"]
+    ids = env.ids
+    st = env.state()
+    w, x, y, z = st.quat_wxyz[i]
     return SimpleNamespace(
-        gt_xyz_m=st["xyz"], gt_quat_wxyz=st["quat"],
+        gt_xyz_m=st.xyz_m[i], gt_quat_wxyz=st.quat_wxyz[i],
         gt_yaw_rad=math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
-        wheel_rates_rad_s=st["rates"].astype(np.float64), steer_rad=st["steer"].astype(
-            np.float64), accel_m_s2=st["accel"], gyro_rad_s=st["gyro"], t_s=k / env.control_hz)
+        wheel_rates_rad_s=env._v["qvel"][i, ids["drive_dof"]].astype(np.float64),
+        steer_rad=env._v["qpos"][i, ids["steer_qpos"]].astype(np.float64),
+        accel_m_s2=st.accel_m_s2[i], gyro_rad_s=st.gyro_rad_s[i], t_s=k / env.control_hz)
 
 
 def test_cpu_episode_gives_the_same_observation_and_reward(env: BatchNavEnv) -> None:
@@ -76,7 +76,7 @@ def test_cpu_episode_gives_the_same_observation_and_reward(env: BatchNavEnv) -> 
         action[:, 0] = np.abs(action[:, 0])
         obs, reward, terminated, truncated, _info = env.step(action)
         assert not (terminated | truncated).any(), "no episode may end in these steps"
-        hit = collided(env)
+        hit = collided(env._con, env._v["nacon"], env.world, env._rocks, env.bk)
         for i in range(N):
             coll[i][0] = bool(hit[i])
             a = np.clip(action[i], -1, 1)
@@ -95,11 +95,32 @@ def test_cpu_episode_gives_the_same_observation_and_reward(env: BatchNavEnv) -> 
     assert float(np.abs(obs["observation"][:, 5]).max()) > 0.05  # the rovers drove
 
 
+def test_the_cpu_environment_and_the_batch_call_one_judgement(env: BatchNavEnv, nav_world: Any,
+                                                             monkeypatch: Any) -> None:
+    one, calls = judgement.judge_step, []
+
+    def spy(state: Any, **kw: Any) -> judgement.Judgement:
+        calls.append(state.xyz_m.shape[0])
+        return one(state, **kw)
+
+    monkeypatch.setattr(judgement, "judge_step", spy)
+    cpu = RoverNavEnv(nav_world, control_hz=5.0, physics_hz=100.0)
+    try:
+        cpu.reset(seed=0)
+        *_, info = cpu.step(np.zeros(2, np.float32))
+    finally:
+        cpu.close()
+    env.reset()
+    env.step(np.zeros((N, 2)))
+    assert calls == [1, N]  # one rover, then the batch's N: the same function
+    assert info["termination"] == ""
+
+
 def test_a_rover_reaching_its_goal_is_reset_alone(env: BatchNavEnv) -> None:
     env.reset()
     for _ in range(2):
         env.step(np.tile([0.6, 0.0], (N, 1)))
-    before = env._state()["xyz"].copy()
+    before = env.state().xyz_m.copy()
     env.goal_xy_m[1] = before[1, :2]  # rover 1 stands on its goal
     obs, reward, terminated, truncated, info = env.step(np.tile([0.6, 0.0], (N, 1)))
     assert list(info["termination"]) == [0, 1, 0]
@@ -107,7 +128,7 @@ def test_a_rover_reaching_its_goal_is_reset_alone(env: BatchNavEnv) -> None:
     assert reward[1] > 9.0  # the goal bonus: 5 x 2 x (time left)
     assert list(env.steps_done) == [3, 0, 3]
     assert info["final_observation"]["observation"][1, 2] < env.task.goal_tolerance_m
-    after = env._state()["xyz"]
+    after = env.state().xyz_m
     moved = np.hypot(*(after[:, :2] - before[:, :2]).T)
     assert moved[0] < 0.2 and moved[2] < 0.2  # the others drove on, 0.12 m in a step
     starts = env._pool["start"]

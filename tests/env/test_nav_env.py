@@ -13,7 +13,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import marsscene.env as me
-from marsscene.env.reward import RewardConfig, compute_reward, goal_terms, step_terms
+from marsscene._xp import namespace
+from marsscene.env.reward import RewardConfig, compute_reward, goal_terms
+from marsscene.env.terms import Quantities, reward_terms
 from marsscene.errors import ConfigError
 
 FAST = {"control_hz": 5.0, "physics_hz": 100.0}
@@ -108,6 +110,17 @@ def test_a_vector_env_of_two_equals_two_single_envs(nav_world):
             e.close()
 
 
+def _step_terms(action: np.ndarray, last: np.ndarray, *, collided: bool, strayed: bool,
+                cfg: RewardConfig) -> dict[str, float]:
+    """The goal-free terms of one step of a 200-step episode (the table's)."""
+    zero = np.zeros(1)
+    q = Quantities(xp=namespace(zero), dist_m=zero, bearing_rad=zero, reached=zero > 0,
+                   steps_left=zero, steps_total=200.0, action=action[None],
+                   last_action=last[None], collided=np.array([collided]),
+                   strayed=np.array([strayed]), progress_m=zero)
+    return {k: float(v[0]) for k, v in reward_terms(q, cfg, goal=False).items()}
+
+
 def test_reward_terms_signs_and_zero_cases():
     cfg = RewardConfig()
     near = goal_terms([0.0, 0.0], [0.2, 0.0], yaw_rad=0.0, steps_left=100, steps_total=200,
@@ -117,11 +130,11 @@ def test_reward_terms_signs_and_zero_cases():
     assert near["goal"] == pytest.approx(5.0 * 2 * 100 / 200) and far["goal"] == 0
     assert near["distance"] > far["distance"] > 0 and near["bearing"] > far["bearing"] > 0
     assert far["heading_away"] < 0 and near["heading_away"] == 0  # the goal behind: > 2 rad
-    calm = step_terms(np.array([0.5, 0.0]), np.array([0.5, 0.0]), collided=False,
-                      strayed=False, steps_total=200, cfg=cfg)
+    calm = _step_terms(np.array([0.5, 0.0]), np.array([0.5, 0.0]), collided=False,
+                       strayed=False, cfg=cfg)
     assert all(v == 0 for v in calm.values())
-    rough = step_terms(np.array([-0.5, 1.0]), np.array([0.5, -1.0]), collided=True,
-                       strayed=True, steps_total=200, cfg=cfg)
+    rough = _step_terms(np.array([-0.5, 1.0]), np.array([0.5, -1.0]), collided=True,
+                        strayed=True, cfg=cfg)
     assert all(rough[k] < 0 for k in ("oscillation", "reverse", "collision", "stray"))
     sparse = RewardConfig(kind="sparse")
     ag = np.array([[0.0, 0.0], [0.1, 0.0], [5.0, 5.0]])

@@ -14,10 +14,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from marsscene._xp import namespace
 from marsscene.env import taskmath
 from marsscene.env.observe import HeightScan
 from marsscene.env.reward import RewardConfig
 from marsscene.env.task import NavTask
+from marsscene.env.terms import TERMINATIONS, Quantities, reward_terms
 from marsscene.rover.config import RoverConfig
 from marsscene.rover.geometry import body_twist_from_wheels, body_twists_from_wheels, wheel_commands
 from marsscene.terrain.heightfield import Heightfield
@@ -98,8 +100,7 @@ def test_failures_are_judged_in_order() -> None:
     start, goal = np.zeros((5, 2)), np.tile([10.0, 0.0], (5, 1))
     stuck = np.array([True, True, True, True, False])
     code = taskmath.failure_code(q, xy, bounds, start, goal, stuck, task)
-    names = ["", *taskmath.FAILURES]
-    assert [names[c] for c in code] == ["tipped", "left_world", "strayed", "stuck", ""]
+    assert [TERMINATIONS[c] for c in code] == ["tipped", "left_world", "strayed", "stuck", ""]
 
 
 def _batch_inputs(n: int, seed: int) -> dict[str, np.ndarray]:
@@ -124,9 +125,12 @@ def _all_terms(x: dict[str, np.ndarray], xp_asarray: Any) -> dict[str, Any]:
                                         xp_asarray(left), a["world"])}
     b = taskmath.bearing_rad(a["xy"], a["goal"], a["yaw"])
     d = a["xy"][:, 0] * 0 + 3.0
-    out.update(taskmath.goal_terms(d, abs(b), d < 5, d * 0 + 10, steps_total=750, cfg=cfg))
-    out.update(taskmath.step_terms(a["act"], a["last"], a["act"][:, 0] > 0, a["act"][:, 1] > 0,
-                                   steps_total=750, cfg=cfg, progress_m=a["yaw"] * 0.1))
+    xp = namespace(d)
+    q = Quantities(xp=xp, dist_m=d, bearing_rad=abs(b), reached=d < 5, steps_left=d * 0 + 10,
+                   steps_total=750.0, action=a["act"], last_action=a["last"],
+                   collided=a["act"][:, 0] > 0, strayed=a["act"][:, 1] > 0,
+                   progress_m=a["yaw"] * 0.1)
+    out.update(reward_terms(q, cfg))
     out["code"] = taskmath.failure_code(a["q"], a["xy"], xp_asarray(np.tile(
         [-15.0, -15.0, 15.0, 15.0], (len(x["yaw"]), 1))), a["xy"] * 0, a["goal"],
         a["act"][:, 0] > 0.5, task)

@@ -17,7 +17,7 @@ from marsscene.runtime import (
 )
 from marsscene.seeding import stage_rng
 from marsscene.sim.driver import drive_sim
-from marsscene.sim.route import cross_track_m
+from marsscene.sim.cross_track import cross_track_m
 from marsscene.sim.rover_sim import RoverSim
 from marsscene.terrain.heightfield import Heightfield
 

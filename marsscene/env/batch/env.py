@@ -24,18 +24,19 @@ import mujoco
 import numpy as np
 from array_api_compat import device
 
-from marsscene.env import taskmath
+from marsscene.env import judgement, taskmath
 from marsscene.env.batch.backend import Backend
-from marsscene.env.batch.judge import judge
+from marsscene.env.batch.judge import RockContacts, collided
 from marsscene.env.batch.model import WarpPhysics, tiled_model, warp_model
 from marsscene.env.batch.pool import settle_pool
 from marsscene.env.batch.worlds import WorldBatch
-from marsscene.env.episode import MOVING_CMD
 from marsscene.env.observe import ObsConfig
 from marsscene.env.reward import RewardConfig
+from marsscene.env.state import RoverState
 from marsscene.env.task import NavTask
+from marsscene.env.terms import GOAL
 from marsscene.errors import ConfigError
-from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RoverConfig
+from marsscene.rover.config import RoverConfig
 from marsscene.rover.geometry import body_twists_from_wheels, wheel_commands
 from marsscene.transforms import yaw_of_quat
 
@@ -118,7 +119,11 @@ class BatchNavEnv:
         self._reset_mask = wp.zeros(self.num_envs, dtype=bool, device=self.device)
         self._task_arrays(terrains, tiled.offsets_xy_m)
         with bk.on_stream():
-            self._pool = settle_pool(self, terrains, data, ph.nconmax, ph.njmax)
+            self._pool, self.pool_level_fraction = settle_pool(
+                self.batch, terrains, model=self.mj_model, warp_model=self.mjw_model, data=data,
+                offsets_xy_m=self._offsets, qpos_root=int(self.ids["qpos_root"]),
+                rover=self.rover, task=self.task, backend=bk, nconmax=ph.nconmax,
+                njmax=ph.njmax)
             self._capture()
             self.reset()
 
@@ -130,24 +135,28 @@ class BatchNavEnv:
         self._fwd, self._left = bk.asarray(fwd), bk.asarray(left)
         grids = np.stack([t.z_m for t in terrains])
         self._grids = bk.asarray(grids)
-        self._grid_origins = bk.asarray(np.array([t.origin_xy_m for t in terrains], float))
-        self._cell_m = float(terrains[0].cell_size_m)
+        origins = bk.asarray(np.array([t.origin_xy_m for t in terrains], float))
+        self._grid_origins, self._cell_m = origins, float(terrains[0].cell_size_m)
         bare = [self.batch.heightfield(w).sample(*np.meshgrid(
             t.origin_xy_m[0] + np.arange(t.z_m.shape[1]) * t.cell_size_m,
             t.origin_xy_m[1] + np.arange(t.z_m.shape[0]) * t.cell_size_m))
             for w, t in enumerate(terrains)]
-        self._rock_cells = bk.asarray((grids - np.stack(bare)) > ROCK_CONTACT_M, xp.float32)
         self._offsets = bk.asarray(offsets)
+        self._rocks = RockContacts(
+            chassis_geom=self.ids["chassis_geom"],
+            wheel_geoms=[int(g) for g in self.ids["wheel_geoms"]],
+            rock_cells=bk.asarray((grids - np.stack(bare)) > ROCK_CONTACT_M, xp.float32),
+            grid_origins_xy_m=origins, cell_m=self._cell_m, offsets_xy_m=self._offsets)
         self._bounds = bk.asarray(self.batch.bounds_xy_m)
         self.world = xp.zeros(n, dtype=xp.int64, device=device(self._offsets))
         zeros2 = xp.zeros((n, 2), dtype=xp.float64, device=device(self._offsets))
         self.start_xy_m, self.goal_xy_m, self.last_action = zeros2, zeros2 * 1, zeros2 * 1
         self.steps_done = xp.zeros(n, dtype=xp.int64, device=device(self._offsets))
         self.last_distance_m = xp.zeros(n, dtype=xp.float64, device=device(self._offsets))
-        self._stuck = taskmath.StuckClock(self._offsets, (n,), round(self.task.stuck_s *
-                                          self.control_hz), self.task.stuck_m)
+        self._stuck = taskmath.StuckClock(self._offsets, (n,),
+                                          self.task.stuck_steps(self.control_hz),
+                                          self.task.stuck_m)
         self.episodes = xp.zeros(2, dtype=xp.int64, device=device(self._offsets))  # ended, won
-        self._wheels = [int(g) for g in self.ids["wheel_geoms"]]
 
     # ---- episodes --------------------------------------------------------------------------
     def reset(self) -> dict[str, Any]:
@@ -202,61 +211,76 @@ class BatchNavEnv:
     def step(self, action: Any) -> tuple[dict[str, Any], Any, Any, Any, dict[str, Any]]:
         """Apply ``action`` (N, 2) normalised ``[v, omega]`` for one control period; the
         observations (of the next episode where one ended), reward, terminated, truncated and
-        info (``termination`` code: 0 none, 1 goal, 2 + the index in
-        :data:`~marsscene.env.taskmath.FAILURES`; ``final_observation`` of the rovers reset)."""
+        info (``termination``: the code of :data:`~marsscene.env.terms.TERMINATIONS`, 0 none,
+        1 goal, 2 + the index in :data:`~marsscene.env.terms.FAILURES`;
+        ``final_observation`` of the rovers reset)."""
         xp = self.xp
         with self.bk.on_stream():
             a = xp.clip(xp.astype(xp.asarray(action), xp.float64), -1.0, 1.0)
-            v, w = a[:, 0] * V_MAX_M_S, a[:, 1] * OMEGA_MAX_RAD_S
+            v, w = self.task.command(a)
             rates, steer = wheel_commands(v, w, self.rover)
             ctrl = self._v["ctrl"]
             ctrl[:, self.ids["drive_act"]] = xp.astype(rates, ctrl.dtype)
             ctrl[:, self.ids["steer_act"]] = xp.astype(steer, ctrl.dtype)
             self._physics()
             self.steps_done = self.steps_done + 1
-            moving = (xp.abs(v) > MOVING_CMD) | (xp.abs(w) > MOVING_CMD)
-            reward, terminated, truncated, code = self._judge(a, moving)
-            final = self.observe()
+            state = self.state()
+            j = self._judge(state, a, self.task.moving(v, w))
+            self.last_distance_m = j.distance_m
+            final = self.observe(state)
             self.last_action = a
-            done = terminated | truncated
+            done = j.terminated | j.truncated
             self.episodes = self.episodes + xp.stack([xp.sum(xp.astype(done, xp.int64)),
-                                                      xp.sum(xp.astype(code == 1, xp.int64))])
+                                                      xp.sum(xp.astype(j.code == GOAL,
+                                                                       xp.int64))])
             self._restart(done)
             obs = self.observe()
-        return obs, reward, terminated, truncated, {"termination": code,
-                                                    "final_observation": final}
+        return obs, j.reward, j.terminated, j.truncated, {"termination": j.code,
+                                                          "final_observation": final}
 
-    def _state(self) -> dict[str, Any]:
+    def state(self) -> RoverState:
+        """The rovers now, as the task reads them (each world's frame; noise-free sensors,
+        the true pose)."""
         ids, q, xp = self.ids, self._v["qpos"], self.xp
         r = ids["qpos_root"]
         xyz = xp.astype(q[:, r: r + 3], xp.float64)
         off = self._offsets[self.world]
         xyz = xp.concat([xyz[:, :2] - off, xyz[:, 2:]], axis=1)
+        quat = xp.astype(q[:, r + 3: r + 7], xp.float64)
+        yaw = yaw_of_quat(quat)
         s = self._v["sensordata"]
-        return {"xyz": xyz, "quat": xp.astype(q[:, r + 3: r + 7], xp.float64),
-                "rates": self._v["qvel"][:, ids["drive_dof"]],
-                "steer": q[:, ids["steer_qpos"]],
-                "accel": xp.astype(s[:, ids["_acc_adr"]: ids["_acc_adr"] + 3], xp.float64),
-                "gyro": xp.astype(s[:, ids["_gyr_adr"]: ids["_gyr_adr"] + 3], xp.float64)}
+        twist = body_twists_from_wheels(self._v["qvel"][:, ids["drive_dof"]],
+                                        q[:, ids["steer_qpos"]], self.rover)
+        return RoverState(
+            xyz_m=xyz, quat_wxyz=quat, yaw_rad=yaw, pose_xy_m=xyz[:, :2], pose_yaw_rad=yaw,
+            twist=twist,
+            accel_m_s2=xp.astype(s[:, ids["_acc_adr"]: ids["_acc_adr"] + 3], xp.float64),
+            gyro_rad_s=xp.astype(s[:, ids["_gyr_adr"]: ids["_gyr_adr"] + 3], xp.float64))
 
-    def observe(self) -> dict[str, Any]:
-        """The observations of the rovers now (the CPU environment's keys)."""
-        xp, st = self.xp, self._state()
-        yaw = yaw_of_quat(st["quat"])
-        twist = body_twists_from_wheels(st["rates"], st["steer"], self.rover)
-        out = {"observation": taskmath.observation_vector(
-                   st["xyz"][:, :2], yaw, self.goal_xy_m, twist, st["accel"], st["gyro"],
-                   self.last_action),
-               "achieved_goal": xp.astype(st["xyz"][:, :2], xp.float32),
+    def observe(self, state: RoverState | None = None) -> dict[str, Any]:
+        """The observations of the rovers in ``state`` (now, by default; the CPU environment's
+        keys)."""
+        xp = self.xp
+        st = state if state is not None else self.state()
+        out = {"observation": st.observation_vector(self.goal_xy_m, self.last_action),
+               "achieved_goal": xp.astype(st.xy_m, xp.float32),
                "desired_goal": xp.astype(self.goal_xy_m, xp.float32)}
         if self.obs_config.height_scan is not None:
             out["height_scan"] = taskmath.height_scan(
-                self._grids, self._grid_origins, self._cell_m, st["xyz"], yaw, self._fwd,
-                self._left, self.world)
+                self._grids, self._grid_origins, self._cell_m, st.xyz_m, st.yaw_rad,
+                self._fwd, self._left, self.world)
         return out
 
-    def _judge(self, a: Any, moving: Any) -> tuple[Any, Any, Any, Any]:
-        return judge(self, a, moving)
+    def _judge(self, state: RoverState, a: Any, moving: Any) -> judgement.Judgement:
+        """The step's judgement (:func:`marsscene.env.judgement.judge_step`, the CPU
+        environment's)."""
+        hit = collided(self._con, self._v["nacon"], self.world, self._rocks, self.bk)
+        return judgement.judge_step(
+            state, start_xy_m=self.start_xy_m, goal_xy_m=self.goal_xy_m,
+            bounds_xy_m=self._bounds[self.world], steps_left=self.steps_total - self.steps_done,
+            action=a, last_action=self.last_action, last_distance_m=self.last_distance_m,
+            collided=hit, moving=moving, stuck_clock=self._stuck, task=self.task,
+            reward=self.reward_config, steps_total=self.steps_total)
 
     @property
     def success_rate(self) -> float:

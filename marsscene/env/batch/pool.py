@@ -22,27 +22,55 @@ from marsscene.rover.spawn import spawn_pose
 __all__ = ["settle_pool"]
 
 
-def settle_pool(env: Any, terrains: list[Any], data: Any, nconmax: int, njmax: int
-                ) -> dict[str, Any]:
-    """Every drawn start of ``env``'s batch (its rock ``terrains``), the rover settled there
-    with its wheels braked: states, sensor readings, starts, goals and worlds."""
-    b, ids, mjw = env.batch, env.ids, env._mjw
-    offsets = env.bk.to_numpy(env._offsets)
-    qpos = np.tile(env.mj_model.qpos0, (b.count * b.pool, 1))
+def settle_pool(batch: Any, terrains: list[Any], *, model: Any, warp_model: Any, data: Any,
+                offsets_xy_m: Any, qpos_root: int, rover: Any, task: Any, backend: Any,
+                nconmax: int, njmax: int) -> tuple[dict[str, Any], float]:
+    """Every drawn start of ``batch`` (a :class:`~.worlds.WorldBatch`, its rock ``terrains``),
+    the rover settled there with its wheels braked.
+
+    Parameters
+    ----------
+    batch, terrains
+        The worlds and their rock terrains.
+    model, warp_model, data
+        The tiled ``mujoco.MjModel``, its MuJoCo Warp model, and an ``MjData`` of it.
+    offsets_xy_m : (W, 2) array
+        Each world's tile offset.
+    qpos_root : int
+        The rover's free joint in ``qpos``.
+    rover : RoverConfig
+    task : NavTask
+        ``start_settle_s``, ``start_max_tilt_deg``.
+    backend : Backend
+        The batch's arrays and Warp device.
+    nconmax, njmax : int
+        MuJoCo Warp's buffers.
+
+    Returns
+    -------
+    pool : dict
+        States, sensor readings, starts, goals and worlds (backend arrays, one row a start).
+    level_fraction : float
+        The fraction of drawn starts where the rover stood level (the others replaced).
+    """
+    import mujoco_warp as mjw
+
+    b, bk, r = batch, backend, qpos_root
+    offsets = bk.to_numpy(offsets_xy_m)
+    qpos = np.tile(model.qpos0, (b.count * b.pool, 1))
     for w in range(b.count):
         for p in range(b.pool):
             pose = spawn_pose(terrains[w], tuple(b.starts_xy_m[w, p]), float(b.yaws_rad[w, p]),
-                              env.rover)
+                              rover)
             pose[:2] += offsets[w]
-            qpos[w * b.pool + p, ids["qpos_root"]: ids["qpos_root"] + 7] = pose
-    with env.bk.wp.ScopedDevice(env.device):
-        d = mjw.put_data(env.mj_model, data, nworld=len(qpos), nconmax=nconmax, njmax=njmax)
-        env.bk.view(d.qpos)[...] = env.bk.asarray(qpos)
-        for _ in range(round(env.task.start_settle_s * env.mj_model.opt.timestep ** -1)):
-            mjw.step(env.mjw_model, d)
-    q = env.bk.to_numpy(env.bk.view(d.qpos))
-    level = taskmath.up_z(q[:, ids["qpos_root"] + 3: ids["qpos_root"] + 7]) > math.cos(
-        math.radians(env.task.start_max_tilt_deg))
+            qpos[w * b.pool + p, r: r + 7] = pose
+    with bk.wp.ScopedDevice(bk.device):
+        d = mjw.put_data(model, data, nworld=len(qpos), nconmax=nconmax, njmax=njmax)
+        bk.view(d.qpos)[...] = bk.asarray(qpos)
+        for _ in range(round(task.start_settle_s * model.opt.timestep ** -1)):
+            mjw.step(warp_model, d)
+    q = bk.to_numpy(bk.view(d.qpos))
+    level = taskmath.up_z(q[:, r + 3: r + 7]) > math.cos(math.radians(task.start_max_tilt_deg))
     keep = np.arange(len(q))
     for w in range(b.count):  # a leaning start -> another start of its world
         rows = np.arange(w * b.pool, (w + 1) * b.pool)
@@ -51,11 +79,10 @@ def settle_pool(env: Any, terrains: list[Any], data: Any, nconmax: int, njmax: i
             raise ConfigError(f"world {w}: the rover does not stand level at any of its "
                               f"{b.pool} drawn starts")
         keep[rows[~level[rows]]] = good[0]
-    env.pool_level_fraction = float(level.mean())
-    sel = env.bk.asarray(keep)
-    return {"qpos": env.bk.view(d.qpos)[sel], "qvel": env.bk.view(d.qvel)[sel],
-            "sensordata": env.bk.view(d.sensordata)[sel],
-            "start": env.bk.asarray(b.starts_xy_m.reshape(-1, 2)[keep]),
-            "goal": env.bk.asarray(b.goals_xy_m.reshape(-1, 2)[keep]),
-            "world": env.bk.asarray(keep // b.pool)}
-
+    sel = bk.asarray(keep)
+    pool = {"qpos": bk.view(d.qpos)[sel], "qvel": bk.view(d.qvel)[sel],
+            "sensordata": bk.view(d.sensordata)[sel],
+            "start": bk.asarray(b.starts_xy_m.reshape(-1, 2)[keep]),
+            "goal": bk.asarray(b.goals_xy_m.reshape(-1, 2)[keep]),
+            "world": bk.asarray(keep // b.pool)}
+    return pool, float(level.mean())

@@ -1,0 +1,82 @@
+"""``RoverState``: the rover as the navigation task reads it, arrays with a batch axis (N,).
+
+Both physics produce it: the CPU environment's :class:`~marsscene.sim.session.DriveSession`
+observation (:meth:`RoverState.of_observation`, N = 1: noisy encoders and IMU, the pose the
+policy sees from odometry or the ground truth) and the batched environment's MuJoCo Warp
+buffers (N rovers, noise-free, :meth:`~marsscene.env.batch.BatchNavEnv.state`). The task's
+functions (:mod:`.taskmath`, :mod:`.judgement`) read nothing else of the physics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from marsscene.env import taskmath
+from marsscene.rover.geometry import body_twist_from_wheels
+from marsscene.units import MARS_GRAVITY_M_S2
+
+__all__ = ["RoverState"]
+
+
+@dataclass(frozen=True)
+class RoverState:
+    """The task's view of N rovers (numpy or PyTorch arrays of one namespace, float64).
+
+    Attributes
+    ----------
+    xyz_m : (N, 3)
+        Ground-truth ``base_link`` position in the task's (the world's) frame.
+    quat_wxyz : (N, 4)
+        Ground-truth orientation.
+    yaw_rad : (N,)
+        Ground-truth heading.
+    pose_xy_m, pose_yaw_rad : (N, 2), (N,)
+        The pose the policy observes (the ground truth, or the wheel odometry).
+    twist : (N, 2)
+        Body ``(v, omega)`` from the wheel encoders (m/s, rad/s).
+    accel_m_s2, gyro_rad_s : (N, 3)
+        The latest IMU sample (specific force incl. gravity, angular rate; body frame).
+    """
+
+    xyz_m: Any
+    quat_wxyz: Any
+    yaw_rad: Any
+    pose_xy_m: Any
+    pose_yaw_rad: Any
+    twist: Any
+    accel_m_s2: Any
+    gyro_rad_s: Any
+
+    @property
+    def xy_m(self) -> Any:
+        """(N, 2) ground-truth position."""
+        return self.xyz_m[..., :2]
+
+    @classmethod
+    def of_observation(cls, obs: Any, rover: Any, pose_source: str = "truth") -> RoverState:
+        """One rover (N = 1) from a :class:`~marsscene.sim.control.Observation`; ``rover``
+        (a :class:`~marsscene.rover.config.RoverConfig`) turns wheel rates into the body twist,
+        ``pose_source`` ``"truth"`` or ``"odom"`` picks the observed pose. Before the first IMU
+        sample the IMU reads gravity at rest."""
+        if pose_source == "truth":
+            xy, yaw = obs.gt_xyz_m[:2], obs.gt_yaw_rad
+        else:
+            xy, yaw = obs.odom_xyz_m[:2], obs.odom_yaw_rad
+        twist = body_twist_from_wheels(obs.wheel_rates_rad_s, obs.steer_rad, rover)
+        acc = obs.accel_m_s2 if obs.accel_m_s2 is not None else (0.0, 0.0, MARS_GRAVITY_M_S2)
+        gyr = obs.gyro_rad_s if obs.gyro_rad_s is not None else (0.0, 0.0, 0.0)
+        row = lambda v: np.asarray(v, dtype=np.float64).reshape(1, -1)  # noqa: E731
+        one = lambda v: np.asarray(v, dtype=np.float64).reshape(1)  # noqa: E731
+        return cls(xyz_m=row(obs.gt_xyz_m), quat_wxyz=row(obs.gt_quat_wxyz),
+                   yaw_rad=one(obs.gt_yaw_rad), pose_xy_m=row(xy), pose_yaw_rad=one(yaw),
+                   twist=row(twist), accel_m_s2=row(acc), gyro_rad_s=row(gyr))
+
+    def observation_vector(self, goal_xy_m: Any, last_action: Any) -> Any:
+        """The ``observation`` vector (N, 17) float32 (layout in :mod:`.observe`) towards goals
+        ``goal_xy_m`` (N, 2), after ``last_action`` (N, 2)."""
+        return taskmath.observation_vector(self.pose_xy_m, self.pose_yaw_rad, goal_xy_m,
+                                           self.twist, self.accel_m_s2, self.gyro_rad_s,
+                                           last_action)
