@@ -7,25 +7,37 @@ from __future__ import annotations
 import importlib
 from collections.abc import Iterator
 from types import ModuleType
+from typing import Any
 
-import click
 import pytest
 from click.testing import CliRunner
 
 from marsscene.errors import ConfigError
 from marsscene.ros2.options import Ros2Options
-from marsscene.rover.config import CameraConfig
+from marsscene.rover.config import CameraConfig, LidarConfig
+from marsscene.runs.export.options import ExportOptions
 from marsscene.sim.mission import DriveOptions
 from marsscene.sim.pursuit import PursuitConfig
 from marsscene.sweep import SweepSpec
+from marsscene.terrain.config import TerrainConfig
 
-#: (module of the command, its name, dataclass, field, option, a value no default has)
+_RUN, _DRIVE = "marsscene.cli.options_run", "marsscene.cli.drive"
+#: (modules that read the defaults, the command's last; command; dataclass; field; option;
+#:  a value no default has; what the option's help line then says)
 _CASES = [
-    ("marsscene.cli.drive", "drive", DriveOptions, "max_slope_deg", "--max-slope-deg", 27.5),
-    ("marsscene.cli.drive", "drive", DriveOptions, "corridor_m", "--corridor-m", 23.25),
-    ("marsscene.cli.drive", "drive", PursuitConfig, "lookahead_m", "--lookahead-m", 1.75),
-    ("marsscene.cli.serve", "serve", Ros2Options, "cmd_timeout_s", "--cmd-timeout-s", 4.5),
-    ("marsscene.cli.drive", "drive", CameraConfig, "rate_hz", "--camera-hz", 12.5),
+    ((_DRIVE,), "drive", DriveOptions, "max_slope_deg", "--max-slope-deg", 27.5,
+     "default: 27.5"),
+    ((_DRIVE,), "drive", DriveOptions, "corridor_m", "--corridor-m", 23.25, "default: 23.25"),
+    ((_DRIVE,), "drive", PursuitConfig, "lookahead_m", "--lookahead-m", 1.75, "default: 1.75"),
+    ((_DRIVE,), "drive", ExportOptions, "dataset_images", "--dataset-images", "convert",
+     "default: convert"),
+    ((_RUN, _DRIVE), "drive", CameraConfig, "rate_hz", "--camera-hz", 12.5, "default: 12.5"),
+    ((_RUN, _DRIVE), "drive", LidarConfig, "model", "--lidar ", "vlp16",
+     "default model vlp16: 16 x 1800 at 10 Hz"),
+    (("marsscene.cli.serve",), "serve", Ros2Options, "cmd_timeout_s", "--cmd-timeout-s", 4.5,
+     "default: 4.5"),
+    (("marsscene.cli.options_dem", "marsscene.cli.build"), "build", TerrainConfig,
+     "focus_post_m", "--focus-post-m", 0.375, "default 0.375"),
 ]
 
 
@@ -39,34 +51,26 @@ def reloaded(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[ModuleType]]:
         importlib.reload(module)
 
 
-def _reload(name: str) -> ModuleType:
-    """``name`` re-imported (its option tables read the dataclasses again), after
-    ``cli.options_run`` (the run options' table)."""
-    importlib.reload(importlib.import_module("marsscene.cli.options_run"))
-    return importlib.reload(importlib.import_module(name))
-
-
-@pytest.mark.parametrize(("module", "command", "cls", "field", "option", "value"), _CASES,
-                         ids=[f"{c[1]} {c[4]}" for c in _CASES])
+@pytest.mark.parametrize(("modules", "command", "cls", "field", "option", "value", "shown"),
+                         _CASES, ids=[f"{c[1]} {c[4].strip()}" for c in _CASES])
 def test_a_changed_dataclass_default_changes_the_help(
-    monkeypatch: pytest.MonkeyPatch, reloaded: list[ModuleType], module: str, command: str,
-    cls: type, field: str, option: str, value: float,
+    monkeypatch: pytest.MonkeyPatch, reloaded: list[ModuleType], modules: tuple[str, ...],
+    command: str, cls: type, field: str, option: str, value: Any, shown: str,
 ) -> None:
-    old = cls.__init__.__kwdefaults__[field]  # type: ignore[misc]
-    cmd: click.Command = getattr(importlib.import_module(module), command)
-    assert _option(cmd, option).default == old  # the dataclass's default today
+    def help_line() -> str:
+        cmd = getattr(importlib.import_module(modules[-1]), command)
+        lines = CliRunner().invoke(cmd, ["--help"], terminal_width=300).output.splitlines()
+        i = next(i for i, ln in enumerate(lines) if ln.lstrip().startswith(option))
+        j = next((j for j in range(i + 1, len(lines)) if lines[j].lstrip().startswith("-")),
+                 len(lines))
+        return " ".join(ln.strip() for ln in lines[i:j])  # the option's help, one line
+
+    assert shown not in help_line()
     monkeypatch.setitem(cls.__init__.__kwdefaults__, field, value)  # type: ignore[misc]
-    reloaded += [importlib.import_module("marsscene.cli.options_run"),
-                 importlib.import_module(module)]
-    cmd = getattr(_reload(module), command)
-    assert _option(cmd, option).default == value
-    text = CliRunner().invoke(cmd, ["--help"], terminal_width=200).output
-    line = next(ln for ln in text.splitlines() if ln.lstrip().startswith(option))
-    assert f"default: {value:g}" in line, line
-
-
-def _option(cmd: click.Command, flag: str) -> click.Option:
-    return next(p for p in cmd.params if isinstance(p, click.Option) and flag in p.opts)
+    reloaded += [importlib.import_module(name) for name in modules]
+    for module in reloaded:
+        importlib.reload(module)  # the option tables read the dataclasses again
+    assert shown in help_line()
 
 
 def test_the_drive_options_bounds_are_the_dataclasses() -> None:

@@ -14,7 +14,12 @@ from marsscene.cli._progress import DriveMeter, ProgressBar
 from marsscene.cli.bag import BAG_OPTION_NAMES, bag_options, bag_options_of, echo_bag
 from marsscene.cli.options_run import RUN_OPTION_NAMES, run_config, run_options
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RunConfig
-from marsscene.runs.export.options import DATASET_FORMATS, DATASET_IMAGES, DATASET_IMAGES_HELP
+from marsscene.runs.export.options import (
+    DATASET_FORMATS,
+    DATASET_IMAGES,
+    DATASET_IMAGES_HELP,
+    ExportOptions,
+)
 from marsscene.sim.mission import DriveOptions
 
 _PATH = click.Path(exists=True, dir_okay=False, path_type=Path)
@@ -122,8 +127,8 @@ Examples:
               "needs --camera); repeat for both.")
 @click.option("--overwrite", is_flag=True,
               help="With --bag / --dataset: replace existing RUN_DIR/bag and dataset folders.")
-@click.option("--dataset-images", type=click.Choice(DATASET_IMAGES), default="link",
-              show_default=True,
+@click.option("--dataset-images", type=click.Choice(DATASET_IMAGES),
+              default=ExportOptions().dataset_images, show_default=True,
               help=DATASET_IMAGES_HELP)
 @click.option("--keep-lidar-files", is_flag=True,
               help="With --bag and --lidar: keep RUN_DIR/lidar/*.ply beside the bag (by "
@@ -137,7 +142,6 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
     """``marsscene drive`` (its help text: :data:`_HELP`); ``opts`` holds the run and bag
     options."""
     import marsscene as ms
-    from marsscene.runs.export.options import ExportOptions
     from marsscene.sim.driver import DriveInterrupted
     from marsscene.sim.pursuit import PursuitConfig
 
@@ -205,7 +209,13 @@ def _load_controller(ref: str) -> Any:
         return obj
     if "route" not in inspect.signature(obj).parameters:
         return obj()
-    return OnStart(lambda sim, route: obj(route=route))
+
+    factory: Any = obj
+
+    def make(sim: Any, route: Any = None) -> Any:  # the drive passes its route
+        return factory(route=route)
+
+    return OnStart(make)
 
 
 def _exit_interrupted(message: str) -> None:

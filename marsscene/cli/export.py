@@ -10,7 +10,7 @@ from typing import Any
 import click
 
 from marsscene.cli._common import user_errors
-from marsscene.runs.export.options import DATASET_IMAGES, DATASET_IMAGES_HELP
+from marsscene.runs.export.options import DATASET_IMAGES, DATASET_IMAGES_HELP, ExportOptions
 
 
 @click.command(name="export", short_help="Write a run folder as a TUM RGB-D or EuRoC dataset.")
@@ -20,7 +20,8 @@ from marsscene.runs.export.options import DATASET_IMAGES, DATASET_IMAGES_HELP
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               help="Output folder (default: RUN_DIR/tum_rgbd or RUN_DIR/euroc).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output folder.")
-@click.option("--images", type=click.Choice(DATASET_IMAGES), default="link",
+@click.option("--images", type=click.Choice(DATASET_IMAGES),
+              default=ExportOptions().dataset_images,
               show_default=True, help=DATASET_IMAGES_HELP)
 def export_cmd(run_dir: Path, fmt: str, out_dir: Path | None, overwrite: bool,
                images: str) -> None:

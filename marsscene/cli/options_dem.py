@@ -19,8 +19,11 @@ from typing import Any
 import click
 
 from marsscene.cli._common import compose
+from marsscene.terrain.config import TerrainConfig
 
 __all__ = ["apply", "options"]
+
+_T = TerrainConfig()  # the terrain defaults live in TerrainConfig only
 
 _OPTIONS = compose(
     click.option("--ortho", "ortho", type=click.Path(exists=True, dir_okay=False,
@@ -51,12 +54,14 @@ _OPTIONS = compose(
     click.option("--focus-xy", "focus_xy_m", type=(float, float), default=None, metavar="X Y",
                  help="Centre of the full-resolution focus square (m); implies --lod."),
     click.option("--focus-size-m", "focus_size_m", type=click.FloatRange(min=0, min_open=True),
-                 default=None, help="Side of the focus square (m, default 1000); implies --lod."),
+                 default=None,
+                 help=f"Side of the focus square (m, default {_T.focus_size_m:g}); implies --lod."),
     click.option("--focus-post-m", "focus_post_m", type=click.FloatRange(min=0, min_open=True),
-                 default=None, help="Post spacing inside the focus square (m, default 0.25)."),
+                 default=None,
+                 help=f"Post spacing inside the focus square (m, default {_T.focus_post_m:g})."),
     click.option("--tile-m", "tile_m", type=click.FloatRange(min=0, min_open=True),
                  default=None, help="Side of a focus tile, built independently (m, default "
-                 "500); implies --lod."),
+                 f"{_T.tile_m:g}); implies --lod."),
     click.option("--resampling", "resampling", type=click.Choice(["bilinear", "cubic", "area"]),
                  default=None, help="DEM resampling (default: area when coarsening)."),
 )

@@ -33,6 +33,7 @@ __all__ = ["RUN_OPTION_NAMES", "camera_size", "run_config", "run_option", "run_o
 
 _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 _CAM = CameraConfig()  # the camera defaults live in CameraConfig only
+_LIDAR = LidarConfig()  # and the LiDAR's in LidarConfig
 
 #: click parameter -> (option declarations, click.option keywords with the drive's help text)
 _SPECS: dict[str, tuple[tuple[str, ...], dict[str, Any]]] = {
@@ -65,7 +66,8 @@ _SPECS: dict[str, tuple[tuple[str, ...], dict[str, Any]]] = {
         help="Override the sun elevation (deg) for the camera's lighting.")),
     "lidar": (("--lidar",), dict(
         is_flag=True,
-        help="Log a spinning 3D LiDAR (default model os1-128: 128 x 1024 at 10 Hz; PLY).")),
+        help=f"Log a spinning 3D LiDAR (default model {_LIDAR.model}: {_LIDAR.spec.channels} x "
+        f"{_LIDAR.spec.horizontal_samples} at {_LIDAR.spec.rate_hz:g} Hz; PLY).")),
     "lidar_model": (("--lidar-model",), dict(
         type=click.Choice(tuple(lidar_models())), default=None,
         help="LiDAR model from datasheets (docs/runtime.md); implies --lidar.")),

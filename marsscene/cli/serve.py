@@ -15,6 +15,7 @@ import click
 from marsscene.cli._common import compose, sigterm_interrupts, user_errors
 from marsscene.cli.options_run import RUN_OPTION_NAMES, run_config, run_option
 from marsscene.ros2.options import PACES, SENSOR_QOS, Ros2Options
+from marsscene.rover.config import LidarConfig
 from marsscene.runs.export.options import DISTROS, IMAGES
 
 _R = Ros2Options()  # the defaults live in Ros2Options only
@@ -25,7 +26,7 @@ _sensor_options = compose(
     run_option("camera_size"),
     run_option("camera_hz"),
     run_option("stereo", "Also a rectified stereo pair."),
-    run_option("lidar", "Spinning 3D LiDAR (default model os1-128)."),
+    run_option("lidar", f"Spinning 3D LiDAR (default model {LidarConfig().model})."),
     run_option("lidar_model", "LiDAR model (implies --lidar)."),
     run_option("soil"),
     run_option("noise_profile", "IMU + wheel-odometry noise profile (default: noise-free)."),

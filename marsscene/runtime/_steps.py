@@ -97,10 +97,8 @@ def started(controller: Any, sim: Any, route: Route | None) -> tuple[Any, tuple[
     route) and the listeners it adds."""
     if not isinstance(controller, OnStart):
         return controller, ()
-    if "route" in inspect.signature(controller.make).parameters:
-        made = controller.make(sim, route=route)
-    else:
-        made = controller.make(sim)
+    make: Any = controller.make
+    made = make(sim, route=route) if "route" in inspect.signature(make).parameters else make(sim)
     return made, ((made,) if controller.listen else ())
 
 

@@ -134,9 +134,9 @@ def prepare_drive(
         world = load_world(scene_dir)
         route = author_route(np.asarray(waypoints_xy_m, dtype=np.float64), world.heightfield,
                              max_slope_deg=opt.max_slope_deg, obstacles=world.obstacles)
-    corridor = {} if route is None else {"contact_corridor_xy_m": route.xy_m,
-                                         "contact_corridor_m": _corridor_m(opt, run)}
-    sim = RoverSim(scene_dir, run=run, settle_s=0.0, **corridor)
+    sim = RoverSim(scene_dir, run=run, settle_s=0.0,  # only the corridor's rocks with a route
+                   contact_corridor_xy_m=None if route is None else route.xy_m,
+                   contact_corridor_m=_corridor_m(opt, run))
     sim.settle_s = opt.settle_s
     if route is None:
         sim.reset(xy_m=opt.start_xy_m, yaw_rad=opt.start_yaw_rad)
