@@ -89,12 +89,12 @@ def _text_rows(fields: list[_Field], n: int) -> bytes:
 
 def rock_catalog_columns(scene: Any) -> dict[str, NDArray[Any]]:
     """The catalogue's columns (:data:`COLUMNS`, in order) as arrays (no copies of the rocks)."""
-    from marsscene.rocks.report import mjcf_rock_selection
+    from marsscene.rocks.report import mjcf_focus, mjcf_rock_selection
 
     rocks = scene.rocks
     n = len(rocks)
     in_mjcf = np.zeros(n, dtype=bool)
-    in_mjcf[mjcf_rock_selection(rocks, scene.config.rocks)] = True
+    in_mjcf[mjcf_rock_selection(rocks, scene.config.rocks, within=mjcf_focus(scene))] = True
     pos = rocks.position_xyz_m
     return {"id": np.arange(n, dtype=np.int64), "x_m": pos[:, 0], "y_m": pos[:, 1],
             "z_m": pos[:, 2], "diameter_m": rocks.diameter_m, "height_m": rocks.height_m,

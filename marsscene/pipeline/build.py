@@ -84,9 +84,14 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     if lod_note:
         log.warning(lod_note)
         rec.notes.append(lod_note)
-    check_rock_budget(config)  # a rock plan that cannot fit is refused before the terrain
+    # a rock plan that cannot fit is refused early: before one grid's terrain, after a
+    # level-of-detail focus plan (the terrain's own refusal of a focus too large comes first)
+    if not config.terrain.lod:
+        check_rock_budget(config)
     with rec.stage("terrain"):
         terrain = terrain_stage(config, seed, dem, rec.models, rec.notes, rec.summary)
+    if config.terrain.lod:
+        check_rock_budget(config)
     world = terrain.world
     hf, coarse, craters = terrain.hf, world.coarse if world is not None else None, None
     if config.craters.enabled:

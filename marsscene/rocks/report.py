@@ -16,8 +16,8 @@ if TYPE_CHECKING:
     from marsscene.craters.table import CraterTable
     from marsscene.rocks.budget import RockLevels
 
-__all__ = ["EJECTA_CITATION", "level_summary", "mjcf_rock_selection", "rock_notes",
-           "rock_summary"]
+__all__ = ["EJECTA_CITATION", "inside_focus", "level_summary", "mjcf_focus", "mjcf_rock_selection",
+           "rock_notes", "rock_summary"]
 
 EJECTA_CITATION = (
     "rocky rims and ejecta around fresh craters (Golombek et al. 2008, doi:10.1029/2007JE003065); "
@@ -26,17 +26,18 @@ EJECTA_CITATION = (
 
 
 def mjcf_rock_selection(rocks: RockTable, cfg: RockConfig,
-                        within: Heightfield | None = None) -> NDArray[np.int64]:
+                        within: Heightfield | tuple[float, float, float, float] | None = None
+                        ) -> NDArray[np.int64]:
     """Indices of the rocks exported as MJCF collision geoms, largest first.
 
-    Rule: diameter >= ``mjcf_min_diameter_m``; on ``within``'s footprint if given (the focus
-    square of a level-of-detail scene); within ``mjcf_region_radius_m`` of
-    ``mjcf_region_xy_m`` if a region is set; then at most ``mjcf_max_rocks``, keeping the
-    largest (ties broken by table order).
+    Rule: diameter >= ``mjcf_min_diameter_m``; on ``within`` if given (the focus square of a
+    level-of-detail scene or of a two-level rock population: a heightfield's footprint or
+    ``(x0, y0, x1, y1)``); within ``mjcf_region_radius_m`` of ``mjcf_region_xy_m`` if a region
+    is set; then at most ``mjcf_max_rocks``, keeping the largest (ties broken by table order).
     """
     keep = rocks.diameter_m >= cfg.mjcf_min_diameter_m
     if within is not None:
-        keep &= within.contains(rocks.position_xyz_m[:, 0], rocks.position_xyz_m[:, 1])
+        keep &= inside_focus(within, rocks.position_xyz_m[:, 0], rocks.position_xyz_m[:, 1])
     if cfg.mjcf_region_xy_m is not None and cfg.mjcf_region_radius_m is not None:
         cx, cy = cfg.mjcf_region_xy_m
         dist = np.hypot(rocks.position_xyz_m[:, 0] - cx, rocks.position_xyz_m[:, 1] - cy)
@@ -44,6 +45,24 @@ def mjcf_rock_selection(rocks: RockTable, cfg: RockConfig,
     idx = np.flatnonzero(keep)
     order = np.argsort(-rocks.diameter_m[idx], kind="stable")
     return np.asarray(idx[order][: cfg.mjcf_max_rocks], dtype=np.int64)
+
+
+def inside_focus(within: Heightfield | tuple[float, float, float, float],
+                 x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Which of the points ``(x, y)`` lie on ``within`` (a heightfield or ``(x0, y0, x1, y1)``)."""
+    if isinstance(within, Heightfield):
+        return np.asarray(within.contains(x, y), dtype=bool)
+    x0, y0, x1, y1 = within
+    return np.asarray((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1), dtype=bool)
+
+
+def mjcf_focus(scene: Any) -> Heightfield | tuple[float, float, float, float] | None:
+    """Where a scene's MJCF rock geoms come from: the focus heightfield of a level-of-detail
+    scene, the focus square of a two-level rock population, else anywhere (``None``)."""
+    if scene.outer is not None:
+        return scene.heightfield
+    levels = scene.provenance.extra.get("rocks", {}).get("levels")
+    return tuple(levels["focus_bounds_xy_m"]) if levels else None
 
 
 def rock_notes(
@@ -102,9 +121,8 @@ def level_summary(levels: RockLevels, rocks: RockTable) -> dict[str, Any]:
     """The manifest's account of a two-level rock population: the focus square, the cut-off
     outside it (and whether the budget raised it), expected and placed counts."""
     assert levels.focus_bounds_xy_m is not None
-    x0, y0, x1, y1 = levels.focus_bounds_xy_m
     x, y = rocks.position_xyz_m[:, 0], rocks.position_xyz_m[:, 1]
-    inside = int(np.count_nonzero((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)))
+    inside = int(np.count_nonzero(inside_focus(levels.focus_bounds_xy_m, x, y)))
     return {
         "focus_bounds_xy_m": [round(float(v), 6) for v in levels.focus_bounds_xy_m],
         "outer_d_min_m": levels.outer_d_min_m,

@@ -133,8 +133,8 @@ def test_a_procedural_rock_plan_that_cannot_fit_is_refused_before_the_terrain(
         raise AssertionError("the terrain was built")
 
     monkeypatch.setattr(build, "terrain_stage", no_terrain)
-    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [3000.0, 3000.0]},
-                                 "rocks": {"k": 0.3}})
+    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [2000.0, 2000.0]},
+                                 "rocks": {"k": 0.3}})  # one grid: refused before its terrain
     with pytest.raises(ConfigError, match=r"^rocks: about 4.\d+e\+06 rocks .* focus square"):
         ms.build_scene(cfg, seed=1)
 
@@ -224,3 +224,27 @@ def test_a_2km_crop_of_a_1m_dtm_builds_with_its_defaults(tmp_path: Path) -> None
         scene = ms.build_scene(cfg, seed=7)
     levels = scene.provenance.extra["rocks"]["levels"]
     assert levels["outer_d_min_m"] == 1.0 and 0.9e6 < levels["focus_count"] < 1.1e6
+
+
+def test_mjcf_rocks_of_a_two_level_population_come_from_its_focus_square() -> None:
+    """As in a level-of-detail scene: the rover drives in the focus, so its contact rocks (MJCF
+    geoms, the catalogue's in_mjcf) are the focus square's largest, not the outer level's."""
+    from marsscene.export.catalog_rocks import rock_catalog_columns
+    from marsscene.export.mjcf.build import build_mjcf
+
+    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [400.0, 400.0],
+                                             "post_m": 0.5, "focus_size_m": 100.0},
+                                 "craters": {"enabled": False}, "lighting": {"enabled": False},
+                                 "rocks": _rocks(d_min_m=0.2, outer_d_min_m=0.6, max_rocks=20_000,
+                                                 mjcf_max_rocks=50)})
+    scene = ms.build_scene(cfg, seed=4)
+    assert scene.rocks is not None and scene.provenance.extra["rocks"]["levels"]
+    p = scene.rocks.position_xyz_m
+    far = (np.abs(p[:, 0]) > 50.0) | (np.abs(p[:, 1]) > 50.0)
+    assert scene.rocks.diameter_m[far].max() > scene.rocks.diameter_m[~far].max()
+    in_mjcf = rock_catalog_columns(scene)["in_mjcf"].astype(bool)
+    assert in_mjcf.sum() == 50 and not (in_mjcf & far).any()
+    root, _ = build_mjcf(scene)
+    geoms = [g for g in root.iter("geom") if g.get("name", "").startswith("rock")]
+    xy = np.array([[float(v) for v in g.get("pos", "0 0 0").split()[:2]] for g in geoms])
+    assert len(xy) >= 50 and np.all(np.abs(xy) <= 50.0 + 1e-6)

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from marsscene.rocks.report import mjcf_rock_selection
+from marsscene.rocks.report import inside_focus, mjcf_focus, mjcf_rock_selection
 
 __all__ = ["ROCK_FRICTION", "add_rocks", "obj_bytes"]
 
@@ -46,11 +46,11 @@ def add_rocks(root: ET.Element, assets: dict[str, bytes], scene: Any) -> None:
     rocks = scene.rocks
     cfg = scene.config.rocks
     protos = tuple(scene.rock_prototypes or ())
-    focus = scene.heightfield if scene.outer is not None else None  # LOD: focus rocks only
+    focus = mjcf_focus(scene)  # two levels: focus rocks only
     sel = mjcf_rock_selection(rocks, cfg, within=focus)
     if cfg.mjcf_small_rocks == "bake":
         unselected = np.ones(len(rocks), dtype=bool) if focus is None else \
-            focus.contains(rocks.position_xyz_m[:, 0], rocks.position_xyz_m[:, 1])
+            inside_focus(focus, rocks.position_xyz_m[:, 0], rocks.position_xyz_m[:, 1])
         unselected[sel] = False
         _bake(root, assets, scene, np.flatnonzero(unselected))
     if len(sel) == 0 or not protos:
