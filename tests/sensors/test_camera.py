@@ -15,7 +15,7 @@ from marsscene.runtime import CameraConfig, RunConfig, read_tum  # noqa: E402
 from marsscene.seeding import stage_rng  # noqa: E402
 from marsscene.sim.driver import drive_sim  # noqa: E402
 from marsscene.sim.rover_sim import RoverSim  # noqa: E402
-from tests.support.vision import camera_poses, corners, rgbd_vo  # noqa: E402
+from marsscene.testing.vision import camera_poses, corners, rgbd_vo  # noqa: E402
 
 _ROCKY = {
     "terrain": {"source": "procedural", "size_m": [40, 40], "post_m": 0.25, "rms_height_m": 0.05},

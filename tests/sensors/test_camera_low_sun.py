@@ -27,7 +27,7 @@ from marsscene.scene import Provenance, Scene
 from marsscene.sim.rover_sim import RoverSim
 from marsscene.terrain.from_dem import GeoFrame
 from marsscene.terrain.heightfield import Heightfield
-from tests.support.shadow_truth import horizon_excess_deg
+from marsscene.testing.shadow_truth import horizon_excess_deg
 
 #: Beyond the sun's disc (radius 0.175 deg) a pixel counts as fully lit or fully shadowed
 _MARGIN_DEG = 0.05

@@ -19,7 +19,7 @@ pytest.importorskip("newton", reason="needs the extra [newton]")
 pytest.importorskip("warp", reason="needs the extra [newton]")
 pytest.importorskip("mujoco")
 
-from tests.support import newton_checks as bn
+from marsscene.testing import newton_checks as bn
 
 pytestmark = pytest.mark.newton
 

@@ -1,7 +1,8 @@
 """A penumbra-aware truth for terrain shadows, independent of the renderer: the terrain's
 horizon toward the sun by a ray march over the heightfield, and the visible share of the sun's
 disc above it. ``tests/sensors/test_camera_low_sun.py`` judges rendered frames with it and
-``perf/bench_shadow_accuracy.py`` prints how far they are from it."""
+``perf/fidelity/bench_shadow_accuracy.py`` prints how far they are from it. Core dependencies
+only."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
 """A small OpenCV visual front end and RGB-D visual odometry, scored against ground truth.
 
-Used by the camera tests and by ``perf/bench_camera.py``: Shi-Tomasi corners, KLT
-tracking with a forward-backward check, PnP-RANSAC on back-projected depth, and the VO drift
-(end-point error of the composed camera motion over the camera's path length).
+Shi-Tomasi corners, KLT tracking with a forward-backward check, PnP-RANSAC on back-projected
+depth, and the VO drift (end-point error of the composed camera motion over the camera's path
+length). The camera tests judge rendered drives with it and ``perf/fidelity/bench_camera.py``
+prints its figures. Needs OpenCV (the extra ``bench``), imported on first use.
 """
 
 from __future__ import annotations
@@ -11,22 +12,33 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import cv2 as _cv2
 import numpy as np
 
+from marsscene.errors import missing_dependency
 from marsscene.rover.config import RoverConfig
 from marsscene.transforms import quat_to_matrix
 
-cv2: Any = _cv2  # OpenCV's stubs reject the numpy arrays passed here
+__all__ = ["VOResult", "camera_poses", "corners", "gray", "pnp_step", "rgbd_vo"]
+
+
+def _cv2() -> Any:
+    """OpenCV, typed ``Any`` (its stubs reject the numpy arrays passed here)."""
+    try:
+        import cv2
+    except ImportError as err:
+        raise missing_dependency("cv2", "bench") from err
+    return cv2
 
 
 def gray(rgb: np.ndarray) -> np.ndarray:
+    """Grey image of an RGB frame (H, W, 3) uint8."""
+    cv2 = _cv2()
     return cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2GRAY)
 
 
 def corners(img: np.ndarray, max_corners: int = 3000) -> np.ndarray:
     """Shi-Tomasi corners (N, 2) float32 (quality 0.01, min distance 5 px)."""
-    pts = cv2.goodFeaturesToTrack(gray(img), max_corners, 0.01, 5)
+    pts = _cv2().goodFeaturesToTrack(gray(img), max_corners, 0.01, 5)
     return np.zeros((0, 2), np.float32) if pts is None else pts.reshape(-1, 2)
 
 
@@ -41,6 +53,7 @@ def pnp_step(
 
     Returns (inlier count, 4x4 transform of frame-0 points into frame 1, or None).
     """
+    cv2 = _cv2()
     g0, g1 = gray(rgb0), gray(rgb1)
     p0 = corners(rgb0)
     if len(p0) < 6:
@@ -87,6 +100,9 @@ def camera_poses(gt_xyz: np.ndarray, gt_quat_xyzw: np.ndarray, rover: RoverConfi
 
 @dataclass
 class VOResult:
+    """Figures of a frame-to-frame VO run: corners per frame, PnP inliers per consecutive
+    pair, end-point drift as a fraction of the camera path, and that path's length (m)."""
+
     corners_per_frame: np.ndarray
     inliers_per_pair: np.ndarray
     drift_fraction: float

@@ -1,7 +1,9 @@
 """Worlds and checks for the USD rover in Newton (``marsscene.sim.newton_rover``): a 15 deg slope,
 small and large rocks in the path, a sphere dropped on a rock, and the same ``cmd_vel`` plan in
 MuJoCo's runtime and in Newton. ``tests/usd_clients/test_newton_rover.py`` asserts on them and
-``perf/bench_newton.py`` prints them. Needs the extra ``newton`` (and ``sim`` for MuJoCo)."""
+``perf/interop/bench_newton.py`` prints them. Needs the extra ``newton`` (and ``sim`` for
+MuJoCo), imported on first use (:class:`~marsscene.sim.newton_rover.NewtonRover` raises
+:func:`marsscene.errors.missing_dependency` naming the extra)."""
 
 from __future__ import annotations
 
@@ -192,13 +194,13 @@ def check_sphere(tmp: Path) -> dict[str, Any]:
 
 def _mujoco_run(scene: Path, plan: list[tuple[float, float, int]]) -> Any:
     from marsscene.sim.rover_sim import RoverSim
-    from tests.support.drive import step
 
     sim = RoverSim(scene)
     out = [np.r_[sim.pose()[0], sim.yaw_rad()]]
     for v, w, n in plan:
         for _ in range(n):
-            step(sim, v, w)
+            sim.apply(v, w)  # one control period of cmd_vel, as a drive session makes it
+            sim.advance(sim.substeps)
             out.append(np.r_[sim.pose()[0], sim.yaw_rad()])
     return np.array(out)
 
