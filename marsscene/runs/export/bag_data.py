@@ -1,20 +1,23 @@
-"""Array content of the bag's messages, computed from a run folder (numpy + scipy, vectorised).
+"""Array content of the rover's ROS messages (numpy + scipy, vectorised over rows of samples).
 
-Kept apart from :mod:`marsscene.runs.export.bag` (the only rosbags importer) so each step can be
-tested on its own: ``map -> odom`` from ground truth and odometry, body twists, joint states,
-one LaserScan ring, depth images to metres and to organised point clouds.
+The steps that :mod:`.compose_state` and :mod:`.compose_sensors` compose, each testable on its
+own: ``map -> odom`` from ground truth and odometry, body twists, joint states, the odometry's
+6 x 6 covariances, one LaserScan ring, depth images to metres and to organised point clouds.
+The bag calls them on a whole run, the live publisher on its latest samples.
 """
 
 from __future__ import annotations
 
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from marsscene._validate import dataclass_from_mapping
 from marsscene.errors import RuntimeSimError
-from marsscene.rover.config import RoverConfig
+from marsscene.rover.config import NoiseConfig, RoverConfig
 from marsscene.rover.geometry import body_twists_from_wheels
 from marsscene.runs.tum import Trajectory
 
@@ -25,6 +28,8 @@ __all__ = [
     "joint_states",
     "laser_scan",
     "map_to_odom",
+    "noise_of_run",
+    "odometry_covariance_rows",
 ]
 
 
@@ -136,28 +141,26 @@ def depth_points(
 UNOBSERVED_VAR = 1e6
 
 
-def odometry_covariances(
-    run_meta: dict[str, Any], wheels: NDArray[np.float64], twist: NDArray[np.float64],
-    odom_t_s: NDArray[np.float64], odom_yaw_rad: NDArray[np.float64], rover: RoverConfig,
+def noise_of_run(run_meta: dict[str, Any]) -> NoiseConfig:
+    """The drive's :class:`~marsscene.rover.config.NoiseConfig` from ``run.json``
+    (keys that older versions wrote and this one does not know are ignored)."""
+    known = {f.name for f in fields(NoiseConfig)}
+    return dataclass_from_mapping(
+        NoiseConfig, {k: v for k, v in run_meta.get("noise", {}).items() if k in known}, "noise")
+
+
+def odometry_covariance_rows(
+    pose_xy_yaw: NDArray[np.float64], twist_v_omega: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """(N, 36) pose and twist covariances of ``/rover/odom`` from the run's simulated noise.
+    """(N, 36) pose and twist covariances of ``/rover/odom``.
 
     Row-major 6 x 6 in (x, y, z, roll, pitch, yaw) and (vx, vy, vz, wx, wy, wz), as
-    ``nav_msgs/Odometry`` orders them; computed by :mod:`marsscene.rover.odometry_covariance`
-    (the wheel-encoder noise of ``run.json``'s ``noise``; ``slip_mean`` is a bias, in none).
+    ``nav_msgs/Odometry`` orders them, from the (N, 3, 3) covariance of the dead-reckoned
+    ``(x, y, yaw)`` and the (N, 2, 2) one of ``(v, omega)``
+    (:mod:`marsscene.rover.odometry_covariance`); what wheel odometry does not observe gets
+    :data:`UNOBSERVED_VAR`.
     """
-    from dataclasses import fields
-
-    from marsscene._validate import dataclass_from_mapping
-    from marsscene.rover.config import NoiseConfig
-    from marsscene.rover.odometry_covariance import pose_covariance, twist_covariance
-
-    known = {f.name for f in fields(NoiseConfig)}  # run.json of older versions may hold more
-    noise = dataclass_from_mapping(
-        NoiseConfig, {k: v for k, v in run_meta.get("noise", {}).items() if k in known}, "noise")
-    n = len(odom_t_s)  # RunLog keeps one wheels row per odometry row
-    tw = twist_covariance(wheels[:n, 1:7], wheels[:n, 7:11], noise, rover)
-    pose3 = pose_covariance(odom_t_s, twist[:n, 0], odom_yaw_rad, tw)
+    n = len(pose_xy_yaw)
     pose = np.zeros((n, 6, 6))
     twist6 = np.zeros((n, 6, 6))
     for k in (2, 3, 4):
@@ -165,7 +168,7 @@ def odometry_covariances(
     for k in (1, 2, 3, 4):
         twist6[:, k, k] = UNOBSERVED_VAR
     ix = np.array([0, 1, 5])
-    pose[:, ix[:, None], ix[None, :]] = pose3
+    pose[:, ix[:, None], ix[None, :]] = pose_xy_yaw
     jx = np.array([0, 5])
-    twist6[:, jx[:, None], jx[None, :]] = tw
+    twist6[:, jx[:, None], jx[None, :]] = twist_v_omega
     return pose.reshape(n, 36), twist6.reshape(n, 36)

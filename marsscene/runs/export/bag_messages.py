@@ -1,10 +1,10 @@
 """ROS 2 message builders on one ``rosbags`` typestore and the time-ordered queue of a bag's
 messages (the only module that touches ``rosbags`` types; :mod:`.bag` writes the bag).
 
-Each builder makes one message from one sample's values; the bag (:mod:`.bag_topics`, from a
-run folder's files) and the live publisher (:mod:`.sample_messages`, from a drive's samples as
-they are made) call the same builders, and :meth:`MessageBuilder.serialize` gives the CDR bytes
-that both the bag and the DDS wire carry."""
+Each builder makes one message from the fields it is given; what goes into each topic is
+composed by :mod:`.compose_state` and :mod:`.compose_sensors`, which the bag (:mod:`.bag_topics`)
+and the live publisher (:mod:`.sample_messages`) both call, and :meth:`MessageBuilder.serialize`
+gives the CDR bytes that both the bag and the DDS wire carry."""
 
 from __future__ import annotations
 
@@ -18,7 +18,6 @@ import numpy as np
 from marsscene._threads import ordered_map
 from marsscene.errors import missing_dependency
 from marsscene.runs.export.topic_table import QOS_PROFILES, Topic
-from marsscene.runs.runlog import CameraStream
 
 __all__ = ["MessageBuilder"]
 
@@ -146,11 +145,6 @@ class MessageBuilder:
             header=self.header(t_s, frame), format=fmt_data[0],
             data=np.frombuffer(fmt_data[1], dtype=np.uint8),
         )
-
-    def camera_info(self, t_s: float, frame: str, cam: CameraStream, tx: float) -> Any:
-        """``sensor_msgs/CameraInfo`` of a run folder's camera stream."""
-        return self.camera_info_k(t_s, frame, cam.k, int(cam.intrinsics["width"]),
-                                  int(cam.intrinsics["height"]), tx)
 
     def camera_info_k(self, t_s: float, frame: str, k: Any, width: int, height: int,
                       tx: float) -> Any:
