@@ -194,12 +194,10 @@ class NavEpisode:
         ``obs``."""
         world = self.world
         assert world is not None
-        ag, dg = self._goals(obs)
         state = state if state is not None else self.state(obs)
-        vector = state.observation_vector(self.goal_xy_m[None],
-                                          np.asarray(self.last_action, dtype=np.float64)[None])
-        out: dict[str, np.ndarray] = {"observation": vector[0], "achieved_goal": ag,
-                                      "desired_goal": dg}
+        task = state.observations(self.goal_xy_m[None],
+                                  np.asarray(self.last_action, dtype=np.float64)[None])
+        out: dict[str, np.ndarray] = {k: v[0] for k, v in task.items()}
         if world.scanner is not None:
             out["height_scan"] = world.scanner(obs.gt_xyz_m, obs.gt_yaw_rad)
         if self.obs_config.camera is not None:

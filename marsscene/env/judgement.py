@@ -15,6 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from marsscene._xp import namespace
 from marsscene.env import taskmath
 from marsscene.env.state import RoverState
@@ -47,12 +49,20 @@ def goal_quantities(xy_m: Any, yaw_rad: Any, goal_xy_m: Any, steps_left: Any, *,
     the goal test on it and on the goal as ``info["desired_goal"]`` holds it, the distance and
     bearing to the goal itself."""
     xp = namespace(xy_m, goal_xy_m)
-    ag = xp.astype(xp.astype(xy_m, xp.float32), xp.float64)
-    dg = xp.astype(xp.astype(goal_xy_m, xp.float32), xp.float64)
-    return Quantities(xp=xp, dist_m=goal_distance_m(ag, goal_xy_m),
+    ag, dg = _float32_rounded(xp, xy_m), _float32_rounded(xp, goal_xy_m)
+    dist = goal_distance_m(ag, goal_xy_m)
+    return Quantities(xp=xp, zero=xp.zeros_like(dist), dist_m=dist,
                       bearing_rad=xp.abs(taskmath.bearing_rad(ag, goal_xy_m, yaw_rad)),
                       reached=goal_reached(ag, dg, tolerance_m), steps_left=steps_left,
                       steps_total=float(steps_total))
+
+
+def _float32_rounded(xp: Any, x: Any) -> Any:
+    """``x`` rounded to float32, as float64 (numpy's own ``astype`` for numpy arrays: the
+    namespace's wrapper costs more than the rounding on one rover)."""
+    if isinstance(x, np.ndarray):
+        return x.astype(np.float32).astype(np.float64)
+    return xp.astype(xp.astype(x, xp.float32), xp.float64)
 
 
 def judge_step(state: RoverState, *, start_xy_m: Any, goal_xy_m: Any, bounds_xy_m: Any,
@@ -87,11 +97,11 @@ def judge_step(state: RoverState, *, start_xy_m: Any, goal_xy_m: Any, bounds_xy_
     stuck = stuck_clock(state.xy_m, moving)
     fail = taskmath.failure_code(state.quat_wxyz, state.xy_m, bounds_xy_m, start_xy_m,
                                  goal_xy_m, stuck, task)
-    code = xp.where(q.reached, xp.ones_like(fail) * GOAL, fail)
+    code = xp.where(q.reached, fail * 0 + GOAL, fail)
     q.action, q.last_action, q.collided = action, last_action, collided
     q.strayed, q.progress_m = code == _STRAYED, last_distance_m - q.dist_m
     terms = reward_terms(q, reward)
-    total = xp.zeros_like(q.dist_m)
+    total = q.zero
     for value in terms.values():
         total = total + value
     terminated = code > 0

@@ -3,7 +3,7 @@
 Both physics produce it: the CPU environment's :class:`~marsscene.sim.session.DriveSession`
 observation (:meth:`RoverState.of_observation`, N = 1: noisy encoders and IMU, the pose the
 policy sees from odometry or the ground truth) and the batched environment's MuJoCo Warp
-buffers (N rovers, noise-free, :meth:`~marsscene.env.batch.BatchNavEnv.state`). The task's
+buffers (:meth:`RoverState.of_buffers`, N rovers, noise-free; ``BatchNavEnv.state()``). The task's
 functions (:mod:`.taskmath`, :mod:`.judgement`) read nothing else of the physics.
 """
 
@@ -14,8 +14,10 @@ from typing import Any
 
 import numpy as np
 
+from marsscene._xp import namespace
 from marsscene.env import taskmath
-from marsscene.rover.geometry import body_twist_from_wheels
+from marsscene.rover.geometry import body_twist_from_wheels, body_twists_from_wheels
+from marsscene.transforms import yaw_of_quat
 from marsscene.units import MARS_GRAVITY_M_S2
 
 __all__ = ["RoverState"]
@@ -74,9 +76,45 @@ class RoverState:
                    yaw_rad=one(obs.gt_yaw_rad), pose_xy_m=row(xy), pose_yaw_rad=one(yaw),
                    twist=row(twist), accel_m_s2=row(acc), gyro_rad_s=row(gyr))
 
+    @classmethod
+    def of_buffers(cls, qpos: Any, qvel: Any, sensordata: Any, ids: dict[str, Any],
+                   offsets_xy_m: Any, rover: Any) -> RoverState:
+        """N rovers from MuJoCo Warp's buffers (arrays (N, ...) of the batch's namespace):
+        ``ids`` the tiled model's indices (``qpos_root``, ``drive_dof``, ``steer_qpos``,
+        ``_acc_adr``, ``_gyr_adr``), ``offsets_xy_m`` (N, 2) each rover's tile offset (the
+        state is in each world's frame); noise-free sensors, the true pose observed."""
+        xp = namespace(qpos)
+        r = ids["qpos_root"]
+        xyz = xp.astype(qpos[:, r: r + 3], xp.float64)
+        xyz = xp.concat([xyz[:, :2] - offsets_xy_m, xyz[:, 2:]], axis=1)
+        quat = xp.astype(qpos[:, r + 3: r + 7], xp.float64)
+        yaw = yaw_of_quat(quat)
+        twist = body_twists_from_wheels(qvel[:, ids["drive_dof"]], qpos[:, ids["steer_qpos"]],
+                                        rover)
+        acc, gyr = ids["_acc_adr"], ids["_gyr_adr"]
+        return cls(xyz_m=xyz, quat_wxyz=quat, yaw_rad=yaw, pose_xy_m=xyz[:, :2],
+                   pose_yaw_rad=yaw, twist=twist,
+                   accel_m_s2=xp.astype(sensordata[:, acc: acc + 3], xp.float64),
+                   gyro_rad_s=xp.astype(sensordata[:, gyr: gyr + 3], xp.float64))
+
+    def observations(self, goal_xy_m: Any, last_action: Any) -> dict[str, Any]:
+        """The observation dict's entries of the task, (N, ...) each: ``observation`` (the
+        vector), ``achieved_goal`` (the position) and ``desired_goal`` (the goal), float32;
+        the environments add their sensors' (height scan, camera, LiDAR)."""
+        return {"observation": self.observation_vector(goal_xy_m, last_action),
+                "achieved_goal": _float32(self.xy_m), "desired_goal": _float32(goal_xy_m)}
+
     def observation_vector(self, goal_xy_m: Any, last_action: Any) -> Any:
         """The ``observation`` vector (N, 17) float32 (layout in :mod:`.observe`) towards goals
         ``goal_xy_m`` (N, 2), after ``last_action`` (N, 2)."""
         return taskmath.observation_vector(self.pose_xy_m, self.pose_yaw_rad, goal_xy_m,
                                            self.twist, self.accel_m_s2, self.gyro_rad_s,
                                            last_action)
+
+
+def _float32(x: Any) -> Any:
+    """``x`` as float32 (numpy's own ``astype`` for numpy arrays)."""
+    if isinstance(x, np.ndarray):
+        return x.astype(np.float32)
+    xp = namespace(x)
+    return xp.astype(x, xp.float32)

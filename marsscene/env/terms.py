@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Any
 
 __all__ = ["DENSE_TERMS", "FAILURES", "GOAL", "GOAL_TERMS", "SPARSE_TERMS", "TERMINATIONS",
-           "WEIGHTS", "Quantities", "RewardTerm", "reward_terms", "termination_code"]
+           "WEIGHTS", "Quantities", "RewardTerm", "reward_terms"]
 
 #: The ways an episode ends, by code (index): none, the goal, then the failures in the order
 #: they are judged.
@@ -33,21 +33,18 @@ GOAL = TERMINATIONS.index("goal")
 FAILURES = TERMINATIONS[GOAL + 1:]
 
 
-def termination_code(name: str) -> int:
-    """The code of a termination's name (``""``: 0, the episode goes on)."""
-    return TERMINATIONS.index(name)
-
-
 @dataclass
 class Quantities:
     """What the reward terms of a step read, each (N,) (``action`` and ``last_action`` (N, 2)).
 
     Goal terms read ``dist_m`` (to the goal), ``bearing_rad`` (its absolute bearing),
     ``reached``, ``steps_left`` and ``steps_total``; the others the actions, ``collided``,
-    ``strayed`` and ``progress_m`` (goal distance gained this step).
+    ``strayed`` and ``progress_m`` (goal distance gained this step). ``zero`` is zeros like
+    ``dist_m`` (made once: on one rover each array call costs more than its arithmetic).
     """
 
     xp: Any
+    zero: Any
     dist_m: Any
     bearing_rad: Any
     reached: Any
@@ -82,13 +79,12 @@ def _bearing(q: Quantities, w: float) -> Any:
 
 
 def _goal(q: Quantities, w: float) -> Any:
-    return q.xp.where(q.reached, w * 2.0 * q.steps_left / q.steps_total,
-                      q.xp.zeros_like(q.dist_m))
+    return q.xp.where(q.reached, w * 2.0 * q.steps_left / q.steps_total, q.zero)
 
 
 def _heading_away(q: Quantities, w: float) -> Any:
     b = q.bearing_rad
-    return q.xp.where(b > 2.0, w * b / q.steps_total, q.xp.zeros_like(q.dist_m))
+    return q.xp.where(b > 2.0, w * b / q.steps_total, q.zero)
 
 
 def _oscillation(q: Quantities, w: float) -> Any:
@@ -99,8 +95,7 @@ def _oscillation(q: Quantities, w: float) -> Any:
 
 
 def _when(flag: Any, value: float, q: Quantities) -> Any:
-    none = q.xp.zeros_like(q.dist_m)
-    return q.xp.where(flag, none + value, none)
+    return q.xp.where(flag, q.zero + value, q.zero)
 
 
 def _reverse(q: Quantities, w: float) -> Any:
@@ -120,8 +115,7 @@ def _progress(q: Quantities, w: float) -> Any:
 
 
 def _sparse_goal(q: Quantities, w: float) -> Any:
-    zero = q.xp.zeros_like(q.dist_m)
-    return q.xp.where(q.reached, zero, zero - w)
+    return q.xp.where(q.reached, q.zero, q.zero - w)
 
 
 #: The dense reward (RLRoverLab's terms; values and sources in :mod:`marsscene.env.reward`).

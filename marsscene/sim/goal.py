@@ -26,13 +26,17 @@ __all__ = ["GOAL_TOLERANCE_M", "goal_distance_m", "goal_reached"]
 def goal_distance_m(xy_m: Any, goal_xy_m: Any) -> Any:
     """The horizontal distance (m, float64) of positions ``xy_m`` (..., 2) from goals
     ``goal_xy_m`` (..., 2): ``sqrt(dx^2 + dy^2)``, as ``numpy.linalg.norm`` computes it."""
-    if not hasattr(xy_m, "shape"):
-        xy_m = np.asarray(xy_m, dtype=np.float64)
-    if not hasattr(goal_xy_m, "shape"):
-        goal_xy_m = np.asarray(goal_xy_m, dtype=np.float64)
+    if _plain(xy_m) and _plain(goal_xy_m):  # numpy's own calls: one rover's cost is the calls
+        d = np.asarray(xy_m, dtype=np.float64) - np.asarray(goal_xy_m, dtype=np.float64)
+        return np.sqrt(np.sum(d * d, axis=-1))
     xp = namespace(xy_m, goal_xy_m)
     d = xp.astype(xy_m, xp.float64) - xp.astype(goal_xy_m, xp.float64)
     return xp.sqrt(xp.sum(d * d, axis=-1))
+
+
+def _plain(x: Any) -> bool:
+    """``x`` is a numpy array or a plain sequence (not PyTorch or another array library's)."""
+    return isinstance(x, np.ndarray | np.generic | list | tuple)
 
 
 def goal_reached(xy_m: Any, goal_xy_m: Any, tolerance_m: float = GOAL_TOLERANCE_M) -> Any:

@@ -114,8 +114,8 @@ def _step_terms(action: np.ndarray, last: np.ndarray, *, collided: bool, strayed
                 cfg: RewardConfig) -> dict[str, float]:
     """The goal-free terms of one step of a 200-step episode (the table's)."""
     zero = np.zeros(1)
-    q = Quantities(xp=namespace(zero), dist_m=zero, bearing_rad=zero, reached=zero > 0,
-                   steps_left=zero, steps_total=200.0, action=action[None],
+    q = Quantities(xp=namespace(zero), zero=zero, dist_m=zero, bearing_rad=zero,
+                   reached=zero > 0, steps_left=zero, steps_total=200.0, action=action[None],
                    last_action=last[None], collided=np.array([collided]),
                    strayed=np.array([strayed]), progress_m=zero)
     return {k: float(v[0]) for k, v in reward_terms(q, cfg, goal=False).items()}

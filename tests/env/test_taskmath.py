@@ -126,8 +126,8 @@ def _all_terms(x: dict[str, np.ndarray], xp_asarray: Any) -> dict[str, Any]:
     b = taskmath.bearing_rad(a["xy"], a["goal"], a["yaw"])
     d = a["xy"][:, 0] * 0 + 3.0
     xp = namespace(d)
-    q = Quantities(xp=xp, dist_m=d, bearing_rad=abs(b), reached=d < 5, steps_left=d * 0 + 10,
-                   steps_total=750.0, action=a["act"], last_action=a["last"],
+    q = Quantities(xp=xp, zero=d * 0, dist_m=d, bearing_rad=abs(b), reached=d < 5,
+                   steps_left=d * 0 + 10, steps_total=750.0, action=a["act"], last_action=a["last"],
                    collided=a["act"][:, 0] > 0, strayed=a["act"][:, 1] > 0,
                    progress_m=a["yaw"] * 0.1)
     out.update(reward_terms(q, cfg))

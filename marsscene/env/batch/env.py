@@ -37,8 +37,7 @@ from marsscene.env.task import NavTask
 from marsscene.env.terms import GOAL
 from marsscene.errors import ConfigError
 from marsscene.rover.config import RoverConfig
-from marsscene.rover.geometry import body_twists_from_wheels, wheel_commands
-from marsscene.transforms import yaw_of_quat
+from marsscene.rover.geometry import wheel_commands
 
 __all__ = ["BatchNavEnv"]
 
@@ -241,30 +240,15 @@ class BatchNavEnv:
     def state(self) -> RoverState:
         """The rovers now, as the task reads them (each world's frame; noise-free sensors,
         the true pose)."""
-        ids, q, xp = self.ids, self._v["qpos"], self.xp
-        r = ids["qpos_root"]
-        xyz = xp.astype(q[:, r: r + 3], xp.float64)
-        off = self._offsets[self.world]
-        xyz = xp.concat([xyz[:, :2] - off, xyz[:, 2:]], axis=1)
-        quat = xp.astype(q[:, r + 3: r + 7], xp.float64)
-        yaw = yaw_of_quat(quat)
-        s = self._v["sensordata"]
-        twist = body_twists_from_wheels(self._v["qvel"][:, ids["drive_dof"]],
-                                        q[:, ids["steer_qpos"]], self.rover)
-        return RoverState(
-            xyz_m=xyz, quat_wxyz=quat, yaw_rad=yaw, pose_xy_m=xyz[:, :2], pose_yaw_rad=yaw,
-            twist=twist,
-            accel_m_s2=xp.astype(s[:, ids["_acc_adr"]: ids["_acc_adr"] + 3], xp.float64),
-            gyro_rad_s=xp.astype(s[:, ids["_gyr_adr"]: ids["_gyr_adr"] + 3], xp.float64))
+        v = self._v
+        return RoverState.of_buffers(v["qpos"], v["qvel"], v["sensordata"], self.ids,
+                                     self._offsets[self.world], self.rover)
 
     def observe(self, state: RoverState | None = None) -> dict[str, Any]:
         """The observations of the rovers in ``state`` (now, by default; the CPU environment's
         keys)."""
-        xp = self.xp
         st = state if state is not None else self.state()
-        out = {"observation": st.observation_vector(self.goal_xy_m, self.last_action),
-               "achieved_goal": xp.astype(st.xy_m, xp.float32),
-               "desired_goal": xp.astype(self.goal_xy_m, xp.float32)}
+        out = st.observations(self.goal_xy_m, self.last_action)
         if self.obs_config.height_scan is not None:
             out["height_scan"] = taskmath.height_scan(
                 self._grids, self._grid_origins, self._cell_m, st.xyz_m, st.yaw_rad,
