@@ -267,9 +267,9 @@ def _report(run: Any, out_dir: Path) -> None:
 def _write_rover_xml(scene_dir: Path, run: Any) -> Path:
     """``SCENE_DIR/mjcf/rover.xml``: the rover the drive attaches to the scene."""
     from marsscene._atomic import write_atomic
-    from marsscene.rover.config import RoverConfig
+    from marsscene.rover.config import CameraConfig, RoverConfig
     from marsscene.sim.rover_model import rover_mjcf
 
-    fovy = run.camera.fovy_deg if run.camera is not None else 60.0
+    fovy = (run.camera or CameraConfig()).fovy_deg  # the navcam, logged or not
     target = scene_dir / "mjcf" / "rover.xml"
     return write_atomic(target, rover_mjcf(RoverConfig(), camera_fovy_deg=fovy))

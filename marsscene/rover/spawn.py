@@ -13,7 +13,11 @@ from marsscene.errors import RuntimeSimError
 from marsscene.rover.config import RoverConfig
 from marsscene.transforms import quat_from_yaw_normal
 
-__all__ = ["spawn_pose"]
+__all__ = ["SETTLE_S", "spawn_pose"]
+
+#: Settling time of a spawned rover in s (wheels on the ground, brakes on) before time 0: the
+#: default of ``RoverSim`` and ``DriveOptions.settle_s``.
+SETTLE_S = 3.0
 
 
 def spawn_pose(hf: Any, xy: tuple[float, float], yaw: float,

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError, RuntimeSimError
 from marsscene.rover.config import RunConfig
+from marsscene.rover.spawn import SETTLE_S
 from marsscene.sim.corridor import CORRIDOR_M
 from marsscene.sim.pursuit import PursuitConfig
 from marsscene.sim.route import MAX_SLOPE_DEG, Route, author_route
@@ -58,7 +59,7 @@ class DriveOptions:
 
     max_slope_deg: float = MAX_SLOPE_DEG
     corridor_m: float = CORRIDOR_M
-    settle_s: float = 3.0
+    settle_s: float = SETTLE_S
     pursuit: PursuitConfig = field(default_factory=PursuitConfig)
     start_xy_m: tuple[float, float] | None = None
     start_yaw_rad: float = 0.0

@@ -20,9 +20,9 @@ from numpy.typing import NDArray
 
 from marsscene._atomic import write_atomic
 from marsscene.errors import RuntimeSimError
-from marsscene.rover.config import RoverConfig, RunConfig
+from marsscene.rover.config import CameraConfig, RoverConfig, RunConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, wheel_commands
-from marsscene.rover.spawn import spawn_pose
+from marsscene.rover.spawn import SETTLE_S, spawn_pose
 from marsscene.sim.corridor import CORRIDOR_M, cull_scene_xml
 from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.terrain import scene_heightfield
@@ -138,7 +138,7 @@ class RoverSim:
         start_xy_m: tuple[float, float] | None = None,
         start_yaw_rad: float = 0.0,
         edit_spec: Callable[[Any], None] | None = None,
-        settle_s: float = 3.0,
+        settle_s: float = SETTLE_S,
         contact_corridor_xy_m: Any = None,
         contact_corridor_m: float = CORRIDOR_M,
         soil: Any = None,
@@ -148,7 +148,7 @@ class RoverSim:
         self.scene_dir = Path(scene_dir)
         choice = soil if soil is not None else self.run.soil
         self.soil_map = read_soil_map(self.scene_dir) if choice is None else soil_map_of(choice)
-        fovy = self.run.camera.fovy_deg if self.run.camera is not None else 60.0
+        fovy = (self.run.camera or CameraConfig()).fovy_deg  # the navcam, logged or not
         self.rover_xml = rover_mjcf(self.rover, camera_fovy_deg=fovy)
         self._edit_spec = edit_spec
         self._corridor = (
