@@ -1,8 +1,12 @@
+# mypy: ignore-errors
+# (Warp's kernel language: its annotations and indexing are not Python's typing)
 """Warp kernels of the batched sensors: LiDAR ray generation (motion distortion included), the
 returns (range gate, dropouts, range noise, intensity, sensor-frame points) and the LiDAR
 site's twist from MuJoCo Warp's body velocities.
 
-Layout: world ``w``, ray ``j`` (firing order, ``column * channels + beam``). Every random draw
+Layout: world ``w``, ray ``j`` (firing order, ``column * channels + beam``). The rays are cast
+in another order (``slot[j]``: the LiDAR's ``cast_order``), so that neighbouring GPU threads
+trace neighbouring rays. Every random draw
 of world ``w``'s scan ``k`` comes from ``rand_init(mix(seed[w], k), j)``: a world's noise
 depends on its seed and scan count alone, never on the batch size or on the other worlds.
 """
@@ -27,18 +31,19 @@ def _rotation_about(v: wp.vec3) -> wp.mat33:
 
 @wp.kernel
 def world_rays(
-    site_xpos: wp.array2d(dtype=wp.vec3),
-    site_xmat: wp.array2d(dtype=wp.mat33),
+    site_xpos: wp.array2d[wp.vec3],
+    site_xmat: wp.array2d[wp.mat33],
     site: int,
-    dirs_sensor: wp.array(dtype=wp.vec3),
-    t_ray: wp.array(dtype=float),
-    t_column: wp.array(dtype=float),
-    twist: wp.array2d(dtype=float),
+    dirs_sensor: wp.array[wp.vec3],
+    t_ray: wp.array[float],
+    t_column: wp.array[float],
+    twist: wp.array2d[float],
     distort: int,
-    pnt_out: wp.array2d(dtype=wp.vec3),
-    vec_out: wp.array2d(dtype=wp.vec3),
+    pnt_out: wp.array2d[wp.vec3],
+    vec_out: wp.array2d[wp.vec3],
 ):
-    """Origin and unit direction of every ray in the world frame: from the site's pose, or with
+    """Origin and unit direction of every ray (in cast order: the sensor arrays are permuted)
+    in the world frame: from the site's pose, or with
     ``distort`` from the pose at each ray's firing time (the twist, angular then linear in the
     world frame, held for the sweep: the column's rotation, the ray's own translation)."""
     w, j = wp.tid()
@@ -61,29 +66,31 @@ def _scan_seed(seed: int, count: int) -> int:
 
 @wp.kernel
 def returns(
-    dist: wp.array2d(dtype=float),
-    normal: wp.array2d(dtype=wp.vec3),
-    vec: wp.array2d(dtype=wp.vec3),
-    dirs_sensor: wp.array(dtype=wp.vec3),
+    dist: wp.array2d[float],
+    normal: wp.array2d[wp.vec3],
+    vec: wp.array2d[wp.vec3],
+    dirs_sensor: wp.array[wp.vec3],
+    slot: wp.array[int],
     range_min_m: float,
     range_max_m: float,
     sigma_m: float,
     dropout: float,
     alpha_per_m: float,
-    seed: wp.array(dtype=int),
-    count: wp.array(dtype=int),
-    range_out: wp.array2d(dtype=float),
-    xyz_out: wp.array2d(dtype=wp.vec3),
-    intensity_out: wp.array2d(dtype=float),
-    valid_out: wp.array2d(dtype=wp.bool),
+    seed: wp.array[int],
+    count: wp.array[int],
+    range_out: wp.array2d[float],
+    xyz_out: wp.array2d[wp.vec3],
+    intensity_out: wp.array2d[float],
+    valid_out: wp.array2d[wp.bool],
 ):
     """The CPU LiDAR's returns (:meth:`marsscene.sensors.lidar.Lidar._returns`) on every ray:
     a hit within range that survives its dropout draw (one per ray, hit or not) returns its
     range plus Gaussian noise (floored at 0); intensity is ``|cos(incidence)| exp(-2 alpha r)``.
-    Rays without a return hold range 0, point 0, intensity 0."""
+    Rays without a return hold range 0, point 0, intensity 0. Output in firing order."""
     w, j = wp.tid()
+    i = slot[j]
     state = wp.rand_init(_scan_seed(seed[w], count[w]), j)
-    d = dist[w, j]
+    d = dist[w, i]
     ok = d >= range_min_m and d <= range_max_m
     if dropout > 0.0:
         if wp.randf(state) < dropout:
@@ -94,7 +101,7 @@ def returns(
         r = d
         if sigma_m > 0.0:
             r = wp.max(r + sigma_m * wp.randn(state), 0.0)
-        cos_inc = wp.abs(wp.dot(normal[w, j], vec[w, j]))
+        cos_inc = wp.abs(wp.dot(normal[w, i], vec[w, i]))
         inten = wp.min(cos_inc, 1.0) * wp.exp(-2.0 * alpha_per_m * r)
     range_out[w, j] = r
     xyz_out[w, j] = dirs_sensor[j] * r
@@ -103,7 +110,7 @@ def returns(
 
 
 @wp.kernel
-def advance(count: wp.array(dtype=int)):
+def advance(count: wp.array[int]):
     """One scan more in every world."""
     w = wp.tid()
     count[w] = count[w] + 1
@@ -111,13 +118,13 @@ def advance(count: wp.array(dtype=int)):
 
 @wp.kernel
 def site_twist(
-    cvel: wp.array2d(dtype=wp.spatial_vector),
-    subtree_com: wp.array2d(dtype=wp.vec3),
-    site_xpos: wp.array2d(dtype=wp.vec3),
-    body_rootid: wp.array(dtype=int),
+    cvel: wp.array2d[wp.spatial_vector],
+    subtree_com: wp.array2d[wp.vec3],
+    site_xpos: wp.array2d[wp.vec3],
+    body_rootid: wp.array[int],
     body: int,
     site: int,
-    twist_out: wp.array2d(dtype=float),
+    twist_out: wp.array2d[float],
 ):
     """The site's angular and linear velocity in the world frame (``mj_objectVelocity``'s
     order, ``flg_local=0``): the body's com-based velocity moved to the site."""

@@ -108,12 +108,16 @@ class BatchLidar:
         The geom groups it sees (default: 0 and 1, as the CPU LiDAR).
     render_context : mujoco_warp.RenderContext, optional
         A context whose BVH holds those groups (default: one built here, for ``nworld``).
+    cast_order : {"beam", "firing"}
+        The order the rays are traced in (the output is in firing order either way):
+        ``"beam"`` traces one beam's columns side by side (neighbouring threads follow nearly
+        parallel rays: sky with sky, ground with ground), ``"firing"`` a column's beams.
     """
 
     def __init__(self, mj_model: Any, model: Any, nworld: int,
                  config: LidarConfig | None = None, *, site: str | int = LIDAR_SITE,
                  seed: int = 0, geom_groups: tuple[int, ...] = LIDAR_GROUPS,
-                 render_context: Any = None) -> None:
+                 render_context: Any = None, cast_order: str = "beam") -> None:
         import mujoco_warp as mjw
         import warp as wp
 
@@ -124,6 +128,8 @@ class BatchLidar:
         self.body = int(mj_model.site_bodyid[self.site])
         dirs, self.ring, self.t_s = beam_geometry(spec)
         t_col = np.repeat(self.t_s.reshape(spec.horizontal_samples, -1)[:, 0], spec.channels)
+        order = _cast_order(spec, cast_order)  # order[i]: the ray traced in slot i
+        slot = np.argsort(order).astype(np.int32)
         self.rc = render_context if render_context is not None else mjw.create_render_context(
             mj_model, nworld=self.nworld, cam_active=[], render_rgb=False, render_depth=False,
             use_textures=False, enabled_geom_groups=list(geom_groups))
@@ -132,17 +138,20 @@ class BatchLidar:
         n, rays = self.nworld, len(dirs)
         self.groups = wp.types.vector(6, wp.float32)(*[float(g in geom_groups) for g in range(6)])
         with wp.ScopedDevice(model.geom_type.device):
-            self._dirs = wp.array(dirs.astype(np.float32), dtype=wp.vec3)
-            self._t_ray = wp.array(self.t_s.astype(np.float32), dtype=float)
-            self._t_col = wp.array(t_col.astype(np.float32), dtype=float)
+            self._dirs: Any = wp.array(dirs.astype(np.float32), dtype=wp.vec3)
+            self._slot: Any = wp.array(slot, dtype=int)
+            self._cast: dict[str, Any] = {  # world_rays' sensor arrays, in cast order
+                "dirs": wp.array(dirs[order].astype(np.float32), dtype=wp.vec3),
+                "t_ray": wp.array(self.t_s[order].astype(np.float32), dtype=float),
+                "t_col": wp.array(t_col[order].astype(np.float32), dtype=float)}
             self._exclude = wp.full(rays, -1, dtype=int)
             self._no_twist = wp.zeros((1, 6), dtype=float)
             self.twist = wp.zeros((n, 6), dtype=float)
-            self._pnt, self._vec = (wp.empty((n, rays), dtype=wp.vec3) for _ in range(2))
-            self._dist = wp.empty((n, rays), dtype=float)
-            self._geom = wp.empty((n, rays), dtype=int)
-            self._normal = wp.empty((n, rays), dtype=wp.vec3)
-            self._seed = wp.array(world_seeds(seed, n), dtype=int)
+            self._pnt, self._vec = (wp.zeros((n, rays), dtype=wp.vec3) for _ in range(2))
+            self._dist = wp.zeros((n, rays), dtype=float)
+            self._geom = wp.zeros((n, rays), dtype=int)
+            self._normal = wp.zeros((n, rays), dtype=wp.vec3)
+            self._seed: Any = wp.array(world_seeds(seed, n), dtype=int)
             self._count = wp.zeros(n, dtype=int)
             self.out = BatchScan(
                 range_m=wp.zeros((n, rays), dtype=float), xyz_m=wp.zeros((n, rays), dtype=wp.vec3),
@@ -191,13 +200,13 @@ class BatchLidar:
         if self.refit:
             mjw.refit_bvh(m, data, self.rc)
         wp.launch(k.world_rays, dim=dim, device=dev, inputs=[
-            data.site_xpos, data.site_xmat, self.site, self._dirs, self._t_ray, self._t_col,
+            data.site_xpos, data.site_xmat, self.site, *self._cast.values(),
             twist if distort else self._no_twist, int(distort)], outputs=[self._pnt, self._vec])
         mjw.rays(m, data, self._pnt, self._vec, self.groups, True, self._exclude, self._dist,
                  self._geom, self._normal, self.rc)
         o = self.out
         wp.launch(k.returns, dim=dim, device=dev, inputs=[
-            self._dist, self._normal, self._vec, self._dirs, spec.range_m[0], spec.range_m[1],
+            self._dist, self._normal, self._vec, self._dirs, self._slot, *spec.range_m,
             spec.range_noise_sigma_m, spec.dropout_probability, spec.dust_extinction_per_m,
             self._seed, self._count], outputs=[o.range_m, o.xyz_m, o.intensity, o.valid])
         wp.launch(k.advance, dim=n, inputs=[self._count], device=dev)
@@ -208,6 +217,16 @@ def _k() -> Any:
     from marsscene.sensors.batch import _kernels
 
     return _kernels
+
+
+def _cast_order(spec: LidarSpec, order: str) -> NDArray[np.intp]:
+    """The firing-order index of the ray traced in each slot."""
+    rays = np.arange(spec.horizontal_samples * spec.channels)
+    if order == "firing":
+        return rays
+    if order == "beam":  # slot beam * columns + column holds ray column * channels + beam
+        return np.asarray(rays.reshape(spec.horizontal_samples, spec.channels).T.ravel())
+    raise ConfigError(f"cast_order {order!r}; use 'beam' or 'firing'")
 
 
 def _site_id(mj_model: Any, site: str | int) -> int:

@@ -1,0 +1,234 @@
+"""The batched sensors (marsscene.sensors.batch) on a GPU: LiDAR scans a second and depth frames
+a second for thousands of rovers, on a tiled heightfield of the batch environment's shape.
+
+Usage::
+
+    python perf/bench_batch_sensors.py [--envs 256,1024,4096] [--lidars os1-64,os1-128]
+        [--cast-orders beam,firing] [--camera-envs 1024,4096] [--sizes 64x64,640x480]
+        [--device cuda:0] [--json OUT]
+
+The model is the batch environment's (:mod:`marsscene.env.batch.model`): W = 16 worlds as tiles
+of one heightfield, 60 m at 0.25 m posts, 2 m apart, with the rover attached; here the tiles
+are seeded fractal relief with rock domes (no scene builds: the script needs only mujoco,
+mujoco-warp and warp-lang). Rover i stands on tile i mod W at a seeded pose. Each figure times
+``repeat`` calls after one warm-up (the first call compiles and builds), the device synchronised
+before and after: a LiDAR scan is ray generation + ``mujoco_warp.rays`` (render-context BVH) +
+the returns' kernel; a depth frame is ``refit_bvh`` + ``render``. Building the render context
+(its heightfield mesh is built in Python) is timed apart.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+WORLDS, TILE_M, POST_M, GAP_M = 16, 60.0, 0.25, 2.0
+
+
+def tile(rng: np.random.Generator, posts: int) -> np.ndarray:
+    """Fractal relief (1/f^2 spectrum, about 1 m rms) with rock domes of 0.2 to 0.8 m."""
+    f = np.fft.fftfreq(posts)
+    k = np.hypot(*np.meshgrid(f, f))
+    spectrum = (rng.standard_normal((posts, posts)) + 1j * rng.standard_normal((posts, posts)))
+    z = np.real(np.fft.ifft2(spectrum / np.maximum(k, 1.0 / posts) ** 2))
+    z *= 1.0 / max(z.std(), 1e-9)
+    y, x = np.mgrid[0:posts, 0:posts] * POST_M
+    for cx, cy, d in zip(*rng.uniform(0, TILE_M, (2, 120)), rng.uniform(0.2, 0.8, 120),
+                         strict=True):
+        r2 = ((x - cx) ** 2 + (y - cy) ** 2) / (d / 2) ** 2
+        z += np.where(r2 < 1, 0.5 * d * np.sqrt(np.clip(1 - r2, 0, 1)), 0.0)
+    return z
+
+
+def tiled_model(seed: int = 0) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The worlds as tiles of one heightfield (tiled_model's layout) with the rover attached;
+    the offset of each tile's origin (W, 2); the posts' heights (rows along y, from 0)."""
+    import mujoco
+
+    from marsscene.sim.rover_model import rover_mjcf
+    from marsscene.sim.rover_sim import PREFIX
+
+    rng = np.random.default_rng(seed)
+    posts = round(TILE_M / POST_M) + 1
+    per_row, gap = math.ceil(math.sqrt(WORLDS)), math.ceil(GAP_M / POST_M)
+    pitch = posts + gap
+    rows = math.ceil(WORLDS / per_row)
+    z = np.full((rows * pitch - gap, per_row * pitch - gap), -4.0)
+    offsets = np.zeros((WORLDS, 2))
+    for w in range(WORLDS):
+        r, c = divmod(w, per_row)
+        z[r * pitch:r * pitch + posts, c * pitch:c * pitch + posts] = tile(rng, posts)
+        offsets[w] = (c * pitch * POST_M, r * pitch * POST_M)
+    lo, hi = float(z.min()), float(z.max())
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    rx, ry = (z.shape[1] - 1) * POST_M / 2.0, (z.shape[0] - 1) * POST_M / 2.0
+    hf = spec.add_hfield(name="terrain", size=[rx, ry, hi - lo, 1.0], nrow=z.shape[0],
+                         ncol=z.shape[1])
+    hf.userdata = ((z - lo) / (hi - lo)).astype(np.float32).ravel()
+    spec.worldbody.add_geom(name="terrain", type=mujoco.mjtGeom.mjGEOM_HFIELD,
+                            hfieldname="terrain", pos=[rx, ry, lo])
+    spec.attach(mujoco.MjSpec.from_string(rover_mjcf()), prefix=PREFIX,
+                frame=spec.worldbody.add_frame())
+    return spec.compile(), offsets, z
+
+
+@dataclass(frozen=True)
+class Tiles:
+    """The host model, its device copy, each tile's offset (W, 2) and the posts' heights."""
+
+    mj: Any
+    model: Any
+    offsets: np.ndarray
+    z: np.ndarray
+
+
+def batch_data(t: Tiles, n: int) -> Any:
+    """N rovers, rover i on tile i mod W at a seeded pose, its base 1 m above the ground, with
+    the kinematics and camera poses computed."""
+    import mujoco
+    import mujoco_warp as mjw
+    import warp as wp
+
+    rng = np.random.default_rng(n)
+    qpos = np.tile(t.mj.qpos0, (n, 1))
+    xy = t.offsets[np.arange(n) % WORLDS] + rng.uniform(10, TILE_M - 10, (n, 2))
+    yaw = rng.uniform(-np.pi, np.pi, n)
+    ground = t.z[np.rint(xy[:, 1] / POST_M).astype(int), np.rint(xy[:, 0] / POST_M).astype(int)]
+    qpos[:, 0:2], qpos[:, 2] = xy, ground + 1.0
+    qpos[:, 3], qpos[:, 6] = np.cos(yaw / 2), np.sin(yaw / 2)
+    data = mjw.put_data(t.mj, mujoco.MjData(t.mj), nworld=n)
+    wp.copy(data.qpos, wp.array(qpos.astype(np.float32)))
+    for step in (mjw.kinematics, mjw.com_pos, mjw.camlight):
+        step(t.model, data)
+    return data
+
+
+def timed(call: Any, repeat: int) -> float:
+    """Seconds per call (after one warm-up call)."""
+    import warp as wp
+
+    call()
+    wp.synchronize()
+    t0 = time.perf_counter()
+    for _ in range(repeat):
+        call()
+    wp.synchronize()
+    return (time.perf_counter() - t0) / repeat
+
+
+def rays_only(lidar: Any, data: Any) -> None:
+    """``mujoco_warp.rays`` alone on the scan's last rays (the rest of a scan is two kernels)."""
+    import mujoco_warp as mjw
+
+    mjw.rays(lidar.model, data, lidar._pnt, lidar._vec, lidar.groups, True, lidar._exclude,
+             lidar._dist, lidar._geom, lidar._normal, lidar.rc)
+
+
+def bench_lidar(t: Tiles, envs: list[int], lidars: list[str], orders: list[str],
+                repeat: int) -> list[dict[str, Any]]:
+    import mujoco_warp as mjw
+
+    from marsscene.rover.lidar import LidarConfig
+    from marsscene.sensors.batch import BatchLidar
+
+    rows = []
+    for n in envs:
+        data = batch_data(t, n)
+        t0 = time.perf_counter()
+        rc = mjw.create_render_context(t.mj, nworld=n, cam_active=[], render_rgb=False,
+                                       render_depth=False, use_textures=False,
+                                       enabled_geom_groups=[0, 1])
+        build_s = time.perf_counter() - t0
+        for name, order in [(name, order) for name in lidars for order in orders]:
+            lidar = BatchLidar(t.mj, t.model, n, LidarConfig(model=name), render_context=rc,
+                               cast_order=order)
+            s = timed(lambda lidar=lidar, data=data: lidar.scan(data), repeat)
+            ray_s = timed(lambda lidar=lidar, data=data: rays_only(lidar, data), repeat)
+            hit = float(lidar.out.valid.numpy().mean())
+            rows.append({"sensor": name, "cast_order": order, "envs": n,
+                         "rays": lidar.rays_per_scan, "s_per_batch": s, "scans_per_s": n / s,
+                         "grays_per_s": n * lidar.rays_per_scan / s / 1e9,
+                         "rays_share": ray_s / s, "returns": hit, "context_build_s": build_s})
+            print(f"{name:8s} {order:6s} N={n:5d}  {n / s:9.0f} scans/s  "
+                  f"{n * lidar.rays_per_scan / s / 1e9:5.2f} G rays/s  ({s * 1e3:7.1f} ms a "
+                  f"batch, rays() {100 * ray_s / s:3.0f} % of it; {100 * hit:4.1f} % of rays "
+                  f"return; context {build_s:.1f} s)", flush=True)
+            del lidar
+            gc.collect()
+        del rc, data
+        gc.collect()
+    return rows
+
+
+def bench_depth(t: Tiles, envs: list[int], sizes: list[tuple[int, int]], repeat: int
+                ) -> list[dict[str, Any]]:
+    from marsscene.rover.config import CameraConfig
+    from marsscene.sensors.batch import BatchDepthCamera
+
+    rows = []
+    for n in envs:
+        data = batch_data(t, n)
+        for w_px, h_px in sizes:
+            t0 = time.perf_counter()
+            cam = BatchDepthCamera(t.mj, t.model, n, CameraConfig(width_px=w_px, height_px=h_px))
+            build_s = time.perf_counter() - t0
+            s = timed(lambda cam=cam, data=data: cam.depth(data), repeat)
+            seen = float((cam.depth(data).numpy() > 0).mean())
+            rows.append({"sensor": f"depth {w_px}x{h_px}", "envs": n, "s_per_batch": s,
+                         "frames_per_s": n / s, "gpixels_per_s": n * w_px * h_px / s / 1e9,
+                         "seen": seen, "context_build_s": build_s})
+            print(f"depth {w_px}x{h_px:<4d} N={n:5d}  {n / s:9.0f} frames/s  "
+                  f"{n * w_px * h_px / s / 1e9:5.2f} G px/s  ({s * 1e3:7.1f} ms a batch; "
+                  f"{100 * seen:4.1f} % of pixels see ground; context {build_s:.1f} s)",
+                  flush=True)
+            del cam
+            gc.collect()
+        del data
+        gc.collect()
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--envs", default="256,1024,4096")
+    ap.add_argument("--lidars", default="os1-64,os1-128")
+    ap.add_argument("--cast-orders", default="beam", help="beam, firing or both")
+    ap.add_argument("--camera-envs", default="1024,4096")
+    ap.add_argument("--sizes", default="64x64,640x480")
+    ap.add_argument("--repeat", type=int, default=10)
+    ap.add_argument("--device", default=None)
+    ap.add_argument("--json", type=Path, default=None)
+    a = ap.parse_args()
+    import mujoco_warp as mjw
+    import warp as wp
+
+    wp.init()
+    device = a.device or ("cuda:0" if wp.is_cuda_available() else "cpu")
+    ints = lambda s: [int(v) for v in s.split(",") if v]  # noqa: E731
+    sizes = [tuple(int(v) for v in s.split("x")) for s in a.sizes.split(",") if s]
+    with wp.ScopedDevice(device):
+        t0 = time.perf_counter()
+        mj, offsets, z = tiled_model()
+        tiles = Tiles(mj, mjw.put_model(mj), offsets, z)
+        print(f"{wp.get_device(device).name}: {WORLDS} tiles of {TILE_M:.0f} m at {POST_M} m "
+              f"({mj.hfield_nrow[0]} x {mj.hfield_ncol[0]} posts), model in "
+              f"{time.perf_counter() - t0:.1f} s", flush=True)
+        rows = bench_lidar(tiles, ints(a.envs), a.lidars.split(","), a.cast_orders.split(","),
+                           a.repeat)
+        rows += bench_depth(tiles, ints(a.camera_envs), sizes, a.repeat)  # type: ignore[arg-type]
+    if a.json is not None:
+        a.json.write_text(json.dumps({"device": wp.get_device(device).name, "rows": rows},
+                                     indent=1))
+
+
+if __name__ == "__main__":
+    main()
