@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from marsscene._validate import plain
 from marsscene.errors import ConfigError
+from marsscene.rocks.budget import gib
 from marsscene.rocks.config import RockConfig
 from marsscene.rocks.placement import (
     PlacementGrid,
@@ -37,9 +38,6 @@ from marsscene.terrain.heightfield import Heightfield
 
 if TYPE_CHECKING:
     from marsscene.craters.table import CraterTable
-
-#: Working memory per rock while placing, with margin (measured peak ~320 B; the table keeps 112 B).
-BYTES_PER_ROCK = 500
 
 __all__ = ["intensity_map", "k_per_cell", "orientations", "place_rocks", "prototype_indices"]
 
@@ -165,7 +163,7 @@ def place_rocks(
     if lam.sum() > cfg.max_rocks:
         raise ConfigError(
             f"rocks: about {lam.sum():.3g} rocks expected with d_min_m = {cfg.d_min_m} on "
-            f"{hf.area_m2:.3g} m^2 (~{lam.sum() * BYTES_PER_ROCK / 2**30:.2g} GiB while "
+            f"{hf.area_m2:.3g} m^2 (~{gib(lam.sum()):.2g} GiB while "
             f"placing), above rocks.max_rocks = {cfg.max_rocks}; raise d_min_m or set "
             "rocks.max_rocks explicitly"
         )
