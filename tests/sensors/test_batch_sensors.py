@@ -187,6 +187,37 @@ def test_noise_and_dropouts_are_the_cpu_models(batch: Batch) -> None:
     np.testing.assert_allclose(np.linalg.norm(xyz, axis=1), n.range_m.numpy()[kept], rtol=1e-5)
 
 
+def _bounds(batch: Batch) -> np.ndarray:
+    """Each world's rectangle: 5 m around its rover (the edge of a smaller tile)."""
+    xy = batch.qpos[:, :2]
+    return np.concatenate([xy - 5.0, xy + 5.0], axis=1)
+
+
+def _outside(p: np.ndarray, bounds: np.ndarray, margin_m: float) -> np.ndarray:
+    """-1 inside by more than the margin, 1 outside by more, 0 within it of an edge."""
+    gap = np.max([bounds[0] - p[..., 0], bounds[1] - p[..., 1], p[..., 0] - bounds[2],
+                  p[..., 1] - bounds[3]], axis=0)
+    return np.where(gap < -margin_m, -1, np.where(gap > margin_m, 1, 0))
+
+
+def test_hits_outside_a_worlds_rectangle_are_no_returns(batch: Batch) -> None:
+    cfg = LidarConfig(model="os1-64", horizontal_samples=256, range_noise_sigma_m=0.0)
+    lidar = BatchLidar(batch.mj, batch.model, N, cfg)  # noise off: the points are the hits
+    bounds = _bounds(batch)
+    full = lidar.scan(batch.data)
+    valid, xyz = full.valid.numpy().copy(), full.xyz_m.numpy().copy()
+    clipped = lidar.scan(batch.data, bounds_xy_m=wp.array(bounds, dtype=float, device="cpu"))
+    kept = clipped.valid.numpy()
+    pos, rot = batch.data.site_xpos.numpy(), batch.data.site_xmat.numpy()
+    for w in range(N):
+        hit = pos[w, lidar.site] + xyz[w] @ rot[w, lidar.site].T
+        side = _outside(hit, bounds[w], 1e-3)
+        assert (side[valid[w]] == 1).sum() > 100  # the rectangle cuts the scan
+        np.testing.assert_array_equal(kept[w][side == -1], valid[w][side == -1])
+        assert not kept[w][side == 1].any()
+    np.testing.assert_array_equal(clipped.range_m.numpy()[kept], full.range_m.numpy()[kept])
+
+
 def _bytes(lidar: BatchLidar, data: Any, worlds: int) -> bytes:
     s = lidar.scan(data)
     return b"".join(a.numpy()[:worlds].tobytes() for a in (s.range_m, s.xyz_m, s.intensity,
@@ -222,6 +253,10 @@ def test_bad_arguments_say_what_is_wrong(batch: Batch) -> None:
     lidar = BatchLidar(batch.mj, batch.model, N, cfg)
     with pytest.raises(ConfigError, match="twist"):
         lidar.scan(batch.data, twist=wp.zeros((N, 3), dtype=float, device="cpu"))
+    with pytest.raises(ConfigError, match="bounds_xy_m"):
+        lidar.scan(batch.data, bounds_xy_m=wp.zeros((N, 2), dtype=float, device="cpu"))
+    with pytest.raises(ConfigError, match="world 3"):
+        lidar.scan(batch.data).returns(N)
     with pytest.raises(ConfigError, match="cast_order"):
         BatchLidar(batch.mj, batch.model, N, cfg, cast_order="random")
     with pytest.raises(ConfigError, match="no camera"):
@@ -256,6 +291,24 @@ def test_depth_matches_mujocos_renderer(batch: Batch, size: tuple[int, int]) -> 
             assert np.percentile(np.abs(depth[w] - expect)[near], 99) < 0.05
     finally:
         ref.close()
+
+
+def test_depth_outside_a_worlds_rectangle_is_nothing_seen(batch: Batch) -> None:
+    cam = BatchDepthCamera(batch.mj, batch.model, N, CameraConfig(width_px=48, height_px=32))
+    full = cam.depth(batch.data).numpy().copy()
+    bounds = _bounds(batch)
+    clipped = cam.depth(batch.data, bounds_xy_m=wp.array(bounds, dtype=float, device="cpu"))
+    clipped = clipped.numpy()
+    fx, fy, cx, cy = cam.intrinsics()
+    v, u = np.mgrid[0:32, 0:48] + 0.5
+    ray = np.stack([(u - cx) / fx, -(v - cy) / fy, -np.ones_like(u)], axis=-1)  # camera frame
+    pos, rot = batch.data.cam_xpos.numpy(), batch.data.cam_xmat.numpy()
+    for w in range(N):
+        seen = pos[w, cam.camera_id] + (ray * full[w][..., None]) @ rot[w, cam.camera_id].T
+        side = np.where(full[w] > 0, _outside(seen, bounds[w], 1e-3), 1)
+        assert (side == 1).mean() > 0.05 and (side == -1).mean() > 0.05
+        np.testing.assert_array_equal(clipped[w][side == -1], full[w][side == -1])
+        assert not clipped[w][side == 1].any()
 
 
 def _with_fovy(model: Any, camera_id: int, fovy_deg: float) -> Any:

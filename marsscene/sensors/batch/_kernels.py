@@ -64,11 +64,21 @@ def _scan_seed(seed: int, count: int) -> int:
     return int(wp.rand_init(seed, count))
 
 
+@wp.func
+def _inside(bounds: wp.array2d[float], w: int, p: wp.vec3) -> bool:
+    """Whether ``p`` lies over world ``w``'s rectangle (x0, y0, x1, y1)."""
+    return (p[0] >= bounds[w, 0] and p[1] >= bounds[w, 1] and p[0] <= bounds[w, 2]
+            and p[1] <= bounds[w, 3])
+
+
 @wp.kernel
 def returns(
     dist: wp.array2d[float],
     normal: wp.array2d[wp.vec3],
+    pnt: wp.array2d[wp.vec3],
     vec: wp.array2d[wp.vec3],
+    bounds: wp.array2d[float],
+    clip: int,
     dirs_sensor: wp.array[wp.vec3],
     slot: wp.array[int],
     range_min_m: float,
@@ -86,12 +96,16 @@ def returns(
     """The CPU LiDAR's returns (:meth:`marsscene.sensors.lidar.Lidar._returns`) on every ray:
     a hit within range that survives its dropout draw (one per ray, hit or not) returns its
     range plus Gaussian noise (floored at 0); intensity is ``|cos(incidence)| exp(-2 alpha r)``.
-    Rays without a return hold range 0, point 0, intensity 0. Output in firing order."""
+    With ``clip`` a hit outside the world's rectangle (``bounds``) is no return: in a tiled
+    batch, a neighbouring world's tile or the floor between tiles. Rays without a return hold
+    range 0, point 0, intensity 0. Output in firing order."""
     w, j = wp.tid()
     i = slot[j]
     state = wp.rand_init(_scan_seed(seed[w], count[w]), j)
     d = dist[w, i]
     ok = d >= range_min_m and d <= range_max_m
+    if clip != 0 and ok:
+        ok = _inside(bounds, w, pnt[w, i] + d * vec[w, i])
     if dropout > 0.0:
         if wp.randf(state) < dropout:
             ok = False
@@ -107,6 +121,26 @@ def returns(
     xyz_out[w, j] = dirs_sensor[j] * r
     intensity_out[w, j] = inten
     valid_out[w, j] = ok
+
+
+@wp.kernel
+def clip_depth(
+    rays: wp.array[wp.vec3],
+    cam_xpos: wp.array2d[wp.vec3],
+    cam_xmat: wp.array2d[wp.mat33],
+    camera: int,
+    bounds: wp.array2d[float],
+    depth: wp.array2d[float],
+):
+    """Planar depth 0 (nothing seen) where the pixel sees a point outside its world's
+    rectangle. ``rays``: each pixel's unit ray in the camera frame (the render context's)."""
+    w, k = wp.tid()
+    z = depth[w, k]
+    if z > 0.0:
+        ray = rays[k]
+        p = cam_xpos[w, camera] + cam_xmat[w, camera] @ (ray * (z / -ray[2]))
+        if not _inside(bounds, w, p):
+            depth[w, k] = 0.0
 
 
 @wp.kernel

@@ -78,14 +78,29 @@ class BatchDepthCamera:
         f = 0.5 * self.height / np.tan(np.radians(self.config.fovy_deg) / 2.0)
         return float(f), float(f), self.width / 2.0, self.height / 2.0
 
-    def depth(self, data: Any) -> Any:
+    def depth(self, data: Any, *, bounds_xy_m: Any = None) -> Any:
         """Planar depth in m of every world from ``data``'s current kinematics: a Warp array
         (N, height, width) float32, row 0 at the top, 0 where nothing is seen. The render
-        context's own buffer: overwritten by the next call; ``wp.to_torch`` views it."""
+        context's own buffer: overwritten by the next call; ``wp.to_torch`` views it.
+
+        ``bounds_xy_m`` (N, 4), optional: each world's rectangle ``x0, y0, x1, y1`` in the
+        model frame; a pixel that sees a point outside it sees nothing (a tiled batch's
+        neighbouring tiles, as :meth:`BatchLidar.scan <.lidar.BatchLidar.scan>`)."""
+        import warp as wp
+
+        from marsscene.sensors.batch import _kernels
+        from marsscene.sensors.batch.lidar import check_bounds
+
         if data.nworld != self.nworld:
             raise ConfigError(f"BatchDepthCamera was made for {self.nworld} worlds; data has "
                               f"{data.nworld}")
+        clip = check_bounds(bounds_xy_m, self.nworld)
         if self.refit:
             self._mjw.refit_bvh(self.model, data, self.rc)
         self._mjw.render(self.model, data, self.rc)
+        if clip:
+            rays = self.rc.ray[: self.width * self.height]
+            wp.launch(_kernels.clip_depth, dim=self.rc.depth_data.shape,
+                      inputs=[rays, data.cam_xpos, data.cam_xmat, self.camera_id, bounds_xy_m],
+                      outputs=[self.rc.depth_data], device=self.rc.depth_data.device)
         return self._depth

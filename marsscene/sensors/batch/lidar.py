@@ -30,7 +30,7 @@ from marsscene.errors import ConfigError
 from marsscene.rover.lidar import LidarConfig, LidarSpec
 from marsscene.sensors.lidar import beam_geometry
 
-__all__ = ["BatchLidar", "BatchScan", "world_seeds"]
+__all__ = ["BatchLidar", "BatchScan", "check_bounds", "world_seeds"]
 
 #: The LiDAR's site in a model with the rover attached (``marsscene.sim.rover_sim.PREFIX``).
 LIDAR_SITE = "rover/lidar"
@@ -75,14 +75,16 @@ class BatchScan:
     def returns(self, world: int) -> dict[str, NDArray[Any]]:
         """World ``world``'s scan as :meth:`marsscene.sensors.lidar.Lidar.scan` returns it
         (returns only, in firing order; a host copy)."""
-        valid = self.valid.numpy()[world]
-        idx = np.flatnonzero(valid)
+        if not 0 <= world < self.valid.shape[0]:
+            raise ConfigError(f"world {world} is out of range; the scan has "
+                              f"{self.valid.shape[0]}")
+        idx = np.flatnonzero(self.valid[world].numpy())  # one world's row is copied
         return {
-            "xyz_m": self.xyz_m.numpy()[world].reshape(-1, 3)[idx],
-            "intensity": self.intensity.numpy()[world][idx],
+            "xyz_m": self.xyz_m[world].numpy().reshape(-1, 3)[idx],
+            "intensity": self.intensity[world].numpy()[idx],
             "ring": self.ring[idx],
             "t_s": self.t_s[idx],
-            "range_m": self.range_m.numpy()[world][idx],
+            "range_m": self.range_m[world].numpy()[idx],
             "ray": idx.astype(np.int32),
         }
 
@@ -146,6 +148,7 @@ class BatchLidar:
                 "t_col": wp.array(t_col[order].astype(np.float32), dtype=float)}
             self._exclude = wp.full(rays, -1, dtype=int)
             self._no_twist = wp.zeros((1, 6), dtype=float)
+            self._no_bounds = wp.zeros((1, 4), dtype=float)
             self.twist = wp.zeros((n, 6), dtype=float)
             self._pnt, self._vec = (wp.zeros((n, rays), dtype=wp.vec3) for _ in range(2))
             self._dist = wp.zeros((n, rays), dtype=float)
@@ -178,7 +181,7 @@ class BatchLidar:
                           self.body, self.site], outputs=[self.twist], device=self.twist.device)
         return self.twist
 
-    def scan(self, data: Any, *, twist: Any = None) -> BatchScan:
+    def scan(self, data: Any, *, twist: Any = None, bounds_xy_m: Any = None) -> BatchScan:
         """One revolution in every world from ``data``'s current kinematics (``site_xpos``,
         ``site_xmat``, ``geom_xpos``: after ``mujoco_warp.step`` or ``kinematics``).
 
@@ -189,6 +192,10 @@ class BatchLidar:
             Each site's angular and linear velocity (world frame), held for the sweep: with
             the spec's ``motion_distortion`` each ray is cast from the pose at its firing time
             (:meth:`site_twist` gives it from ``data``). None: every ray from the current pose.
+        bounds_xy_m : warp array (N, 4), optional
+            Each world's rectangle ``x0, y0, x1, y1`` in the model frame: a hit outside it is
+            no return (a tiled batch's neighbouring tiles and the floor between them; the CPU
+            LiDAR's world ends at its edge). None: every hit counts.
         """
         wp, mjw, m, n = self._wp, self._mjw, self.model, self.nworld
         if data.nworld != n:
@@ -196,6 +203,7 @@ class BatchLidar:
         distort = twist is not None and self.spec.motion_distortion
         if distort and tuple(twist.shape) != (n, 6):
             raise ConfigError(f"twist must be ({n}, 6); got {tuple(twist.shape)}")
+        clip = check_bounds(bounds_xy_m, n)
         dim, dev, k, spec = (n, self.rays_per_scan), self._dist.device, _k(), self.spec
         if self.refit:
             mjw.refit_bvh(m, data, self.rc)
@@ -206,7 +214,9 @@ class BatchLidar:
                  self._geom, self._normal, self.rc)
         o = self.out
         wp.launch(k.returns, dim=dim, device=dev, inputs=[
-            self._dist, self._normal, self._vec, self._dirs, self._slot, *spec.range_m,
+            self._dist, self._normal, self._pnt, self._vec,
+            bounds_xy_m if clip else self._no_bounds, int(clip), self._dirs, self._slot,
+            *spec.range_m,
             spec.range_noise_sigma_m, spec.dropout_probability, spec.dust_extinction_per_m,
             self._seed, self._count], outputs=[o.range_m, o.xyz_m, o.intensity, o.valid])
         wp.launch(k.advance, dim=n, inputs=[self._count], device=dev)
@@ -217,6 +227,15 @@ def _k() -> Any:
     from marsscene.sensors.batch import _kernels
 
     return _kernels
+
+
+def check_bounds(bounds_xy_m: Any, n: int) -> bool:
+    """Whether there are bounds to clip by (raising if they are not (n, 4))."""
+    if bounds_xy_m is None:
+        return False
+    if tuple(bounds_xy_m.shape) != (n, 4):
+        raise ConfigError(f"bounds_xy_m must be ({n}, 4); got {tuple(bounds_xy_m.shape)}")
+    return True
 
 
 def _cast_order(spec: LidarSpec, order: str) -> NDArray[np.intp]:
