@@ -14,7 +14,7 @@ import pytest
 import marsscene as ms
 from marsscene.cli import main
 from marsscene.sim.control import OnStart
-from marsscene.sim.world import load_world
+from marsscene.sim.world import load_world, world_obstacles
 
 pytest.importorskip("mujoco")
 
@@ -69,6 +69,28 @@ def test_the_simulator_is_built_once_and_the_controller_gets_the_route(
     assert len(world.obstacles.radius_m) == total
     again = ms.drive(rocky_scene, waypoints=WP, seconds=0.1)
     np.testing.assert_array_equal(again.route.xy_m, run.route.xy_m)
+
+
+def test_rocks_that_touch_nothing_have_the_same_obstacles(rocky_scene: Path) -> None:
+    """A world to plan on compiles its rocks without contacts (no convex hulls): their discs
+    and heights, hence the routes planned around them, are the simulated rocks' to the bit."""
+    import mujoco
+
+    from marsscene.sim.rover_sim import load_scene_spec
+    from marsscene.sim.terrain import scene_heightfield
+
+    def world(contacts: bool) -> tuple[Any, Any]:
+        spec, _, _ = load_scene_spec(rocky_scene, rock_contacts=contacts)
+        model = spec.compile()
+        data = mujoco.MjData(model)
+        mujoco.mj_kinematics(model, data)
+        return model, world_obstacles(model, data, scene_heightfield(model))
+
+    (solid, a), (ghost, b) = world(True), world(False)
+    rocks = [i for i in range(solid.ngeom) if solid.geom(i).name.startswith("rock_")]
+    assert rocks and solid.geom_contype[rocks].all() and not ghost.geom_contype[rocks].any()
+    for key in ("xy_m", "radius_m", "height_m"):
+        np.testing.assert_array_equal(getattr(a, key), getattr(b, key))
 
 
 _NAV = '''
