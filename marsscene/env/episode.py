@@ -126,12 +126,13 @@ class NavEpisode:
         """Start judging an episode on a terrain of ``bounds_xy_m`` (``x0, y0, x1, y1``): the
         stuck clock restarts."""
         self.bounds_xy_m = np.asarray(bounds_xy_m, dtype=np.float64)
-        self.stuck_clock = StuckClock(np.zeros(1), (1,), self.task.stuck_steps(self.control_hz),
+        self.stuck_clock = StuckClock(np.zeros(1), (), self.task.stuck_steps(self.control_hz),
                                       self.task.stuck_m)
 
     # ---- each step -----------------------------------------------------------------------
     def state(self, obs: Any) -> RoverState:
-        """The rover's :class:`~marsscene.env.state.RoverState` (N = 1) at ``obs``."""
+        """The rover's :class:`~marsscene.env.state.RoverState` (one rover: batch shape
+        ``()``) at ``obs``."""
         return RoverState.of_observation(obs, self.rover, self.obs_config.pose_source)
 
     def step(self, obs: Any, action: NDArray[np.float64], v_m_s: float, omega_rad_s: float
@@ -143,22 +144,21 @@ class NavEpisode:
         self.steps_done += 1
         state = self.state(obs)
         j = judgement.judge_step(
-            state, start_xy_m=self.start_xy_m[None], goal_xy_m=self.goal_xy_m[None],
-            bounds_xy_m=self.bounds_xy_m[None],
-            steps_left=np.array([self.steps_total - self.steps_done]),
-            action=np.asarray(action, dtype=np.float64)[None],
-            last_action=np.asarray(self.last_action, dtype=np.float64)[None],
-            last_distance_m=np.array([self.last_distance_m]),
-            collided=np.array([self.world.collided()]),
-            moving=self.task.moving(np.array([v_m_s]), np.array([omega_rad_s])),
+            state, start_xy_m=self.start_xy_m, goal_xy_m=self.goal_xy_m,
+            bounds_xy_m=self.bounds_xy_m, steps_left=np.asarray(self.steps_total - self.steps_done),
+            action=np.asarray(action, dtype=np.float64),
+            last_action=np.asarray(self.last_action, dtype=np.float64),
+            last_distance_m=np.asarray(self.last_distance_m),
+            collided=np.asarray(self.world.collided()),
+            moving=np.asarray(self.task.moving(v_m_s, omega_rad_s)),
             stuck_clock=self.stuck_clock, task=self.task, reward=self.reward_config,
             steps_total=self.steps_total)
-        self.last_distance_m = float(j.distance_m[0])
-        terms = {k: float(v[0]) for k, v in j.terms.items()}
-        info = self.info(obs, terms, TERMINATIONS[int(j.code[0])])
+        self.last_distance_m = float(j.distance_m)
+        terms = {k: float(v) for k, v in j.terms.items()}
+        info = self.info(obs, terms, TERMINATIONS[int(j.code)])
         self.last_action = action
         obs_dict = self.observe(obs, state)
-        return obs_dict, float(j.reward[0]), bool(j.terminated[0]), bool(j.truncated[0]), info
+        return obs_dict, float(j.reward), bool(j.terminated), bool(j.truncated), info
 
     def _goals(self, obs: Any) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """``achieved_goal`` and ``desired_goal``: the rover's and the goal's x, y."""
@@ -173,11 +173,11 @@ class NavEpisode:
         left = self.steps_total - self.steps_done
         if not terms:
             q = judgement.goal_quantities(
-                np.asarray(obs.gt_xyz_m[:2], dtype=np.float64)[None],
-                np.array([obs.gt_yaw_rad], dtype=np.float64), self.goal_xy_m[None],
-                np.array([left]), tolerance_m=self.task.goal_tolerance_m,
+                np.asarray(obs.gt_xyz_m[:2], dtype=np.float64),
+                np.asarray(obs.gt_yaw_rad, dtype=np.float64), self.goal_xy_m,
+                np.asarray(left), tolerance_m=self.task.goal_tolerance_m,
                 steps_total=self.steps_total)
-            terms = {k: float(v[0])
+            terms = {k: float(v)
                      for k, v in reward_terms(q, self.reward_config, goal=True).items()}
         goal_free = [v for k, v in terms.items() if k not in GOAL_TERMS]
         return {"achieved_goal": ag, "desired_goal": dg,
@@ -195,9 +195,8 @@ class NavEpisode:
         world = self.world
         assert world is not None
         state = state if state is not None else self.state(obs)
-        task = state.observations(self.goal_xy_m[None],
-                                  np.asarray(self.last_action, dtype=np.float64)[None])
-        out: dict[str, np.ndarray] = {k: v[0] for k, v in task.items()}
+        out: dict[str, np.ndarray] = state.observations(
+            self.goal_xy_m, np.asarray(self.last_action, dtype=np.float64))
         if world.scanner is not None:
             out["height_scan"] = world.scanner(obs.gt_xyz_m, obs.gt_yaw_rad)
         if self.obs_config.camera is not None:

@@ -1,5 +1,6 @@
-"""The judgement of a navigation step, once, for the CPU environment (N = 1) and the batched
-one (N rovers): reward, terminated, truncated and the termination code.
+"""The judgement of a navigation step, once, for the CPU environment (one rover, batch shape
+``()``) and the batched one (N rovers, ``(N,)``): reward, terminated, truncated and the
+termination code.
 
 :class:`~marsscene.env.episode.NavEpisode` (``RoverNavEnv``) and
 :class:`~marsscene.env.batch.BatchNavEnv` call :func:`judge_step` with the step's
@@ -30,9 +31,10 @@ _STRAYED = GOAL + 1 + FAILURES.index("strayed")
 
 @dataclass(frozen=True)
 class Judgement:
-    """A step's judgement, each (N,): ``reward`` (the sum of ``terms``, each weighted, in table
-    order), ``terminated``, ``truncated``, ``code`` (:data:`~marsscene.env.terms.TERMINATIONS`)
-    and ``distance_m`` (the goal distance, the next step's ``last_distance_m``)."""
+    """A step's judgement, each of the batch shape (N,): ``reward`` (the sum of ``terms``, each
+    weighted, in table order), ``terminated``, ``truncated``, ``code``
+    (:data:`~marsscene.env.terms.TERMINATIONS`) and ``distance_m`` (the goal distance, the next
+    step's ``last_distance_m``)."""
 
     reward: Any
     terms: dict[str, Any]

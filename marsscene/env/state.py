@@ -1,8 +1,10 @@
-"""``RoverState``: the rover as the navigation task reads it, arrays with a batch axis (N,).
+"""``RoverState``: the rover as the navigation task reads it, arrays of a batch shape: (N,) for
+N rovers, () for one.
 
 Both physics produce it: the CPU environment's :class:`~marsscene.sim.session.DriveSession`
-observation (:meth:`RoverState.of_observation`, N = 1: noisy encoders and IMU, the pose the
-policy sees from odometry or the ground truth) and the batched environment's MuJoCo Warp
+observation (:meth:`RoverState.of_observation`, one rover, batch shape ``()``: noisy encoders and
+IMU, the pose the policy sees from odometry or the ground truth; the same functions on 1-element
+arrays cost a tenth more, 15-20 us a step) and the batched environment's MuJoCo Warp
 buffers (:meth:`RoverState.of_buffers`, N rovers, noise-free; ``BatchNavEnv.state()``). The task's
 functions (:mod:`.taskmath`, :mod:`.judgement`) read nothing else of the physics.
 """
@@ -25,7 +27,8 @@ __all__ = ["RoverState"]
 
 @dataclass(frozen=True)
 class RoverState:
-    """The task's view of N rovers (numpy or PyTorch arrays of one namespace, float64).
+    """The task's view of N rovers (numpy or PyTorch arrays of one namespace, float64); shapes
+    below for a batch (N,), without the N for one rover.
 
     Attributes
     ----------
@@ -59,8 +62,9 @@ class RoverState:
 
     @classmethod
     def of_observation(cls, obs: Any, rover: Any, pose_source: str = "truth") -> RoverState:
-        """One rover (N = 1) from a :class:`~marsscene.sim.control.Observation`; ``rover``
-        (a :class:`~marsscene.rover.config.RoverConfig`) turns wheel rates into the body twist,
+        """One rover (batch shape ``()``) from a :class:`~marsscene.sim.control.Observation`;
+        ``rover`` (a :class:`~marsscene.rover.config.RoverConfig`) turns wheel rates into the
+        body twist,
         ``pose_source`` ``"truth"`` or ``"odom"`` picks the observed pose. Before the first IMU
         sample the IMU reads gravity at rest."""
         if pose_source == "truth":
@@ -70,11 +74,10 @@ class RoverState:
         twist = body_twist_from_wheels(obs.wheel_rates_rad_s, obs.steer_rad, rover)
         acc = obs.accel_m_s2 if obs.accel_m_s2 is not None else (0.0, 0.0, MARS_GRAVITY_M_S2)
         gyr = obs.gyro_rad_s if obs.gyro_rad_s is not None else (0.0, 0.0, 0.0)
-        row = lambda v: np.asarray(v, dtype=np.float64).reshape(1, -1)  # noqa: E731
-        one = lambda v: np.asarray(v, dtype=np.float64).reshape(1)  # noqa: E731
-        return cls(xyz_m=row(obs.gt_xyz_m), quat_wxyz=row(obs.gt_quat_wxyz),
-                   yaw_rad=one(obs.gt_yaw_rad), pose_xy_m=row(xy), pose_yaw_rad=one(yaw),
-                   twist=row(twist), accel_m_s2=row(acc), gyro_rad_s=row(gyr))
+        f64 = lambda v: np.asarray(v, dtype=np.float64)  # noqa: E731
+        return cls(xyz_m=f64(obs.gt_xyz_m), quat_wxyz=f64(obs.gt_quat_wxyz),
+                   yaw_rad=f64(obs.gt_yaw_rad), pose_xy_m=f64(xy), pose_yaw_rad=f64(yaw),
+                   twist=f64(twist), accel_m_s2=f64(acc), gyro_rad_s=f64(gyr))
 
     @classmethod
     def of_buffers(cls, qpos: Any, qvel: Any, sensordata: Any, ids: dict[str, Any],

@@ -28,7 +28,7 @@ def goal_distance_m(xy_m: Any, goal_xy_m: Any) -> Any:
     ``goal_xy_m`` (..., 2): ``sqrt(dx^2 + dy^2)``, as ``numpy.linalg.norm`` computes it."""
     if _plain(xy_m) and _plain(goal_xy_m):  # numpy's own calls: one rover's cost is the calls
         d = np.asarray(xy_m, dtype=np.float64) - np.asarray(goal_xy_m, dtype=np.float64)
-        return np.sqrt(np.sum(d * d, axis=-1))
+        return np.sqrt(np.add.reduce(d * d, axis=-1))
     xp = namespace(xy_m, goal_xy_m)
     d = xp.astype(xy_m, xp.float64) - xp.astype(goal_xy_m, xp.float64)
     return xp.sqrt(xp.sum(d * d, axis=-1))

@@ -100,7 +100,7 @@ def test_the_cpu_environment_and_the_batch_call_one_judgement(env: BatchNavEnv, 
     one, calls = judgement.judge_step, []
 
     def spy(state: Any, **kw: Any) -> judgement.Judgement:
-        calls.append(state.xyz_m.shape[0])
+        calls.append(state.xyz_m.shape[:-1])
         return one(state, **kw)
 
     monkeypatch.setattr(judgement, "judge_step", spy)
@@ -112,7 +112,7 @@ def test_the_cpu_environment_and_the_batch_call_one_judgement(env: BatchNavEnv, 
         cpu.close()
     env.reset()
     env.step(np.zeros((N, 2)))
-    assert calls == [1, N]  # one rover, then the batch's N: the same function
+    assert calls == [(), (N,)]  # one rover, then the batch of N: the same function
     assert info["termination"] == ""
 
 
