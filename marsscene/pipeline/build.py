@@ -84,14 +84,9 @@ def build_scene(config: SceneConfig | None = None, *, seed: int, dem: DEM | None
     if lod_note:
         log.warning(lod_note)
         rec.notes.append(lod_note)
-    # a rock plan that cannot fit is refused early: before one grid's terrain, after a
-    # level-of-detail focus plan (the terrain's own refusal of a focus too large comes first)
-    if not config.terrain.lod:
-        check_rock_budget(config)
+    check_rock_budget(config, lod=False)  # one grid: a rock plan that cannot fit, before it
     with rec.stage("terrain"):
         terrain = terrain_stage(config, seed, dem, rec.models, rec.notes, rec.summary)
-    if config.terrain.lod:
-        check_rock_budget(config)
     world = terrain.world
     hf, coarse, craters = terrain.hf, world.coarse if world is not None else None, None
     if config.craters.enabled:
@@ -126,6 +121,7 @@ def _focus_tiles(config: SceneConfig, world: LodWorld, craters: CraterTable | No
                  rec: BuildRecord) -> Heightfield:
     from marsscene.pipeline.lod import focus_heightfield
 
+    check_rock_budget(config, lod=True)  # after the terrain's focus plan, before its tiles
     with rec.stage("tiles"):
         return focus_heightfield(world, craters, config.craters if craters is not None else None)
 

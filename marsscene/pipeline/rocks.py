@@ -49,15 +49,18 @@ def rock_levels(config: SceneConfig, hf: Heightfield, world: LodWorld | None,
     return levels, tiling if levels.two_level else None
 
 
-def check_rock_budget(config: SceneConfig) -> None:
-    """Refuse, before the terrain is built, a procedural scene whose rocks cannot fit
-    ``rocks.max_rocks`` (the stage's own refusal, a minute earlier on a large scene).
+def check_rock_budget(config: SceneConfig, *, lod: bool) -> None:
+    """Refuse early a procedural scene whose rocks cannot fit ``rocks.max_rocks`` (the rock
+    stage's own refusal, a minute earlier on a large scene); only for a scene whose
+    ``terrain.lod`` is ``lod`` (:func:`~marsscene.pipeline.build_scene` asks before a one-grid
+    terrain, and before a level-of-detail scene's focus tiles: after its focus plan, whose own
+    refusal of a focus too large to hold comes first).
 
     The footprint and focus square are taken 8 posts smaller than the terrain can make them
     (snapping, a focus that does not fit), so this refuses nothing the stage would accept.
     """
     rcfg, tcfg = config.rocks, config.terrain
-    if not rcfg.enabled or tcfg.source != "procedural":
+    if not rcfg.enabled or tcfg.source != "procedural" or bool(tcfg.lod) is not lod:
         return
     w, h = tcfg.effective_size_m
     margin = 8.0 * (tcfg.post_m if tcfg.post_m is not None else 0.25)

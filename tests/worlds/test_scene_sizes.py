@@ -139,6 +139,20 @@ def test_a_procedural_rock_plan_that_cannot_fit_is_refused_before_the_terrain(
         ms.build_scene(cfg, seed=1)
 
 
+def test_a_level_of_detail_rock_plan_that_cannot_fit_is_refused_before_the_tiles(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    import marsscene.pipeline.lod as lod
+
+    def no_tiles(*_: object) -> None:
+        raise AssertionError("the focus tiles were built")
+
+    monkeypatch.setattr(lod, "focus_heightfield", no_tiles)
+    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [3000.0, 3000.0]},
+                                 "craters": {"enabled": False}, "rocks": {"k": 0.3}})
+    with pytest.raises(ConfigError, match=r"focus square .* terrain.focus_size_m"):
+        ms.build_scene(cfg, seed=1)
+
+
 def _stage(hf: Heightfield, cfg: SceneConfig) -> ms.RockTable:
     rocks, _ = rock_stage(cfg, 11, hf, None, None, None, None, BuildRecord())
     return rocks
