@@ -33,6 +33,11 @@ __all__ = ["TerrainStage", "lod_inputs", "resolve_lod", "terrain_stage"]
 #: largest side of its focus square in posts (4000: 1 km at 0.25 m, 16 M posts).
 AUTO_OUTER_POSTS = 16_000_000
 AUTO_FOCUS_POSTS_PER_SIDE = 4000
+#: Posts above which ``terrain.lod = "auto"`` gives a procedural terrain two levels (a 1.58 km
+#: square at 0.25 m). Measured on the 2-core machine (perf/bench_scene_sizes.py): one 2 km grid
+#: built in 52.5 s at 2.76 GB peak, two levels in 41.8 s at 1.16 GB; one 2.5 km grid 104.5 s at
+#: 3.87 GB, two levels 48.5 s at 1.14 GB. ``--no-lod`` keeps one grid up to ``MAX_POSTS``.
+AUTO_ONE_GRID_POSTS = 40_000_000
 
 _FBM_CITATION = (
     "fractional Brownian surface by spectral synthesis (Saupe 1988; Turcotte 1997, "
@@ -161,7 +166,7 @@ def resolve_lod(config: SceneConfig, dem: DEM | None = None) -> tuple[SceneConfi
     """``terrain.lod = "auto"`` made true or false, and the note saying why when true.
 
     A procedural terrain whose full-resolution grid would hold more than
-    :data:`~marsscene.terrain.synth.MAX_POSTS` posts gets two levels: its ``post_m`` inside the
+    :data:`AUTO_ONE_GRID_POSTS` posts gets two levels: its ``post_m`` inside the
     ``focus_size_m`` square, and the smallest whole multiple of it outside that keeps the outer
     grid under :data:`AUTO_OUTER_POSTS`. A DEM scene is decided from the DEM's header by
     :func:`marsscene.pipeline.dem_lod.resolve_dem_lod`: a crop that one grid would refuse gets
@@ -184,14 +189,14 @@ def resolve_lod(config: SceneConfig, dem: DEM | None = None) -> tuple[SceneConfi
     post = tcfg.post_m if tcfg.post_m is not None else 0.25
     w, h = tcfg.effective_size_m
     posts = (round(w / post) + 1) * (round(h / post) + 1)
-    if posts <= MAX_POSTS:
+    if posts <= AUTO_ONE_GRID_POSTS:
         return config.replace(terrain=dataclasses.replace(tcfg, lod=False)), None
     k = max(2, math.ceil(math.sqrt(posts / AUTO_OUTER_POSTS)))
     focus = min(tcfg.focus_size_m, w, h, AUTO_FOCUS_POSTS_PER_SIDE * post)
     lod = dataclasses.replace(tcfg, lod=True, focus_post_m=post, post_m=post * k,
                               focus_size_m=focus)
     note = (f"terrain: a {w:g} x {h:g} m grid at {post:g} m posts would hold {posts:,} posts "
-            f"(limit {MAX_POSTS:,}), so the terrain has two levels (terrain.lod = \"auto\"): "
+            f"(one grid up to {AUTO_ONE_GRID_POSTS:,}), so the terrain has two levels (terrain.lod = \"auto\"): "
             f"{post:g} m posts in the central {focus:g} m square (move it with --focus-xy), "
             f"{post * k:g} m outside; --no-lod insists on one grid")
     return config.replace(terrain=lod), note
