@@ -133,7 +133,7 @@ def test_a_procedural_rock_plan_that_cannot_fit_is_refused_before_the_terrain(
         raise AssertionError("the terrain was built")
 
     monkeypatch.setattr(build, "terrain_stage", no_terrain)
-    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [2000.0, 2000.0]},
+    cfg = SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [1500.0, 1500.0]},
                                  "rocks": {"k": 0.3}})  # one grid: refused before its terrain
     with pytest.raises(ConfigError, match=r"^rocks: about 4.\d+e\+06 rocks .* focus square"):
         ms.build_scene(cfg, seed=1)
