@@ -6,6 +6,7 @@ Usage::
     python perf/bench_batch_sensors.py [--envs 256,1024,4096] [--lidars os1-64,os1-128]
         [--cast-orders beam,firing] [--camera-envs 1024,4096] [--sizes 64x64,640x480]
         [--device cuda:0] [--json OUT]
+    python perf/bench_batch_sensors.py --as-env 4096   # as an environment calls them
 
 The model is the batch environment's (:mod:`marsscene.env.batch.model`): W = 16 worlds as tiles
 of one heightfield, 60 m at 0.25 m posts, 2 m apart, with the rover attached; here the tiles
@@ -197,6 +198,72 @@ def bench_depth(t: Tiles, envs: list[int], sizes: list[tuple[int, int]], repeat:
     return rows
 
 
+def tile_bounds(t: Tiles, n: int) -> Any:
+    """Each rover's tile rectangle (x0, y0, x1, y1) in the model frame, (n, 4) on the device."""
+    import warp as wp
+
+    lo = t.offsets[np.arange(n) % WORLDS]
+    return wp.array(np.concatenate([lo, lo + TILE_M], axis=1), dtype=float)
+
+
+def graph_of(call: Any) -> Any:
+    """``call`` captured as a CUDA graph: a function that replays it."""
+    import warp as wp
+
+    call()  # compile and allocate outside the capture
+    with wp.ScopedCapture() as cap:
+        call()
+    return lambda: wp.capture_launch(cap.graph)
+
+
+def bench_as_env(t: Tiles, n: int, repeat: int) -> list[dict[str, Any]]:
+    """The sensors as an environment would call them: an OS1-128 scan with motion distortion
+    (the site's twist) and 64 x 64 depth, both clipped to each rover's tile; eagerly and as
+    CUDA graphs; and whether two LiDARs of one seed (and two frames) give the same bytes."""
+    import hashlib
+
+    import warp as wp
+
+    from marsscene.rover.config import CameraConfig
+    from marsscene.rover.lidar import LidarConfig
+    from marsscene.sensors.batch import BatchDepthCamera, BatchLidar
+
+    data, bounds = batch_data(t, n), tile_bounds(t, n)
+    lidar = BatchLidar(t.mj, t.model, n, LidarConfig(model="os1-128"), seed=1)
+    cam = BatchDepthCamera(t.mj, t.model, n, CameraConfig(width_px=64, height_px=64))
+    calls = {"os1-128 scan, twist, tile bounds":
+             lambda: lidar.scan(data, twist=lidar.site_twist(data), bounds_xy_m=bounds),
+             "depth 64x64, tile bounds": lambda: cam.depth(data, bounds_xy_m=bounds)}
+    rows, cuda = [], wp.get_device().is_cuda
+    for name, call in calls.items():
+        modes = {"eager": call}
+        if cuda:
+            try:
+                modes["graph"] = graph_of(call)
+            except Exception as err:  # a figure of the report, not a failure
+                print(f"{name}: CUDA graph capture failed: {err}", flush=True)
+        for mode, run in modes.items():
+            s = timed(run, repeat)
+            rows.append({"sensor": name, "mode": mode, "envs": n, "per_s": n / s})
+            print(f"{name:34s} {mode} N={n:5d}  {n / s:9.0f} a second ({s * 1e3:7.1f} ms)",
+                  flush=True)
+
+    def digest(arrays: Any) -> str:
+        return hashlib.sha256(b"".join(a.numpy().tobytes() for a in arrays)).hexdigest()[:16]
+
+    scans = []
+    for _ in range(2):
+        other = BatchLidar(t.mj, t.model, n, LidarConfig(model="os1-128"), seed=1,
+                           render_context=lidar.rc)
+        s_ = other.scan(data, bounds_xy_m=bounds)
+        scans.append(digest([s_.range_m, s_.intensity, s_.valid]))
+        del other
+    frames = [digest([cam.depth(data, bounds_xy_m=bounds)]) for _ in range(2)]
+    print(f"same bytes: LiDAR of one seed {scans[0] == scans[1]} ({scans[0]}), depth "
+          f"{frames[0] == frames[1]} ({frames[0]})", flush=True)
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--envs", default="256,1024,4096")
@@ -205,6 +272,8 @@ def main() -> None:
     ap.add_argument("--camera-envs", default="1024,4096")
     ap.add_argument("--sizes", default="64x64,640x480")
     ap.add_argument("--repeat", type=int, default=10)
+    ap.add_argument("--as-env", type=int, default=0, metavar="N",
+                    help="instead: N rovers' sensors as an environment calls them (GPU)")
     ap.add_argument("--device", default=None)
     ap.add_argument("--json", type=Path, default=None)
     a = ap.parse_args()
@@ -222,9 +291,13 @@ def main() -> None:
         print(f"{wp.get_device(device).name}: {WORLDS} tiles of {TILE_M:.0f} m at {POST_M} m "
               f"({mj.hfield_nrow[0]} x {mj.hfield_ncol[0]} posts), model in "
               f"{time.perf_counter() - t0:.1f} s", flush=True)
-        rows = bench_lidar(tiles, ints(a.envs), a.lidars.split(","), a.cast_orders.split(","),
-                           a.repeat)
-        rows += bench_depth(tiles, ints(a.camera_envs), sizes, a.repeat)  # type: ignore[arg-type]
+        if a.as_env:
+            rows = bench_as_env(tiles, a.as_env, a.repeat)
+        else:
+            rows = bench_lidar(tiles, ints(a.envs), a.lidars.split(","),
+                               a.cast_orders.split(","), a.repeat)
+            rows += bench_depth(tiles, ints(a.camera_envs), sizes,  # type: ignore[arg-type]
+                                a.repeat)
     if a.json is not None:
         a.json.write_text(json.dumps({"device": wp.get_device(device).name, "rows": rows},
                                      indent=1))
