@@ -14,7 +14,11 @@ from typing import Any
 
 def _child(fn: Callable[[], Any], queue: Any) -> None:
     t0 = time.perf_counter()
-    extra = fn()
+    try:
+        extra = fn()
+    except BaseException as err:  # the parent raises it (else it would wait for ever)
+        queue.put(("error", f"{type(err).__name__}: {err}", None))
+        raise
     wall = time.perf_counter() - t0
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     queue.put((wall, peak_mb, extra))
@@ -23,7 +27,8 @@ def _child(fn: Callable[[], Any], queue: Any) -> None:
 def measure(fn: Callable[[], Any]) -> tuple[float, float, Any]:
     """Run ``fn`` in a fresh process; return ``(wall_s, peak_rss_mb, fn's return value)``.
 
-    ``fn`` must be a module-level function (picklable under the 'fork' start method too).
+    ``fn`` must be a module-level function (picklable under the 'fork' start method too). An
+    exception in the child is raised here as a ``RuntimeError`` naming it.
     """
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
@@ -31,6 +36,8 @@ def measure(fn: Callable[[], Any]) -> tuple[float, float, Any]:
     proc.start()
     result = queue.get()
     proc.join()
+    if result[0] == "error":
+        raise RuntimeError(f"{getattr(fn, '__name__', fn)} failed in its process: {result[1]}")
     return result
 
 

@@ -1,0 +1,1 @@
+"""Fidelity: figures measured against a truth (geometry, physics, images)."""

@@ -1,0 +1,1 @@
+"""Interoperability: other tools reading or driving what marsscene makes (USD, Newton, DDS)."""

@@ -1,0 +1,1 @@
+"""Speed and memory: wall time, peak RSS, steps or scans a second."""

@@ -1,0 +1,1 @@
+"""Studies: parameter sweeps and one-off investigations behind the results pages."""
