@@ -139,12 +139,14 @@ def lookup(row: dict[str, Any], key: str) -> Any:
 
 def select(recs: Sequence[dict[str, Any]], *, size: str | None = None,
            where: Sequence[str] = (), latest: bool = False) -> list[dict[str, Any]]:
-    """The records of ``size``, matching every ``KEY=VALUE`` of ``where``, and (``latest``)
-    of the most recent run only."""
+    """The records of ``size``, matching every ``KEY=VALUE`` (or not matching ``KEY!=VALUE``)
+    of ``where``, and (``latest``) of the most recent run only."""
     rows = [r for r in recs if size is None or r.get("size") == size]
     for cond in where:
         key, _, want = cond.partition("=")
-        rows = [r for r in rows if str(lookup(flat(r), key)) == want]
+        negate = key.endswith("!")
+        key = key.removesuffix("!")
+        rows = [r for r in rows if (str(lookup(flat(r), key)) == want) != negate]
     if latest and rows:
         last = max(r["utc"] for r in rows)
         rows = [r for r in rows if r["utc"] == last]

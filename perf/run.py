@@ -6,7 +6,7 @@ Usage::
     python perf/run.py NAME --help                       # its parameters, quick and full values
     python perf/run.py NAME [--size quick|full] [--PARAM VALUE ...] [--json FILE | --no-json]
     python perf/run.py all --size quick                  # every registered benchmark
-    python perf/run.py table FILE [--columns KEY[:FMT][=HEADER],...] [--size full] [--latest]
+    python perf/run.py table FILE [-c KEY[:FMT][=HEADER] ...] [--size full] [--latest]
 
 ``NAME`` is a module's name without ``bench_`` (``craters`` is ``perf/speed/bench_craters.py``).
 A run prints its figures and appends one JSON line per figure set to ``--json`` (default
@@ -83,11 +83,13 @@ def table_command(argv: Sequence[str]) -> str:
     ap = argparse.ArgumentParser(prog="perf/run.py table",
                                  description="A Markdown table from a results file.")
     ap.add_argument("file", type=Path)
-    ap.add_argument("--columns", type=lambda s: [c for c in s.split(",") if c], default=[],
-                    help="KEY[:FORMAT][=HEADER],... (keys: figures.*, params.*, machine.*, "
-                         "utc, git_sha; a bare KEY tries figures. then params.)")
+    ap.add_argument("-c", "--column", action="append", default=[], dest="columns",
+                    help="KEY[:FORMAT][=HEADER], repeatable, in order (keys: figures.*, "
+                         "params.*, machine.*, utc, git_sha; a bare KEY tries figures. then "
+                         "params.; FORMAT as in format(), e.g. .2f)")
     ap.add_argument("--size", choices=suite.SIZES, default=None)
-    ap.add_argument("--where", action="append", default=[], help="KEY=VALUE (repeatable)")
+    ap.add_argument("--where", action="append", default=[],
+                    help="KEY=VALUE or KEY!=VALUE (repeatable)")
     ap.add_argument("--latest", action="store_true", help="the most recent run's records only")
     args = ap.parse_args(list(argv))
     recs = results.select(results.read(args.file), size=args.size, where=args.where,
