@@ -16,10 +16,8 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from marsscene._validate import dataclass_from_mapping
-from marsscene.errors import RuntimeSimError
 from marsscene.rover.config import NoiseConfig, RoverConfig
 from marsscene.rover.geometry import body_twists_from_wheels
-from marsscene.runs.tum import Trajectory
 
 __all__ = [
     "body_twist_from_poses",
@@ -30,32 +28,43 @@ __all__ = [
     "map_to_odom",
     "noise_of_run",
     "odometry_covariance_rows",
+    "rate_of_change",
 ]
 
 
+def rate_of_change(values: NDArray[np.float64], t_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """d(values)/dt along the rows (N >= 2): ``np.gradient`` (central differences inside,
+    one-sided at the ends); for two rows, their difference quotient, as ``np.gradient``
+    computes it, without its set-up (a live stream's two latest samples, every step)."""
+    if len(t_s) == 2:
+        d = (values[1:] - values[:1]) / (t_s[1] - t_s[0])
+        return np.concatenate([d, d])
+    return np.gradient(values, t_s, axis=0)
+
+
 def map_to_odom(
-    gt: Trajectory, odom: Trajectory
+    gt_xyz_m: NDArray[np.float64], gt_rot: Rotation, odom_xyz_m: NDArray[np.float64],
+    odom_rot: Rotation,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``T_map_odom = T_map_base (GT) * T_odom_base^-1 (odometry)`` at the shared stamps.
+    """``T_map_odom = T_map_base (GT) * T_odom_base^-1 (odometry)``, row by row.
 
-    Returns translations (N, 3) and quaternions (N, 4, x y z w). The drive logs both at the
-    control rate on the same clock; other stamps are an error.
+    Positions (N, 3) and orientations (scipy ``Rotation`` of N) of ground truth and odometry
+    at the same stamps; returns translations (N, 3) and quaternions (N, 4, x y z w).
     """
-    if len(gt) != len(odom) or not np.allclose(gt.timestamps_s, odom.timestamps_s, atol=1e-6):
-        raise RuntimeSimError("gt.tum and odom.tum must have the same stamps (one control clock)")
-    r_gt, r_od = Rotation.from_quat(gt.quat_xyzw), Rotation.from_quat(odom.quat_xyzw)
-    rot = r_gt * r_od.inv()
-    xyz = gt.xyz_m - rot.apply(odom.xyz_m)
-    return xyz, rot.as_quat()
+    rot = gt_rot * odom_rot.inv()
+    return gt_xyz_m - rot.apply(odom_xyz_m), rot.as_quat()
 
 
-def body_twist_from_poses(traj: Trajectory) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Body-frame linear (m/s) and angular (rad/s) velocity by central differences, (N, 3) each."""
-    t = traj.timestamps_s
+def body_twist_from_poses(
+    t_s: NDArray[np.float64], xyz_m: NDArray[np.float64], rot: Rotation
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Body-frame linear (m/s) and angular (rad/s) velocity, (N, 3) each, of poses at stamps
+    ``t_s`` (positions (N, 3), orientations a ``Rotation`` of N): central differences inside,
+    one-sided ones at the ends (``np.gradient``); zero for a single pose."""
+    t = t_s
     if len(t) < 2:
         return np.zeros((len(t), 3)), np.zeros((len(t), 3))
-    rot = Rotation.from_quat(traj.quat_xyzw)
-    v_world = np.gradient(traj.xyz_m, t, axis=0)
+    v_world = rate_of_change(xyz_m, t)
     rotvec = np.zeros((len(t), 3))
     step = (rot[:-1].inv() * rot[1:]).as_rotvec() / np.diff(t)[:, None]  # body rates per interval
     rotvec[1:-1] = 0.5 * (step[:-1] + step[1:])
@@ -76,7 +85,7 @@ def joint_states(
     t, rates, steer = wheels[:, 0], wheels[:, 1:7], wheels[:, 7:11]
     dt = np.diff(t, prepend=t[0])
     angle = np.cumsum(rates * dt[:, None], axis=0)
-    steer_rate = np.gradient(steer, t, axis=0) if len(t) > 1 else np.zeros_like(steer)
+    steer_rate = rate_of_change(steer, t) if len(t) > 1 else np.zeros_like(steer)
     return (
         np.hstack([angle, steer]),
         np.hstack([rates, steer_rate]),

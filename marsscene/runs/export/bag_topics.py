@@ -69,7 +69,7 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     bag.add("/rover/robot_description", t0, cs.robot_description, bag, run.rover, statics)
     for t in run.imu[:, 0]:
         bag.add("/clock", t, bag.clock, t)
-    f = cs.control_fields(cs.ControlRows.of_run(run), run.rover, bd.noise_of_run(run.meta))
+    f = cs.ControlFields(cs.ControlRows.of_run(run), run.rover, bd.noise_of_run(run.meta))
     for i, t in enumerate(f.t_s):
         bag.add("/tf", t, cs.tf, bag, f, i)
         bag.add("/rover/odom", t, cs.odometry, bag, f, i)

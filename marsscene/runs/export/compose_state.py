@@ -3,7 +3,7 @@
 The bag (:mod:`.bag_topics`, all of a run folder's samples at once) and the live publisher
 (:class:`~.sample_messages.SampleMessages`, each sample as the drive makes it) both compute the
 fields of ``/tf``, ``/rover/odom``, ``/rover/GT_Trajectory`` and ``/rover/joint_states`` with
-:func:`control_fields` and build each message with :func:`tf`, :func:`odometry`,
+:class:`ControlFields` and build each message with :func:`tf`, :func:`odometry`,
 :func:`ground_truth` and :func:`joint_states`; ``/rover/imu_noisy``'s covariances with
 :func:`imu_variances` (``MessageBuilder.imu`` builds both IMU topics); ``/rover/wheel_soil``
 with :func:`wheel_soil`; the latched topics with :func:`tf_static` and
@@ -24,12 +24,14 @@ ones, which have no next sample, backward ones: one function on what each side k
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from marsscene.errors import RuntimeSimError
 from marsscene.rover.config import NoiseConfig, RoverConfig
 from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS
 from marsscene.rover.odometry_covariance import (
@@ -40,11 +42,10 @@ from marsscene.rover.odometry_covariance import (
 from marsscene.runs.export import bag_data as bd
 from marsscene.runs.export.frames import StaticTransform, rover_urdf
 from marsscene.runs.export.imu_noise import imu_noise_of
-from marsscene.runs.tum import Trajectory
 
-__all__ = ["JOINT_NAMES", "Carry", "ControlFields", "ControlRows", "control_fields",
-           "ground_truth", "imu_variances", "joint_states", "odometry",
-           "robot_description", "tf", "tf_static", "wheel_soil"]
+__all__ = ["JOINT_NAMES", "Carry", "ControlFields", "ControlRows", "ground_truth",
+           "imu_variances", "joint_states", "odometry", "robot_description", "tf", "tf_static",
+           "wheel_soil"]
 
 #: ``/rover/joint_states`` names, in the order of its positions and velocities.
 JOINT_NAMES = [*DRIVE_JOINTS, *STEER_JOINTS]
@@ -54,57 +55,37 @@ Float = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class ControlRows:
-    """Control-rate samples of a drive, one row each, on one clock.
+    """Control-rate samples of a drive, one row each, on one clock (N first on every array).
 
-    ``gt`` (``base_link`` in ``map``) and ``odom`` (wheel odometry, ``base_link`` in ``odom``)
-    are trajectories of the same stamps; ``wheels`` holds the ``wheels.csv`` columns (N, 11):
-    stamp, the six drive rates (rad/s), the four steering angles (rad).
+    ``gt_*``: ``base_link`` in ``map`` (ground truth); ``odom_*``: the wheel odometry,
+    ``base_link`` in ``odom``; quaternions x y z w; ``wheels`` holds the ``wheels.csv``
+    columns (N, 11): stamp, the six drive rates (rad/s), the four steering angles (rad).
     """
 
-    gt: Trajectory
-    odom: Trajectory
+    t_s: Float
+    gt_xyz_m: Float
+    gt_quat_xyzw: Float
+    odom_xyz_m: Float
+    odom_quat_xyzw: Float
     wheels: Float
 
     @classmethod
     def of_run(cls, run: Any) -> ControlRows:
-        """The rows of a run folder (:class:`~marsscene.runs.runlog.RunLog`)."""
-        return cls(run.gt, run.odom, run.wheels)
+        """The rows of a run folder (:class:`~marsscene.runs.runlog.RunLog`); its ground
+        truth and odometry must share their stamps (one control clock)."""
+        gt, od = run.gt, run.odom
+        if len(gt) != len(od) or not np.allclose(gt.timestamps_s, od.timestamps_s, atol=1e-6):
+            raise RuntimeSimError("gt.tum and odom.tum must have the same stamps (one control "
+                                  "clock)")
+        return cls(od.timestamps_s, gt.xyz_m, gt.quat_xyzw, od.xyz_m, od.quat_xyzw, run.wheels)
 
     @classmethod
     def of_samples(cls, samples: list[tuple[Any, ...]]) -> ControlRows:
         """Rows of live samples ``(t_s, gt_xyz_m, gt_quat_xyzw, odom_xyz_m, odom_quat_xyzw,
         rates_rad_s, steer_rad)``, oldest first."""
-        t, gx, gq, ox, oq, rates, steer = (np.asarray(c, dtype=np.float64)
+        t, gx, gq, ox, oq, rates, steer = (np.array(c, dtype=np.float64)
                                            for c in zip(*samples, strict=True))
-        return cls(Trajectory(t, gx, gq), Trajectory(t, ox, oq),
-                   np.hstack([t[:, None], rates.reshape(-1, 6), steer.reshape(-1, 4)]))
-
-
-@dataclass(frozen=True)
-class ControlFields:
-    """Every field of the control-rate topics at each row (N first on every array).
-
-    ``map_odom_*``: ``map -> odom`` (from ground truth); ``odom_*`` and ``gt_*``: the poses;
-    ``twist``: the odometry's ``(v m/s, omega rad/s)`` from the wheels; ``pose_cov`` /
-    ``twist_cov``: ``/rover/odom``'s row-major 6 x 6 covariances; ``gt_lin_m_s`` /
-    ``gt_ang_rad_s``: the ground-truth body twist; ``joint_position`` / ``joint_velocity``: in
-    :data:`JOINT_NAMES` order.
-    """
-
-    t_s: Float
-    map_odom_xyz_m: Float
-    map_odom_quat_xyzw: Float
-    odom_xyz_m: Float
-    odom_quat_xyzw: Float
-    twist: Float
-    pose_cov: Float
-    twist_cov: Float
-    gt_xyz_m: Float
-    gt_quat_xyzw: Float
-    gt_lin_m_s: Float
-    gt_ang_rad_s: Float
-    joint_position: Float
-    joint_velocity: Float
+        return cls(t, gx, gq, ox, oq, np.hstack([t[:, None], rates, steer]))
 
 
 class Carry:
@@ -118,9 +99,17 @@ class Carry:
         self.pose = PoseCovarianceStep()
 
 
-def control_fields(rows: ControlRows, rover: RoverConfig, noise: NoiseConfig,
-                   carry: Carry | None = None) -> ControlFields:
-    """The fields of ``/tf``, ``/rover/odom``, ``/rover/GT_Trajectory``, ``/rover/joint_states``.
+class ControlFields:
+    """Every field of ``/tf``, ``/rover/odom``, ``/rover/GT_Trajectory`` and
+    ``/rover/joint_states`` at each row (N first on every array).
+
+    ``odom_*`` and ``gt_*``: the poses; ``twist``: the odometry's ``(v m/s, omega rad/s)``
+    from the wheels; ``pose_cov`` / ``twist_cov``: ``/rover/odom``'s row-major 6 x 6
+    covariances; ``joint_position`` / ``joint_velocity``: in :data:`JOINT_NAMES` order. These
+    are computed at once (a live stream's integrals advance every sample); ``map_odom``
+    (``map -> odom`` from ground truth) and ``gt_twist`` (the ground truth's body twist) when
+    first read, so a live topic nobody takes costs nothing (the bag's message
+    threads may read one at once: both compute the same arrays).
 
     Parameters
     ----------
@@ -131,31 +120,50 @@ def control_fields(rows: ControlRows, rover: RoverConfig, noise: NoiseConfig,
     noise : NoiseConfig
         The drive's simulated noise (the odometry's covariances).
     carry : Carry, optional
-        A live stream's running integrals, advanced to the new sample; then only the new
-        sample's fields are returned (N = 1).
+        A live stream's running integrals, advanced to the new sample; the fields are then
+        the new sample's alone (N = 1).
     """
-    mo_xyz, mo_q = bd.map_to_odom(rows.gt, rows.odom)
-    pos, vel, twist = bd.joint_states(rows.wheels, rover)
-    gt_lin, gt_ang = bd.body_twist_from_poses(rows.gt)
-    od, t = rows.odom, rows.odom.timestamps_s
-    tw = twist_covariance(rows.wheels[:, 1:7], rows.wheels[:, 7:11], noise, rover)
-    if carry is None:
-        yaw = np.unwrap(Rotation.from_quat(od.quat_xyzw).as_euler("xyz")[:, 2])
-        pose3 = pose_covariance(t, twist[:, 0], yaw, tw)
-        pose_cov, twist_cov = bd.odometry_covariance_rows(pose3, tw)
-        return ControlFields(t, mo_xyz, mo_q, od.xyz_m, od.quat_xyzw, twist, pose_cov,
-                             twist_cov, rows.gt.xyz_m, rows.gt.quat_xyzw, gt_lin, gt_ang, pos, vel)
-    pose3 = np.zeros((3, 3))
-    if len(t) == 2:  # the step from the previous sample, heading as it was there
-        yaw_prev = float(Rotation.from_quat(od.quat_xyzw[0]).as_euler("xyz")[2])
-        pose3 = carry.pose.step(float(t[1] - t[0]), float(twist[1, 0]), yaw_prev, tw[1])
-    carry.angle_rad = carry.angle_rad + pos[-1, :6]  # the rows' own integral starts at 0
-    pos[-1, :6] = carry.angle_rad
-    pose_cov, twist_cov = bd.odometry_covariance_rows(pose3[None], tw[-1:])
-    new = slice(len(t) - 1, len(t))
-    return ControlFields(t[new], mo_xyz[new], mo_q[new], od.xyz_m[new], od.quat_xyzw[new],
-                         twist[new], pose_cov, twist_cov, rows.gt.xyz_m[new],
-                         rows.gt.quat_xyzw[new], gt_lin[new], gt_ang[new], pos[new], vel[new])
+
+    def __init__(self, rows: ControlRows, rover: RoverConfig, noise: NoiseConfig,
+                 carry: Carry | None = None) -> None:
+        t, n = rows.t_s, len(rows.t_s)
+        self.rows, self.new = rows, slice(0 if carry is None else n - 1, n)
+        self._r_od = Rotation.from_quat(rows.odom_quat_xyzw)
+        pos, vel, twist = bd.joint_states(rows.wheels, rover)
+        tw = twist_covariance(rows.wheels[:, 1:7], rows.wheels[:, 7:11], noise, rover)
+        yaw = self._r_od.as_euler("xyz")[:, 2]
+        if carry is None:
+            pose3 = pose_covariance(t, twist[:, 0], np.unwrap(yaw), tw)
+        else:
+            pose3 = np.zeros((1, 3, 3))
+            if n == 2:  # the step from the previous sample, heading as it was there
+                pose3[0] = carry.pose.step(float(t[1] - t[0]), float(twist[1, 0]),
+                                           float(yaw[0]), tw[1])
+            carry.angle_rad = carry.angle_rad + pos[-1, :6]  # the rows' integral starts at 0
+            pos[-1, :6] = carry.angle_rad
+        new = self.new
+        self.pose_cov, self.twist_cov = bd.odometry_covariance_rows(pose3, tw[new])
+        self.t_s, self.twist = t[new], twist[new]
+        self.joint_position, self.joint_velocity = pos[new], vel[new]
+        self.odom_xyz_m, self.odom_quat_xyzw = rows.odom_xyz_m[new], rows.odom_quat_xyzw[new]
+        self.gt_xyz_m, self.gt_quat_xyzw = rows.gt_xyz_m[new], rows.gt_quat_xyzw[new]
+
+    @cached_property
+    def _r_gt(self) -> Rotation:
+        return Rotation.from_quat(self.rows.gt_quat_xyzw)
+
+    @cached_property
+    def map_odom(self) -> tuple[Float, Float]:
+        """``map -> odom``: translations (N, 3) and quaternions (N, 4)."""
+        xyz, q = bd.map_to_odom(self.rows.gt_xyz_m, self._r_gt, self.rows.odom_xyz_m,
+                                self._r_od)
+        return xyz[self.new], q[self.new]
+
+    @cached_property
+    def gt_twist(self) -> tuple[Float, Float]:
+        """The ground truth's body twist: linear (N, 3, m/s) and angular (N, 3, rad/s)."""
+        lin, ang = bd.body_twist_from_poses(self.rows.t_s, self.rows.gt_xyz_m, self._r_gt)
+        return lin[self.new], ang[self.new]
 
 
 def tf(b: Any, f: ControlFields, i: int, map_tf: bool = True) -> Any:
@@ -163,7 +171,8 @@ def tf(b: Any, f: ControlFields, i: int, map_tf: bool = True) -> Any:
     publishes it) and ``odom -> base_link``."""
     od = (f.odom_xyz_m[i], f.odom_quat_xyzw[i])
     if map_tf:
-        return b.state_tf(f.t_s[i], (f.map_odom_xyz_m[i], f.map_odom_quat_xyzw[i]), od)
+        xyz, q = f.map_odom
+        return b.state_tf(f.t_s[i], (xyz[i], q[i]), od)
     return b.tf_message([b.tf(f.t_s[i], "odom", "base_link", *od)])
 
 
@@ -176,8 +185,8 @@ def odometry(b: Any, f: ControlFields, i: int) -> Any:
 
 def ground_truth(b: Any, f: ControlFields, i: int) -> Any:
     """``/rover/GT_Trajectory`` at row ``i``: ground truth in ``map``, its body twist."""
-    return b.odometry(f.t_s[i], "map", f.gt_xyz_m[i], f.gt_quat_xyzw[i], f.gt_lin_m_s[i],
-                      f.gt_ang_rad_s[i])
+    lin, ang = f.gt_twist
+    return b.odometry(f.t_s[i], "map", f.gt_xyz_m[i], f.gt_quat_xyzw[i], lin[i], ang[i])
 
 
 def joint_states(b: Any, f: ControlFields, i: int) -> Any:

@@ -109,7 +109,7 @@ class SampleMessages:
         row = (t, gt[0], _xyzw(gt[1]), odom[0], _xyzw(odom[1]), rates, steer)
         rows = [row] if self._prev is None else [self._prev, row]
         self._prev = row
-        f = cs.control_fields(cs.ControlRows.of_samples(rows), self.rover, self.noise,
+        f = cs.ControlFields(cs.ControlRows.of_samples(rows), self.rover, self.noise,
                               self._carry)
         out: Pairs = []
         if want("/tf"):

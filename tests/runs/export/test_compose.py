@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 from collections import Counter, defaultdict
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +26,6 @@ from marsscene.runs.export.bag_topics import ImageOptions
 from marsscene.runs.export.imu_noise import rate_hz
 from marsscene.runs.export.sample_messages import SampleMessages
 from marsscene.runs.runlog import RunLog, read_image, read_ply
-from marsscene.runs.tum import Trajectory
 
 IMAGES = ImageOptions(images="both", depth_cloud=True)
 STATE = ("/clock", "/tf", "/rover/cmd_vel", "/rover/odom", "/rover/GT_Trajectory",
@@ -38,18 +38,19 @@ def _wxyz(q_xyzw: np.ndarray) -> np.ndarray:
 
 def _replay(run: RunLog, sm: SampleMessages) -> dict[tuple[str, int], bytes]:
     """The run's logged samples through the live publisher, one at a time, as a drive hands
-    them to its listeners (quaternions as the TUM files hold them, not yet normalised)."""
+    them to its listeners."""
     got: dict[tuple[str, int], bytes] = {}
 
     def keep(t: float, pairs: list[tuple[str, Any]]) -> None:
         for topic, msg in pairs:
             got[(topic, round(float(t) * 1e9))] = bytes(sm.b.serialize(msg))
 
-    gt, od = np.loadtxt(run.path / "gt.tum"), np.loadtxt(run.path / "odom.tum")
-    for i, t in enumerate(run.odom.timestamps_s):
+    gt, od = run.gt, run.odom
+    for i, t in enumerate(od.timestamps_s):
         w = run.wheels[i]
         keep(t, sm.control(t, run.cmd[i, 1], run.cmd[i, 2], w[1:7], w[7:11],
-                           (gt[i, 1:4], _wxyz(gt[i, 4:8])), (od[i, 1:4], _wxyz(od[i, 4:8]))))
+                           (gt.xyz_m[i], _wxyz(gt.quat_xyzw[i])),
+                           (od.xyz_m[i], _wxyz(od.quat_xyzw[i]))))
     for noisy, true in zip(run.imu, run.imu_true, strict=True):
         keep(noisy[0], sm.imu(noisy[0], noisy[1:4], noisy[4:7], true[1:4], true[4:7]))
     cams = run.camera_streams()
@@ -101,7 +102,7 @@ def replayed(stereo_run: Path, tmp_path_factory: pytest.TempPathFactory):
 
 def test_bag_and_live_call_the_one_composition(stereo_run: Path, tmp_path: Path, monkeypatch):
     """A spy on each composing function: writing the bag and publishing live both go through
-    it (the control fields once for the whole bag, once per sample live)."""
+    it (the control-rate fields once for the whole bag, once per sample live)."""
     calls: Counter[tuple[str, str]] = Counter()
     side = ["bag"]
     for module in (compose_state, compose_sensors):
@@ -112,6 +113,13 @@ def test_bag_and_live_call_the_one_composition(stereo_run: Path, tmp_path: Path,
                     calls[(side[0], _name)] += 1
                     return _fn(*a, **k)
                 monkeypatch.setattr(module, name, spy)
+
+    class Fields(compose_state.ControlFields):
+        def __init__(self, *a: Any, **k: Any) -> None:
+            calls[(side[0], "ControlFields")] += 1
+            super().__init__(*a, **k)
+
+    monkeypatch.setattr(compose_state, "ControlFields", Fields)
     run = RunLog(stereo_run)
     write_bag(stereo_run, tmp_path / "bag", images="both", depth_cloud=True)
     side[0] = "live"
@@ -122,10 +130,11 @@ def test_bag_and_live_call_the_one_composition(stereo_run: Path, tmp_path: Path,
     live = {name for s, name in calls if s == "live"}
     every = {name for m in (compose_state, compose_sensors) for name in m.__all__
              if callable(getattr(m, name)) and not isinstance(getattr(m, name), type)}
+    every.add("ControlFields")
     # what calls the others: pinhole_k through camera_info and depth_cloud, on both sides
     assert bag == live == every - {"wheel_soil"}  # no soil in this run
     n = len(run.odom)
-    assert calls[("bag", "control_fields")] == 1 and calls[("live", "control_fields")] == n
+    assert calls[("bag", "ControlFields")] == 1 and calls[("live", "ControlFields")] == n
     assert calls[("bag", "odometry")] == calls[("live", "odometry")] == n
     assert calls[("bag", "imu_variances")] == calls[("live", "imu_variances")] == 1
 
@@ -224,17 +233,12 @@ def test_carry_steps_give_the_whole_drives_integrals(bag_run: Path):
     whole-drive fields do."""
     run = RunLog(bag_run)
     rover, noise = run.rover, bd.noise_of_run(run.meta)
-    whole = compose_state.control_fields(compose_state.ControlRows.of_run(run), rover, noise)
-    carry = compose_state.Carry()
-
-    def rows(traj: Trajectory, s: slice) -> Trajectory:
-        return Trajectory(traj.timestamps_s[s], traj.xyz_m[s], traj.quat_xyzw[s])
-
+    whole = compose_state.ControlFields(compose_state.ControlRows.of_run(run), rover, noise)
+    carry, every = compose_state.Carry(), compose_state.ControlRows.of_run(run)
     for i in range(len(run.odom)):
         s = slice(max(i - 1, 0), i + 1)
-        f = compose_state.control_fields(
-            compose_state.ControlRows(rows(run.gt, s), rows(run.odom, s), run.wheels[s]),
-            rover, noise, carry)
+        rows = compose_state.ControlRows(*(getattr(every, k.name)[s] for k in fields(every)))
+        f = compose_state.ControlFields(rows, rover, noise, carry)
         assert f.t_s.shape == (1,) and f.t_s[0] == whole.t_s[i]
     assert np.any(f.joint_position[0, :6] != 0)
     np.testing.assert_array_equal(f.joint_position[0], whole.joint_position[-1])
