@@ -213,6 +213,7 @@ def test_every_registered_benchmark_imports_and_its_declaration_is_valid() -> No
     for bench in reg.values():
         assert suite.problems(bench) == [], bench.name
         assert bench.summary, bench.name
+        assert "--size" in suite.parser(bench).format_help()
         for size in suite.SIZES:
             _, values = suite.resolve(bench, ["--size", size])
             assert set(values) == {p.name for p in bench.params}

@@ -72,7 +72,8 @@ def _run() -> dict[str, float]:
         colliders_mb = (Path(tmp) / "rock_colliders.usdc").stat().st_size / 2**20
     t4 = time.perf_counter()
     big = int((rocks.diameter_m >= export.rock_instance_min_diameter_m).sum())
-    scene = SimpleNamespace(rocks=rocks, config=SimpleNamespace(rocks=cfg))
+    scene = SimpleNamespace(rocks=rocks, config=SimpleNamespace(rocks=cfg), outer=None,
+                            provenance=SimpleNamespace(extra={}))  # a one-grid scene
     out.update(rocks=len(rocks), prototypes_s=t1 - t0, place_s=t2 - t1, usd_s=t3 - t2,
                usdc_mb=len(blob) / 2**20, colliders_s=t4 - t3, colliders_mb=colliders_mb,
                collider_rocks=len(keep), collider_prims=big)
