@@ -30,14 +30,15 @@ SIZES = ("quick", "full")
 PERF = Path(__file__).resolve().parent
 
 
-def floats(text: str) -> tuple[float, ...]:
-    """A comma-separated list of numbers (``"13,5,2,-3"``)."""
-    return tuple(float(v) for v in text.split(",") if v.strip())
-
-
 def names(text: str) -> tuple[str, ...]:
-    """A comma-separated list of names (``"os1-64,os1-128"``)."""
-    return tuple(v.strip() for v in text.split(",") if v.strip())
+    """A comma-separated list of names (``"os1-64,os1-128"``; ``none`` or empty: no names)."""
+    items = tuple(v.strip() for v in text.split(",") if v.strip())
+    return () if items == ("none",) else items
+
+
+def floats(text: str) -> tuple[float, ...]:
+    """A comma-separated list of numbers (``"13,5,2,-3"``; ``none`` or empty: no numbers)."""
+    return tuple(float(v) for v in names(text))
 
 
 def optional(kind: Callable[[str], Any]) -> Callable[[str], Any]:
