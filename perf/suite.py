@@ -41,6 +41,11 @@ def floats(text: str) -> tuple[float, ...]:
     return tuple(float(v) for v in names(text))
 
 
+def ints(text: str) -> tuple[int, ...]:
+    """A comma-separated list of whole numbers (``"256,1024,4096"``; ``none``: none)."""
+    return tuple(int(v) for v in names(text))
+
+
 def optional(kind: Callable[[str], Any]) -> Callable[[str], Any]:
     """``kind``, or ``None`` for an empty string or ``none``."""
     def parse(text: str) -> Any:

@@ -72,6 +72,7 @@ def test_list_parsers_and_optional_values() -> None:
     assert suite.floats("13,5,2,-3") == (13.0, 5.0, 2.0, -3.0)
     assert suite.floats("") == () and suite.floats("none") == () and suite.names("none") == ()
     assert suite.names(" os1-64, os1-128 ,") == ("os1-64", "os1-128")
+    assert suite.ints("256,1024") == (256, 1024)
     assert suite.optional(float)("none") is None and suite.optional(float)("0.5") == 0.5
 
 

@@ -25,17 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
-from perf.suite import Param, optional
-
-
-def _ints(text: str) -> tuple[int, ...]:
-    return tuple(int(v) for v in text.split(",") if v.strip())
-
+from perf.suite import Param, ints, optional
 
 PARAMS = (Param("run_dir", optional(Path), "a drive folder with a TUM RGB-D export (needed)",
                 quick=None, full=None),
           Param("pairs", int, "the first this many frame pairs", quick=20, full=400),
-          Param("processes", _ints, "process counts, comma-separated", quick=(1, 2), full=(1, 2)),
+          Param("processes", ints, "process counts, comma-separated", quick=(1, 2), full=(1, 2)),
           Param("chunk", int, "pairs per chunk", quick=10, full=100))
 
 
