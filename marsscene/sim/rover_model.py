@@ -6,7 +6,8 @@
 from __future__ import annotations
 
 from marsscene._format import fmt
-from marsscene.rover.config import RoverConfig
+from marsscene.export.mjcf.common import TORSION_ROLL_FRICTION
+from marsscene.rover.config import CameraConfig, RoverConfig
 from marsscene.rover.geometry import (
     DRIVE_JOINTS,
     LIDAR_ABOVE_CAMERA_M,
@@ -53,13 +54,16 @@ def _body(link: Link, children: dict[str, list[Link]], extra: str = "") -> str:
     return f'<body name="{link.name}" pos="{fmt(link.pos_m)}">{inner}</body>'
 
 
-def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0) -> str:
+def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float | None = None) -> str:
     """MJCF text of the rover: root body ``base_link`` (free joint), actuators and sensors.
 
     Collision: wheels and chassis collide with the terrain and rocks (contype 2 / conaffinity 1,
     so rover parts never collide with each other); links are visual only (group 2).
+    ``camera_fovy_deg`` is the navcam's vertical field of view (default: ``CameraConfig``'s).
     """
     cfg = cfg if cfg is not None else RoverConfig()
+    if camera_fovy_deg is None:
+        camera_fovy_deg = CameraConfig().fovy_deg
     links = rover_links(cfg)
     children: dict[str, list[Link]] = {}
     for link in links[1:]:
@@ -67,7 +71,7 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float = 60.0)
         children.setdefault(link.parent, []).append(link)
     mast = cfg.mast_height_m - cfg.ride_height_m
     cam_pos, cam_xyaxes = navcam_mount(cfg)
-    mu = fmt((cfg.friction, 0.02, 0.002))
+    mu = fmt((cfg.friction, *TORSION_ROLL_FRICTION))
     sensors = (
         '<site name="imu" pos="0 0 0" size="0.02"/>'
         f'<site name="lidar" pos="{fmt((LIDAR_X_M, 0.0, mast + LIDAR_ABOVE_CAMERA_M))}" '

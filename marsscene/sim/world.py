@@ -40,7 +40,7 @@ def load_world(scene_dir: str | Path) -> SceneWorld:
     >>> route = author_route([[-5, -5], [5, 5]], world.heightfield, obstacles=world.obstacles)
     ... # doctest: +SKIP
     """
-    spec, xml, _ = load_scene_spec(scene_dir)
+    spec, xml, _ = load_scene_spec(scene_dir, rock_contacts=False)  # planning only: no hulls
     try:
         model = spec.compile()
     except Exception as err:

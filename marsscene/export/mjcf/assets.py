@@ -10,12 +10,13 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from typing import Any
 
+from marsscene.export.mjcf.common import TORSION_ROLL_FRICTION
 from marsscene.export.mjcf.rocks import obj_bytes
 
 __all__ = ["ASSET_FRICTION", "add_assets"]
 
 #: Metal/composite structure on regolith or wheel (sliding, torsional, rolling).
-ASSET_FRICTION = (0.8, 0.02, 0.002)
+ASSET_FRICTION = (0.8, *TORSION_ROLL_FRICTION)
 
 
 def add_assets(root: ET.Element, assets: dict[str, bytes], scene: Any) -> None:

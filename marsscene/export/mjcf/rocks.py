@@ -22,12 +22,13 @@ from typing import Any
 
 import numpy as np
 
+from marsscene.export.mjcf.common import TORSION_ROLL_FRICTION
 from marsscene.rocks.report import inside_focus, mjcf_focus, mjcf_rock_selection
 
 __all__ = ["ROCK_FRICTION", "add_rocks", "obj_bytes"]
 
 #: Rock friction (sliding, torsional, rolling); rubber/metal on rock ~0.8-1.0.
-ROCK_FRICTION = (0.9, 0.02, 0.002)
+ROCK_FRICTION = (0.9, *TORSION_ROLL_FRICTION)
 
 
 def obj_bytes(vertices: np.ndarray, faces: np.ndarray) -> bytes:
