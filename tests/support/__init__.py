@@ -1,17 +1,16 @@
-"""Support code shared by the test suite and the performance scripts (``perf/``); not part of
-the ``marsscene`` package and not installed with it.
+"""The test suite's own support code; not part of the ``marsscene`` package and not installed
+with it.
 
 * :mod:`.dds_peer`: an independent ROS 2 peer over DDS (plain ``cyclonedds`` + ``rosbags``, no
   marsscene), run as a script: ``python tests/support/dds_peer.py MODE ...``
   (:data:`DDS_PEER` is its path);
-* :mod:`.newton_checks`: worlds and checks for the USD rover in Newton (extra ``newton``);
-* :mod:`.shadow_truth`: a penumbra-aware terrain-shadow truth for rendered frames;
-* :mod:`.vision`: an OpenCV visual front end and RGB-D odometry scored against ground truth;
-* :mod:`.drive`: :func:`~.drive.step`, one control period of ``cmd_vel`` on a ``RoverSim``.
+* :mod:`.drive`: :func:`~.drive.step`, one control period of ``cmd_vel`` on a ``RoverSim``;
+* :mod:`.session_cache`: folders built once per test session for all xdist workers;
+* :mod:`.extras`: skips that name the extra to install.
 
 Tests import them as ``tests.support.<module>`` (pytest puts the repository root on
-``sys.path``); a perf script inserts the repository root first, as it does ``perf/`` for
-``_measure``. Public test helpers for users live in :mod:`marsscene.testing`.
+``sys.path``). The checks the tests and ``perf/`` share are public, in :mod:`marsscene.testing`
+(the OpenCV front end, the shadow truth, the Newton checks, PDS3 writers).
 """
 
 from pathlib import Path

@@ -1,7 +1,7 @@
 """The USD rover in a real client: Newton 1.8 on CPU (``SolverSteel`` through
 :class:`marsscene.sim.newton_rover.NewtonRover`). Skipped without the extra ``newton``; CI does
 not install it (Warp's CPU kernels compile on first use, about 2 minutes here: see
-docs/usd_rover.md). ``perf/bench_newton.py`` runs the same checks and prints figures,
+docs/usd_rover.md). ``python perf/run.py newton`` runs the same checks and prints figures,
 and the default-scene comparison with MuJoCo."""
 
 from __future__ import annotations

@@ -31,7 +31,7 @@ attribute spec, authored with the ``Sdf`` API inside one change block, about 80 
 write and as much to open, parse and validate; so only the few obstacle rocks get one
 (1,610 of the default scene's 120,631 rocks). The merged tiles cost vectorised array work
 (:mod:`marsscene.rocks.merged`). The trade-offs are measured in :doc:`/usd_rover`
-(``perf/bench_default_scene.py``, ``perf/bench_rocks.py``).
+(``python perf/run.py default_scene``, ``python perf/run.py rocks``).
 """
 
 from __future__ import annotations
