@@ -97,7 +97,7 @@ SLOW_TESTS = {
         "a sensor drive",
     "tests/rover/test_noise_profiles.py::test_drive_with_a_profile_is_deterministic_and_recorded":
         "two sensor drives",
-    "tests/worlds/test_assets.py::test_rover_route_goes_around_the_habitat": "a drive",
+    "tests/assets/test_assets.py::test_rover_route_goes_around_the_habitat": "a drive",
     "tests/sensors/test_camera_rock_shadow.py": "renders against an exact shadow",
     "tests/sensors/test_camera_low_sun.py": "low-sun renders",
     "tests/sensors/test_camera_rover_shadow.py": "renders of the rover's shadow",

@@ -204,3 +204,16 @@ def test_long_function_check_can_fail(tmp_path):
     (tmp_path / "pkg" / "m.py").write_text(f"def f():\n{body}\n\n\ndef g():\n    pass\n",
                                            encoding="utf-8")
     assert _long_functions(tmp_path / "pkg", MAX_WIRING_LINES) == ["pkg/m.py:f (81 lines)"]
+
+
+#: Packages whose tests live in a folder of another name, and why.
+TEST_FOLDER_OF = {"testing": "dem"}  # the PDS3 writers, tested by the DEM readers reading them
+
+
+def test_tests_mirror_the_package():
+    """Every subpackage of marsscene has its test folder, ``tests/<name>/`` (or the one named
+    in :data:`TEST_FOLDER_OF`), holding at least one test file."""
+    packages = sorted(p.parent.name for p in PKG.glob("*/__init__.py"))
+    missing = [name for name in packages
+               if not list((ROOT / "tests" / TEST_FOLDER_OF.get(name, name)).glob("test_*.py"))]
+    assert missing == []
