@@ -12,8 +12,8 @@ localhost-only mode. Topics, QoS and how to connect ROS 2: :doc:`/ros2_live`.
 from marsscene._lazy import lazy_attributes
 from marsscene.ros2.options import Ros2Options
 
-__all__ = ["Ros2Options", "ServeResult", "serve"]
+__all__ = ["Ros2Options", "serve"]
 
 __getattr__ = lazy_attributes(__name__, {
-    "ServeResult": "marsscene.ros2.live", "serve": "marsscene.ros2.live",
+    "serve": "marsscene.ros2.live",
 })

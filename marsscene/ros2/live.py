@@ -34,13 +34,10 @@ from marsscene.sim.mission import DriveOptions
 if TYPE_CHECKING:
     from marsscene.scene import Scene
 
-__all__ = ["ServeResult", "serve"]
+__all__ = ["serve"]
 
 #: Sim-time limit of a session without ``seconds`` (it ends with Ctrl-C or at the goal).
 FOREVER_S = 1e9
-#: A served session's result is a drive's (``stats`` holds the bridge's counts). Its fields
-#: are ``DriveRun``'s, in ``DriveRun``'s order.
-ServeResult = DriveRun
 
 
 def serve(

@@ -29,9 +29,7 @@ def test_the_start_heading_is_in_degrees_as_build_takes_it(runner, tmp_path):
     (tmp_path / "scene").mkdir()
     help_text = runner.invoke(main, ["serve", "--help"], terminal_width=200).output
     assert "--yaw-deg" in help_text
-    assert "Deprecated: the start heading in radians; use --yaw-deg." in help_text
     res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--yaw-deg", "400"])
     assert res.exit_code == 2 and "--yaw-deg" in res.output  # out of -360..360
-    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--yaw", "1.0",
-                               "--localhost"])
-    assert "use --yaw-deg" in res.output and "is not a built scene" in res.output
+    res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--yaw", "1.0"])
+    assert res.exit_code == 2 and "No such option '--yaw'" in res.output  # the old alias, gone
