@@ -26,7 +26,7 @@ from marsscene.runs.logs import LIDAR_NOT_STORED
 from marsscene.runs.tum import Trajectory, read_tum
 
 __all__ = ["LIDAR_IN_BAG", "CameraStream", "IncompleteRunWarning", "RunLog",
-           "move_lidar_into_bag", "read_image", "read_numeric_csv",
+           "move_lidar_into_bag", "pinhole_k", "read_image", "read_numeric_csv",
            "read_ply", "run_rover"]
 
 _REQUIRED = ("run.json", "gt.tum", "odom.tum", "cmd.csv", "wheels.csv", "imu.csv")
@@ -79,8 +79,13 @@ class CameraStream:
     @property
     def k(self) -> NDArray[np.float64]:
         """3 x 3 pinhole matrix (pixels)."""
-        i = self.intrinsics
-        return np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
+        return pinhole_k(self.intrinsics)
+
+
+def pinhole_k(intrinsics: dict[str, Any]) -> NDArray[np.float64]:
+    """3 x 3 pinhole matrix (pixels) of a camera's intrinsics (``fx, fy, cx, cy``)."""
+    i = intrinsics
+    return np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
 
 
 def _written_prefix(rows: list[list[str]], folder: Path, columns: int) -> list[list[str]]:

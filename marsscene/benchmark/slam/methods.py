@@ -38,7 +38,7 @@ from marsscene.benchmark.slam.odometry_prior import PRIOR_MODEL
 from marsscene.benchmark.slam.spec import MethodSpec
 from marsscene.errors import MarsSceneError, MissingDependencyError
 from marsscene.runs.export.datasets import tum_associations
-from marsscene.runs.runlog import RunLog, read_image, run_rover
+from marsscene.runs.runlog import RunLog, pinhole_k, read_image, run_rover
 from marsscene.runs.tum import Trajectory, read_tum
 
 __all__ = ["DRIVE_FILE", "CellData", "Estimate", "estimate"]
@@ -136,7 +136,7 @@ def _opencv_mono(cell: CellData, method: MethodSpec) -> Estimate:
     folder = cell.run_dir / "tum_rgbd"
     rows = tum_associations(folder)
     i = _intrinsics(cell.run_dir)
-    k = np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
+    k = pinhole_k(i)
     weights = np.array([0.299, 0.587, 0.114])
     gray = (np.clip(read_image(folder / r[1])[..., :3] @ weights, 0, 255).astype(np.uint8)
             for r in rows)

@@ -17,18 +17,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.runs.export import bag_data as bd
+from marsscene.runs.runlog import pinhole_k
 
 __all__ = ["CLOUD_XYZ", "camera_info", "colour_image", "depth_cloud", "depth_image",
            "laser_scan", "lidar_cloud", "pinhole_k", "projection_tx"]
 
 #: Point record of the organised depth cloud (``/rover/depth/points``).
 CLOUD_XYZ = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
-
-
-def pinhole_k(intrinsics: dict[str, Any]) -> NDArray[np.float64]:
-    """3 x 3 pinhole matrix (pixels) of a camera's intrinsics (``fx, fy, cx, cy``)."""
-    i = intrinsics
-    return np.array([[i["fx"], 0.0, i["cx"]], [0.0, i["fy"], i["cy"]], [0.0, 0.0, 1.0]])
 
 
 def projection_tx(stream: str, intrinsics: dict[str, Any]) -> float:
