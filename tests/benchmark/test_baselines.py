@@ -11,6 +11,7 @@ from marsscene.benchmark.slam.methods import CellData, estimate
 from marsscene.benchmark.slam.metrics import score_estimate
 from marsscene.benchmark.slam.rgbd_odometry import RgbdOdometry, rgbd_odometry
 from marsscene.benchmark.slam.spec import MethodSpec
+from tests.support.extras import needs
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +39,7 @@ def cell(gentle_scene: Path, tmp_path_factory: pytest.TempPathFactory) -> CellDa
 @pytest.fixture(scope="module")
 def fused(cell: CellData) -> RgbdOdometry:
     """Open3D RGB-D with the wheel odometry as guess and fallback, in this process."""
-    pytest.importorskip("open3d")
+    needs("open3d", "bench")
     return rgbd_odometry(cell.run_dir / "tum_rgbd", cell.run_dir, wheel_prior=True)
 
 
@@ -67,7 +68,7 @@ def test_monocular_vo_tracks_with_sim3(cell: CellData, tmp_path: Path) -> None:
 
 
 def test_open3d_rgbd_odometry_tracks(cell: CellData, tmp_path: Path) -> None:
-    pytest.importorskip("open3d")
+    needs("open3d", "bench")
     score, path_m = _score(cell, "open3d-rgbd", "se3", tmp_path)
     assert score.status == "ok"
     assert score.tracked_fraction > 0.9
@@ -78,7 +79,7 @@ def test_open3d_rgbd_with_the_wheel_odometry_as_guess_and_fallback(
         cell: CellData, fused: RgbdOdometry) -> None:
     """The RTAB-Map-style variant: each pair starts from the wheel odometry's step and falls
     back to it; with no departure allowed it *is* the wheel odometry (in the camera frame)."""
-    pytest.importorskip("open3d")
+    needs("open3d", "bench")
     import numpy as np
 
     from marsscene.benchmark.slam.rgbd_odometry import wheel_camera_steps
@@ -111,7 +112,7 @@ def test_open3d_rgbd_on_halved_images(cell: CellData) -> None:
     """``decimate = 2``: colour and depth averaged over 2 x 2 pixels (a block with a missing
     depth has none), intrinsics halved; it still tracks, less well at 160 x 120 (measured
     13.7 % of the path on this texture-only ground, 4.4 % at 320 x 240)."""
-    pytest.importorskip("open3d")
+    needs("open3d", "bench")
     import numpy as np
 
     from marsscene.benchmark.slam.rgbd_pairs import halve
@@ -133,7 +134,7 @@ def test_open3d_rgbd_continues_from_its_checkpoint(cell: CellData, tmp_path: Pat
     """A scoring stopped part-way continues from the chunks of pairs it saved: those pairs are
     not run again, and the steps are those of an uninterrupted run; a checkpoint of other
     inputs is not used."""
-    o3d = pytest.importorskip("open3d")
+    o3d = needs("open3d", "bench")
     import numpy as np
 
 
@@ -186,7 +187,8 @@ def test_open3d_rgbd_pairs_shared_out_over_processes(cell: CellData, tmp_path: P
     """``processes = 2``: child processes compute the chunks of pairs, with the steps of one
     process; a chunk already saved under the key is used as it is, not computed again."""
     import numpy as np
-    import open3d as o3d
+
+    o3d = needs("open3d", "bench")
 
     def not_here(*_):  # type: ignore[no-untyped-def]
         raise AssertionError("a pair was computed in the parent process")
@@ -217,6 +219,8 @@ def test_a_failing_child_process_fails_the_row_in_one_line(cell: CellData,
     """A chunk whose child process fails (here: a depth image gone) is an error naming its
     pairs and the child's exit code."""
     import os
+
+    needs("open3d", "bench")
 
     from marsscene.errors import RuntimeSimError
 

@@ -19,6 +19,7 @@ from bench_util import FLAT_SCENE
 from click.testing import CliRunner
 
 from marsscene.cli import main
+from tests.support.extras import needs
 
 SCENE = FLAT_SCENE
 
@@ -230,6 +231,7 @@ def test_a_drive_killed_in_its_exports_keeps_the_drive(bench: tuple[Path, Path, 
     """A worker killed while writing the drive's dataset folders (the drive itself finished and
     marked): the resumed cell writes the missing folders, reuses the drive, and scores the
     camera methods on them to the same rows."""
+    needs("open3d", "bench")  # the camera-only cell's RGB-D row
     from marsscene.benchmark.slam.cell import run_slam_cell
     from marsscene.benchmark.slam.run import slam_cells
     from marsscene.benchmark.slam.spec import SlamSpec

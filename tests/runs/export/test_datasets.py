@@ -21,6 +21,7 @@ from marsscene.runs.export.datasets import (
 from marsscene.runs.export.frames import frame_in_base, static_transforms
 from marsscene.runs.runlog import RunLog, read_image
 from marsscene.runtime import read_tum
+from tests.support.extras import needs
 
 
 def _table(path: Path) -> list[list[str]]:
@@ -68,7 +69,7 @@ def test_open3ds_tum_reader_reads_the_run_depth_right(bag_run, tmp_path) -> None
     """Open3D's ``create_from_tum_format`` (its TUM scale, 5000, hard-coded) gives the run's
     depth in metres, to the run's millimetre (up to the 4 m it truncates at: a Kinect's range;
     the folder holds depth to the format's 13.1 m)."""
-    o3d = pytest.importorskip("open3d")
+    o3d = needs("open3d", "bench")
     out = export_dataset(bag_run, "tum-rgbd", tmp_path / "tum")
     cam = RunLog(bag_run).camera_streams()[0]
     for (_, c, _, d), src in list(zip(_table(out / "associations.txt"), cam.depth_files,
