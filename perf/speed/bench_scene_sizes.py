@@ -7,16 +7,17 @@ stereo strip, ``MISSING_CONSTANT`` elsewhere; :mod:`marsscene.testing.pds3`), ea
 inside and outside the focus square of a two-level population, with the cut-off outside it.
 Goal: each < 150 s and < 4 GB on the 2-core machine, 1 km unchanged.
 
-Then, for comparison, the one-grid sizes again with ``--lod`` (two-level terrain, as 3 km gets
-by itself): what they would cost if the terrain's automatic choice went to two levels sooner.
+Then, for comparison, the sizes of ``one_grid_sizes`` again with ``--no-lod`` (one grid at
+0.25 m): since the terrain goes to two levels by itself above
+:data:`marsscene.pipeline.terrain.AUTO_ONE_GRID_POSTS` posts, 2000 and 2500 m are two-level
+by default, and these rows show what one grid would cost there.
 
-Usage: ``python perf/bench_scene_sizes.py [--sizes 1000 1500 ...] [--lod-sizes 2000 ...]
-[--no-dem]``.
+Run: ``python perf/run.py scene_sizes [--sizes 1000,1500 ...] [--one-grid-sizes 2000,...]
+[--no-dem]`` (quick: 1000 m only, no DTM, no one-grid rows).
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import shutil
@@ -25,15 +26,26 @@ import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from marsscene.testing.pds3 import write_pds3_dtm
+from perf.suite import Param, ints
 
 SIZES_M = (1000, 1200, 1500, 2000, 2500, 3000, 3600)
 DTM_LINES, DTM_SAMPLES = 18_000, 6_000
 STRIP_HALF_WIDTH_POSTS = 1_100  # the 2 km crop's corners reach MISSING_CONSTANT posts
 STRIP_SLANT = 0.06  # columns per line
+
+PARAMS = (
+    Param("sizes", ints, "sides of the procedural scenes built with their defaults (m)",
+          quick=(1000,), full=SIZES_M),
+    Param("one_grid_sizes", ints, "sides built again with --no-lod: one grid at 0.25 m (m)",
+          quick=(), full=(2000, 2500)),
+    Param("dem", bool, "build the 2 km crop of a full-size HiRISE-shaped DTM", quick=False,
+          full=True),
+)
 
 
 def _dtm_blocks(rows_per_block: int = 500) -> Iterator[np.ndarray]:
@@ -48,15 +60,20 @@ def _dtm_blocks(rows_per_block: int = 500) -> Iterator[np.ndarray]:
         yield z.astype(np.float32)
 
 
-def _rocks(manifest: Path) -> str:
+def _rocks(manifest: Path) -> tuple[str, dict[str, Any]]:
+    """The manifest's rock counts, as printed and as figures."""
     doc = json.loads(manifest.read_text())
     rocks = doc["summary"].get("rocks", {})
     levels = rocks.get("levels")
     if levels is None:
-        return f"{rocks.get('count', 0):>9,} (one level)"
+        count = rocks.get("count", 0)
+        return f"{count:>9,} (one level)", {"rocks_focus": count}
     raised = ", raised to fit rocks.max_rocks" if levels["outer_d_min_raised"] else ""
     return (f"{levels['focus_count']:>9,} in focus, {levels['outer_count']:>7,} outside "
-            f"(>= {levels['outer_d_min_m']:g} m{raised})")
+            f"(>= {levels['outer_d_min_m']:g} m{raised})",
+            {"rocks_focus": levels["focus_count"], "rocks_outside": levels["outer_count"],
+             "outer_d_min_m": levels["outer_d_min_m"],
+             "outer_d_min_raised": levels["outer_d_min_raised"]})
 
 
 def _build(args: list[str], out: Path) -> tuple[float, float, int]:
@@ -74,40 +91,39 @@ def _build(args: list[str], out: Path) -> tuple[float, float, int]:
     return wall, usage.ru_maxrss / 1024.0, proc.returncode
 
 
-def _row(name: str, args: list[str], tmp: Path) -> None:
+def _row(name: str, args: list[str], tmp: Path) -> dict[str, Any]:
     out = tmp / "scene"
     wall, peak_mb, rc = _build(args, out)
-    rocks = _rocks(out / "manifest.json") if rc == 0 else f"FAILED (exit {rc})"
-    ok = "ok" if rc == 0 and wall < 150 and peak_mb < 4096 else "OVER GOAL"
-    print(f"{name:<28} {wall:7.1f} s {peak_mb / 1024:6.2f} GB  {rocks}  [{ok}]", flush=True)
+    rocks, counts = _rocks(out / "manifest.json") if rc == 0 else (f"FAILED (exit {rc})", {})
+    ok = rc == 0 and wall < 150 and peak_mb < 4096
+    print(f"{name:<32} {wall:7.1f} s {peak_mb / 1024:6.2f} GB  {rocks}  "
+          f"[{'ok' if ok else 'OVER GOAL'}]", flush=True)
     shutil.rmtree(out, ignore_errors=True)
+    return {"scene": name, "wall_s": wall, "peak_gb": peak_mb / 1024, "exit": rc, **counts,
+            "within_goal": ok}
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=list(SIZES_M))
-    ap.add_argument("--lod-sizes", type=int, nargs="*", default=[2000, 2500])
-    ap.add_argument("--no-dem", action="store_true", help="skip the 2 km DTM crop")
-    opts = ap.parse_args()
+def main(sizes: tuple[int, ...], one_grid_sizes: tuple[int, ...], dem: bool
+         ) -> list[dict[str, Any]]:
     print(f"marsscene build, seed 7, niced; {os.cpu_count()} CPU cores "
           f"(load average {os.getloadavg()[0]:.1f} at the start)")
+    rows = []
     with tempfile.TemporaryDirectory(prefix="bench_scene_sizes_") as name:
         tmp = Path(name)
-        for s in opts.sizes:
-            _row(f"procedural {s} x {s} m", ["--procedural", "--size-m", str(s), str(s)], tmp)
-        if not opts.no_dem:
+        for s in sizes:
+            rows.append(_row(f"procedural {s} x {s} m",
+                             ["--procedural", "--size-m", str(s), str(s)], tmp))
+        if dem:
             t0 = time.perf_counter()
             dtm = write_pds3_dtm(tmp / "DTEEC_BENCH_U01.IMG", shape=(DTM_LINES, DTM_SAMPLES),
                                  blocks=_dtm_blocks())
             print(f"(wrote a {DTM_SAMPLES:,} x {DTM_LINES:,}-post DTM, "
                   f"{dtm.stat().st_size / 1e6:.0f} MB, in {time.perf_counter() - t0:.0f} s)")
-            _row("DTM crop 2000 x 2000 m", ["--dem", str(dtm), "--size-m", "2000", "2000"], tmp)
+            rows.append(_row("DTM crop 2000 x 2000 m",
+                             ["--dem", str(dtm), "--size-m", "2000", "2000"], tmp))
             (tmp / dtm.name).unlink()
-        for s in opts.lod_sizes:
-            _row(f"procedural {s} x {s} m --lod", ["--procedural", "--size-m", str(s), str(s),
-                                                   "--lod"], tmp)
+        for s in one_grid_sizes:
+            rows.append(_row(f"procedural {s} x {s} m --no-lod",
+                             ["--procedural", "--size-m", str(s), str(s), "--no-lod"], tmp))
     print(f"(load average {os.getloadavg()[0]:.1f} at the end)")
-
-
-if __name__ == "__main__":
-    main()
+    return rows

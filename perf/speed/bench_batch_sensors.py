@@ -3,10 +3,10 @@ a second for thousands of rovers, on a tiled heightfield of the batch environmen
 
 Usage::
 
-    python perf/bench_batch_sensors.py [--envs 256,1024,4096] [--lidars os1-64,os1-128]
+    python perf/run.py batch_sensors [--envs 256,1024,4096] [--lidars os1-64,os1-128]
         [--cast-orders beam,firing] [--camera-envs 1024,4096] [--sizes 64x64,640x480]
-        [--device cuda:0] [--json OUT]
-    python perf/bench_batch_sensors.py --as-env 4096   # as an environment calls them
+        [--device cuda:0]
+    python perf/run.py batch_sensors --as-env 4096   # as an environment calls them
 
 The model is the batch environment's (:mod:`marsscene.env.batch.model`): W = 16 worlds as tiles
 of one heightfield, 60 m at 0.25 m posts, 2 m apart, with the rover attached; here the tiles
@@ -20,18 +20,42 @@ the returns' kernel; a depth frame is ``refit_bvh`` + ``render``. Building the r
 
 from __future__ import annotations
 
-import argparse
 import gc
-import json
 import math
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from perf.suite import Param, ints, names, optional
+
 WORLDS, TILE_M, POST_M, GAP_M = 16, 60.0, 0.25, 2.0
+
+
+def frame_sizes(text: str) -> tuple[str, ...]:
+    """A comma-separated list of image sizes ``WIDTHxHEIGHT`` (``"64x64,640x480"``)."""
+    out = names(text)
+    for size in out:
+        w, sep, h = size.partition("x")
+        if not (sep and w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
+            raise ValueError(f"not WIDTHxHEIGHT: {size!r}")
+    return out
+
+
+PARAMS = (
+    Param("envs", ints, "rovers a LiDAR batch scans", quick=(16,), full=(256, 1024, 4096)),
+    Param("lidars", names, "LiDAR models", quick=("simple",), full=("os1-64", "os1-128")),
+    Param("cast_orders", names, "ray orders (beam, firing)", quick=("beam",), full=("beam",)),
+    Param("camera_envs", ints, "rovers a depth batch renders", quick=(16,), full=(1024, 4096)),
+    Param("sizes", frame_sizes, "depth image sizes (WIDTHxHEIGHT)", quick=("64x64",),
+          full=("64x64", "640x480")),
+    Param("repeat", int, "timed calls per figure (after one warm-up)", quick=2, full=10),
+    Param("as_env", int, "instead: this many rovers' sensors as an environment calls them "
+          "(0: no)", quick=0, full=0),
+    Param("device", optional(str), "Warp device (none: cuda:0 where there is a GPU, else "
+          "cpu)", quick=None, full=None),
+)
 
 
 def tile(rng: np.random.Generator, posts: int) -> np.ndarray:
@@ -134,8 +158,8 @@ def rays_only(lidar: Any, data: Any) -> None:
              lidar._dist, lidar._geom, lidar._normal, lidar.rc)
 
 
-def bench_lidar(t: Tiles, envs: list[int], lidars: list[str], orders: list[str],
-                repeat: int) -> list[dict[str, Any]]:
+def bench_lidar(t: Tiles, envs: tuple[int, ...], lidars: tuple[str, ...],
+                orders: tuple[str, ...], repeat: int) -> list[dict[str, Any]]:
     import mujoco_warp as mjw
 
     from marsscene.rover.lidar import LidarConfig
@@ -170,8 +194,8 @@ def bench_lidar(t: Tiles, envs: list[int], lidars: list[str], orders: list[str],
     return rows
 
 
-def bench_depth(t: Tiles, envs: list[int], sizes: list[tuple[int, int]], repeat: int
-                ) -> list[dict[str, Any]]:
+def bench_depth(t: Tiles, envs: tuple[int, ...], sizes: tuple[tuple[int, int], ...],
+                repeat: int) -> list[dict[str, Any]]:
     from marsscene.rover.config import CameraConfig
     from marsscene.sensors.batch import BatchDepthCamera
 
@@ -261,47 +285,30 @@ def bench_as_env(t: Tiles, n: int, repeat: int) -> list[dict[str, Any]]:
     frames = [digest([cam.depth(data, bounds_xy_m=bounds)]) for _ in range(2)]
     print(f"same bytes: LiDAR of one seed {scans[0] == scans[1]} ({scans[0]}), depth "
           f"{frames[0] == frames[1]} ({frames[0]})", flush=True)
-    return rows
+    return [*rows, {"sensor": "same bytes", "envs": n, "lidar_same": scans[0] == scans[1],
+                    "depth_same": frames[0] == frames[1]}]
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--envs", default="256,1024,4096")
-    ap.add_argument("--lidars", default="os1-64,os1-128")
-    ap.add_argument("--cast-orders", default="beam", help="beam, firing or both")
-    ap.add_argument("--camera-envs", default="1024,4096")
-    ap.add_argument("--sizes", default="64x64,640x480")
-    ap.add_argument("--repeat", type=int, default=10)
-    ap.add_argument("--as-env", type=int, default=0, metavar="N",
-                    help="instead: N rovers' sensors as an environment calls them (GPU)")
-    ap.add_argument("--device", default=None)
-    ap.add_argument("--json", type=Path, default=None)
-    a = ap.parse_args()
+def main(envs: tuple[int, ...], lidars: tuple[str, ...], cast_orders: tuple[str, ...],
+         camera_envs: tuple[int, ...], sizes: tuple[str, ...], repeat: int, as_env: int,
+         device: str | None) -> list[dict[str, Any]]:
     import mujoco_warp as mjw
     import warp as wp
 
     wp.init()
-    device = a.device or ("cuda:0" if wp.is_cuda_available() else "cpu")
-    ints = lambda s: [int(v) for v in s.split(",") if v]  # noqa: E731
-    sizes = [tuple(int(v) for v in s.split("x")) for s in a.sizes.split(",") if s]
+    device = device or ("cuda:0" if wp.is_cuda_available() else "cpu")
+    frames = tuple((int(w), int(h)) for w, _, h in (s.partition("x") for s in sizes))
     with wp.ScopedDevice(device):
         t0 = time.perf_counter()
         mj, offsets, z = tiled_model()
         tiles = Tiles(mj, mjw.put_model(mj), offsets, z)
-        print(f"{wp.get_device(device).name}: {WORLDS} tiles of {TILE_M:.0f} m at {POST_M} m "
+        name = wp.get_device(device).name
+        print(f"{name}: {WORLDS} tiles of {TILE_M:.0f} m at {POST_M} m "
               f"({mj.hfield_nrow[0]} x {mj.hfield_ncol[0]} posts), model in "
               f"{time.perf_counter() - t0:.1f} s", flush=True)
-        if a.as_env:
-            rows = bench_as_env(tiles, a.as_env, a.repeat)
+        if as_env:
+            rows = bench_as_env(tiles, as_env, repeat)
         else:
-            rows = bench_lidar(tiles, ints(a.envs), a.lidars.split(","),
-                               a.cast_orders.split(","), a.repeat)
-            rows += bench_depth(tiles, ints(a.camera_envs), sizes,  # type: ignore[arg-type]
-                                a.repeat)
-    if a.json is not None:
-        a.json.write_text(json.dumps({"device": wp.get_device(device).name, "rows": rows},
-                                     indent=1))
-
-
-if __name__ == "__main__":
-    main()
+            rows = bench_lidar(tiles, envs, lidars, cast_orders, repeat)
+            rows += bench_depth(tiles, camera_envs, frames, repeat)
+    return [{"device": name, **row} for row in rows]

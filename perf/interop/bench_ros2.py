@@ -1,8 +1,8 @@
 """Live ROS 2 (``marsscene serve``): publish rates, real-time factor, ``/cmd_vel`` latency, and the
 write time of one image and one cloud.
 
-One command: ``python perf/bench_ros2.py`` (``BENCH_ROS2_SECONDS`` of sim time per session,
-default 10). On a 60 m procedural scene, every DDS packet on 127.0.0.1, with an independent
+One command: ``python perf/run.py ros2`` (``--seconds`` of sim time per session, full 10,
+quick 2). On a 60 m procedural scene, every DDS packet on 127.0.0.1, with an independent
 subscriber process (``tests/support/dds_peer.py``: plain cyclonedds + rosbags) taking every
 topic:
 
@@ -19,7 +19,7 @@ topic:
    command, then waits for ``/clock`` to say the step's samples are out (the peer's
    ``lockstep`` mode, taking odometry and LiDAR), with the LiDAR alone and with the camera too.
 
-``python perf/bench_ros2.py lockstep`` runs part 4 alone.
+``python perf/run.py ros2 --lockstep`` runs part 4 alone.
 """
 
 from __future__ import annotations
@@ -38,8 +38,15 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
 
-PEER = str(Path(__file__).resolve().parents[1] / "tests" / "support" / "dds_peer.py")
-SECONDS = float(os.environ.get("BENCH_ROS2_SECONDS", "10"))
+from perf.suite import Param
+
+PARAMS = (
+    Param("seconds", float, "sim seconds per session and per lockstep run", quick=2.0,
+          full=10.0),
+    Param("lockstep", bool, "run the lockstep part (4) alone", quick=False, full=False),
+)
+
+PEER = str(Path(__file__).resolve().parents[2] / "tests" / "support" / "dds_peer.py")
 ALL = {
     "/clock": ["rosgraph_msgs/msg/Clock", False, False, 100],
     "/tf": ["tf2_msgs/msg/TFMessage", True, False, 50],
@@ -65,7 +72,7 @@ def _listen(domain: int, topics: dict[str, list[Any]]) -> subprocess.Popen[str]:
                              "600", json.dumps(spec)], stdout=subprocess.PIPE, text=True)
 
 
-def write_times() -> None:
+def write_times() -> list[dict[str, Any]]:
     """ms per message: rosbags CDR + Cyclone's C writer, against cyclonedds-python's path."""
     from cyclonedds.pub import DataWriter
     from cyclonedds.topic import Topic
@@ -89,6 +96,7 @@ def write_times() -> None:
               "/bench/cloud_py": ["sensor_msgs/msg/PointCloud2", True, False]}
     listener = _listen(90, topics)
     part = dds.Participant(90, localhost=True)
+    rows = []
     try:
         for (name, msg), topic in zip(msgs.items(), ("/bench/image", "/bench/cloud"),
                                       strict=True):
@@ -124,13 +132,19 @@ def write_times() -> None:
                   f"{1e3 * statistics.median(ours):.2f} ms | cyclonedds-python "
                   f"DataWriter.write (Python CDR) {1e3 * statistics.median(theirs):.1f} ms "
                   f"(+ {1e3 * statistics.median(build):.1f} ms to build the IdlStruct sample)")
+            rows.append({"part": "write", "message": name, "cdr_mb": len(bytes(data)) / 1e6,
+                         "rosbags_cdr_ms": 1e3 * statistics.median(ser),
+                         "live_path_ms": 1e3 * statistics.median(ours),
+                         "cyclonedds_python_ms": 1e3 * statistics.median(theirs),
+                         "idlstruct_build_ms": 1e3 * statistics.median(build)})
     finally:
         part.close()
         listener.kill()
+    return rows
 
 
 def session(label: str, scene: Path, domain: int, config: Any, pace: str,
-            topics: dict[str, list[Any]]) -> None:
+            topics: dict[str, list[Any]], seconds: float) -> dict[str, Any]:
     from marsscene.ros2 import Ros2Options, serve
 
     listener = _listen(domain, topics) if topics else None
@@ -142,12 +156,14 @@ def session(label: str, scene: Path, domain: int, config: Any, pace: str,
             time.sleep(0.05)
 
     res = serve(scene, ros=Ros2Options(domain_id=domain, localhost=True, pace=pace),
-                config=config, seconds=SECONDS, ready=ready)
+                config=config, seconds=seconds, ready=ready)
     st = res.stats
+    row: dict[str, Any] = {"part": "session", "label": label, "pace": pace, "sim_s": res.sim_s,
+                           "wall_s": res.wall_s, "realtime_factor": res.realtime_factor}
     if listener is None:
         print(f"\n{label} (pace {pace}): {res.sim_s:.1f} sim s in {res.wall_s:.1f} s = "
               f"{res.realtime_factor:.2f}x real time (nothing built or sent)")
-        return
+        return row
     got = json.loads(listener.communicate(timeout=120)[0])
     print(f"\n{label} (pace {pace}): {res.sim_s:.1f} sim s in {res.wall_s:.1f} s = "
           f"{res.realtime_factor:.2f}x real time; building the messages took "
@@ -156,16 +172,21 @@ def session(label: str, scene: Path, domain: int, config: Any, pace: str,
           + f"), CDR + DDS writes {sum(st['write_s'].values()):.2f} s")
     print(f"  {'topic':42s} {'rate Hz':>7s} {'expected':>8s} {'published':>9s} "
           f"{'received':>8s} {'pub Hz (wall)':>13s} {'ms/msg':>7s} {'kB/msg':>7s}")
+    per_topic = {}
     for t, spec in topics.items():
-        exp = int(spec[3] * SECONDS) + 1
+        exp = int(spec[3] * seconds) + 1
         pub, rec = st["messages"].get(t, 0), got[t]["n"]
         ms_msg = 1e3 * st["write_s"].get(t, 0.0) / max(pub, 1)
         kb = st["bytes"].get(t, 0) / max(pub, 1) / 1e3
         print(f"  {t:42s} {spec[3]:7d} {exp:8d} {pub:9d} {rec:8d} "
               f"{pub / max(res.wall_s, 1e-9):13.1f} {ms_msg:7.2f} {kb:7.1f}")
+        per_topic[t] = {"expected": exp, "published": pub, "received": rec,
+                        "ms_per_msg": ms_msg, "kb_per_msg": kb}
+    return {**row, "build_s": sum(st["build_s"].values()),
+            "write_s": sum(st["write_s"].values()), "topics": per_topic}
 
 
-def latency(label: str, scene: Path, config: Any, domain: int) -> None:
+def latency(label: str, scene: Path, config: Any, domain: int) -> dict[str, Any]:
     from marsscene.ros2 import Ros2Options, serve
 
     peer = subprocess.Popen([sys.executable, PEER, "latency", str(domain), "0.4", "--repeats",
@@ -187,12 +208,16 @@ def latency(label: str, scene: Path, config: Any, domain: int) -> None:
           f"{1e3 * statistics.median(lat):.0f} ms, min {1e3 * min(lat):.0f} ms, max "
           f"{1e3 * max(lat):.0f} ms (in sim time the command is applied at the next 50 Hz "
           "control step and the wheel odometry reads >= 0.2 m/s one step later)")
+    return {"part": "latency", "label": label, "steps": len(lat),
+            "median_ms": 1e3 * statistics.median(lat), "min_ms": 1e3 * min(lat),
+            "max_ms": 1e3 * max(lat)}
 
 
-def lockstep(label: str, scene: Path, config: Any, domain: int) -> None:
+def lockstep_rate(label: str, scene: Path, config: Any, domain: int, seconds: float
+                  ) -> dict[str, Any]:
     from marsscene.ros2 import Ros2Options, serve
 
-    steps, dt = int(50 * SECONDS), 1.0 / 50.0
+    steps, dt = int(50 * seconds), 1.0 / 50.0
     peer = subprocess.Popen([sys.executable, PEER, "lockstep", str(domain), str(steps),
                              str(dt), "0.4", "0.05"], stdout=subprocess.PIPE, text=True)
     try:
@@ -207,12 +232,15 @@ def lockstep(label: str, scene: Path, config: Any, domain: int) -> None:
           f"({steps * dt / got['wall_s']:.2f}x real time); the client took "
           f"{got['counts']['lidar']} of {sent.get('/rover/lidar/points', 0)} clouds and "
           f"{got['counts']['odom']} of {sent.get('/rover/odom', 0)} odometry messages")
+    return {"part": "lockstep", "label": label, "steps": steps, "wall_s": got["wall_s"],
+            "steps_per_s": steps / got["wall_s"], "realtime_factor": steps * dt / got["wall_s"],
+            "clouds_taken": got["counts"]["lidar"],
+            "clouds_sent": sent.get("/rover/lidar/points", 0),
+            "odom_taken": got["counts"]["odom"], "odom_sent": sent.get("/rover/odom", 0)}
 
 
-def main() -> None:
+def main(seconds: float, lockstep: bool) -> list[dict[str, Any]]:
     import marsscene as ms
-
-    only_lockstep = sys.argv[1:] == ["lockstep"]
 
     with tempfile.TemporaryDirectory(prefix="marsscene-bench-ros2-") as tmp:
         scene = Path(tmp) / "scene"
@@ -223,24 +251,20 @@ def main() -> None:
         ms.write_scene(ms.build_scene(cfg, seed=3), scene, formats=("mjcf",))
         full = ms.RunConfig(camera=ms.CameraConfig(), lidar=ms.LidarConfig())
         lidar = ms.RunConfig(lidar=ms.LidarConfig())
-        lockstep("LiDAR os1-128 only", scene, lidar, 98)
-        lockstep("camera 640x480 + LiDAR os1-128", scene, full, 99)
-        if only_lockstep:
-            return
-        write_times()
-        session("camera 640x480 + LiDAR os1-128, every topic subscribed", scene, 91, full,
-                "max", ALL)
-        session("camera 640x480 + LiDAR os1-128, every topic subscribed", scene, 92, full,
-                "realtime", ALL)
-        session("camera 640x480 + LiDAR os1-128, no subscriber", scene, 95, full, "max", {})
+        rows = [lockstep_rate("LiDAR os1-128 only", scene, lidar, 98, seconds),
+                lockstep_rate("camera 640x480 + LiDAR os1-128", scene, full, 99, seconds)]
+        if lockstep:
+            return rows
+        rows += write_times()
+        every = "camera 640x480 + LiDAR os1-128, every topic subscribed"
         lidar_topics = {t: v for t, v in ALL.items() if "rgb" not in t and "depth" not in t}
-        session("LiDAR os1-128 only, every topic subscribed", scene, 94, lidar, "max",
-                lidar_topics)
-        session("LiDAR os1-128 only, every topic subscribed", scene, 96, lidar, "realtime",
-                lidar_topics)
-        latency("camera 640x480 + LiDAR os1-128", scene, full, 93)
-        latency("LiDAR os1-128 only", scene, lidar, 97)
-
-
-if __name__ == "__main__":
-    main()
+        for label, domain, config, pace, topics in (
+                (every, 91, full, "max", ALL), (every, 92, full, "realtime", ALL),
+                ("camera 640x480 + LiDAR os1-128, no subscriber", 95, full, "max", {}),
+                ("LiDAR os1-128 only, every topic subscribed", 94, lidar, "max", lidar_topics),
+                ("LiDAR os1-128 only, every topic subscribed", 96, lidar, "realtime",
+                 lidar_topics)):
+            rows.append(session(label, scene, domain, config, pace, topics, seconds))
+        rows.append(latency("camera 640x480 + LiDAR os1-128", scene, full, 93))
+        rows.append(latency("LiDAR os1-128 only", scene, lidar, 97))
+    return rows
