@@ -34,8 +34,8 @@ __all__ = ["TerrainStage", "lod_inputs", "resolve_lod", "terrain_stage"]
 AUTO_OUTER_POSTS = 16_000_000
 AUTO_FOCUS_POSTS_PER_SIDE = 4000
 #: Posts above which ``terrain.lod = "auto"`` gives a procedural terrain two levels (a 1.58 km
-#: square at 0.25 m). Measured on the 2-core machine (perf/bench_scene_sizes.py): one 2 km grid
-#: built in 52.5 s at 2.76 GB peak, two levels in 41.8 s at 1.16 GB; one 2.5 km grid 104.5 s at
+#: square at 0.25 m). Measured on the 2-core machine (python perf/run.py scene_sizes): one 2 km
+#: grid built in 52.5 s at 2.76 GB peak, two levels in 41.8 s at 1.16 GB; one 2.5 km grid 104.5 s at
 #: 3.87 GB, two levels 48.5 s at 1.14 GB. ``--no-lod`` keeps one grid up to ``MAX_POSTS``.
 AUTO_ONE_GRID_POSTS = 40_000_000
 

@@ -5,7 +5,7 @@ square and rocks above the stated cut-off outside it), or is refused in one line
 option to change.
 
 Kept cheap: coarse posts and small rock budgets (the plan and the code paths are those of a
-full-size build at 0.25 m; ``perf/bench_scene_sizes.py`` measures the real sizes)."""
+full-size build at 0.25 m; ``python perf/run.py scene_sizes`` measures the real sizes)."""
 
 from __future__ import annotations
 
