@@ -196,7 +196,8 @@ def resolve_lod(config: SceneConfig, dem: DEM | None = None) -> tuple[SceneConfi
     lod = dataclasses.replace(tcfg, lod=True, focus_post_m=post, post_m=post * k,
                               focus_size_m=focus)
     note = (f"terrain: a {w:g} x {h:g} m grid at {post:g} m posts would hold {posts:,} posts "
-            f"(one grid up to {AUTO_ONE_GRID_POSTS:,}), so the terrain has two levels (terrain.lod = \"auto\"): "
+            f"(one grid up to {AUTO_ONE_GRID_POSTS:,}), so the terrain has two levels "
+            f"(terrain.lod = \"auto\"): "
             f"{post:g} m posts in the central {focus:g} m square (move it with --focus-xy), "
             f"{post * k:g} m outside; --no-lod insists on one grid")
     return config.replace(terrain=lod), note
