@@ -20,7 +20,8 @@ from scipy import ndimage
 from marsscene._validate import check_range
 from marsscene.errors import ConfigError, RuntimeSimError
 from marsscene.rover.config import GOAL_TOLERANCE_M, OMEGA_MAX_RAD_S, V_MAX_M_S
-from marsscene.sim.route import traversable_grid
+from marsscene.rover.spawn import SETTLE_S
+from marsscene.sim.route import MAX_SLOPE_DEG, traversable_grid
 
 __all__ = ["NavTask", "TaskMap"]
 
@@ -75,12 +76,12 @@ class NavTask:
     distance_m: tuple[float, float] = (5.0, 20.0)
     goal_tolerance_m: float = GOAL_TOLERANCE_M
     max_episode_s: float = 150.0
-    max_slope_deg: float = 20.0
+    max_slope_deg: float = MAX_SLOPE_DEG
     max_obstacle_height_m: float = 0.3
     clearance_m: float = 1.0
     margin_m: float = 4.0
     start_max_tilt_deg: float = 20.0
-    start_settle_s: float = 3.0
+    start_settle_s: float = SETTLE_S
     max_tilt_deg: float = 35.0
     stuck_s: float = 20.0
     stuck_m: float = 0.2

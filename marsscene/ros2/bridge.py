@@ -34,6 +34,7 @@ from marsscene.errors import RuntimeSimError
 from marsscene.ros2.dds import Participant, RawWriter
 from marsscene.ros2.options import Ros2Options
 from marsscene.runs.export.sample_messages import SampleMessages
+from marsscene.sim.goal import goal_reached
 from marsscene.transforms import yaw_of_quat
 
 __all__ = ["Bridge", "SessionStats"]
@@ -223,8 +224,7 @@ class Bridge:
 
     def _check_goal(self, obs: Any) -> None:
         if self.goal_xy is not None and self.stats.goal_reached_t_s is None:
-            d = math.hypot(obs.gt_xyz_m[0] - self.goal_xy[0], obs.gt_xyz_m[1] - self.goal_xy[1])
-            if d <= self.opts.goal_tolerance_m:
+            if goal_reached(obs.gt_xyz_m[:2], self.goal_xy, self.opts.goal_tolerance_m):
                 self.stats.goal_reached_t_s = float(obs.t_s)
                 self._goal_reached(True)
                 log.info("goal reached at %.2f sim s", obs.t_s)

@@ -28,6 +28,7 @@ from marsscene.runs.tum import Trajectory, read_tum, write_tum
 from marsscene.sensors.imu import ImuNoise
 from marsscene.sim.control import Controller, OpenLoop
 from marsscene.sim.cross_track import cross_track_m
+from marsscene.sim.goal import goal_reached
 from marsscene.sim.pursuit import PurePursuit, PursuitConfig
 from marsscene.sim.route import Route
 from marsscene.sim.run_writer import GT_HEADER, ODOM_HEADER
@@ -117,6 +118,16 @@ def _read_back(out: Path) -> tuple[Trajectory, Trajectory, np.ndarray]:
     return gt.head(n), odom.head(n), read_numeric_csv(out / "cmd.csv", 3)
 
 
+def _goal_reached(gt: Trajectory, controller: Any, route: Route | None) -> bool | None:
+    """The summary's ``goal_reached``: the drive ended within the goal tolerance of its route's
+    end (:func:`marsscene.sim.goal.goal_reached`, the environments' and the bridge's test); a
+    drive without a route reports its controller's ``done``, if it has one."""
+    if route is not None:
+        return bool(goal_reached(gt.xyz_m[-1, :2], route.xy_m[-1]))
+    done = getattr(controller, "done", None)
+    return bool(done) if done is not None else None
+
+
 def _result(session: DriveSession, rows: _Rows | None, controller: Any, route: Route | None,
             status: str) -> DriveResult:
     """Close the session; the trajectories and the summary (written into ``run.json``)."""
@@ -130,7 +141,6 @@ def _result(session: DriveSession, rows: _Rows | None, controller: Any, route: R
         gt, odom, cmd = rows.trajectories()
     else:
         gt, odom, cmd = _read_back(out)
-    done = getattr(controller, "done", None)
     summary: dict[str, Any] = {
         "status": status,
         "sim_time_s": round(float(gt.timestamps_s[-1]), 6),
@@ -138,7 +148,7 @@ def _result(session: DriveSession, rows: _Rows | None, controller: Any, route: R
         "path_length_m": round(gt.path_length_m(), 6),
         "lidar_scans": session.n_lidar,
         "camera_frames": session.n_cam,
-        "goal_reached": bool(done) if done is not None else None,
+        "goal_reached": _goal_reached(gt, controller, route),
         **summary_camera,
         "imu_bias": _imu_bias(session.imu_noise),
     }

@@ -4,7 +4,8 @@ less than the goal tolerance from it.
 Every judge of arrival calls :func:`goal_reached`: the navigation environments (the CPU
 environment and the batched one, :mod:`marsscene.env.judgement`), the pure-pursuit follower
 (with its own stopping radius, :data:`marsscene.sim.pursuit.STOP_RADIUS_M`, inside the
-tolerance) and the live ROS 2 session. The tolerance is
+tolerance), a drive's summary (``goal_reached`` in ``run.json``: the drive ended within the
+tolerance of its route's end) and the live ROS 2 session. The tolerance is
 :data:`marsscene.rover.config.GOAL_TOLERANCE_M` (0.5 m, a sixth of the rover's 3 m length).
 
 Both functions take numpy or PyTorch arrays of any batch shape ``(..., 2)`` (or one point as a

@@ -6,17 +6,26 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.session_cache import shared_folder
+
 pytest.importorskip("mujoco")
 pytest.importorskip("gymnasium")
 
 
+_BASE = {"terrain": {"source": "procedural", "size_m": [30.0, 30.0], "post_m": 0.25,
+                     "rms_height_m": 0.05},
+         "craters": {"enabled": False},
+         "rocks": {"k": 0.05, "mjcf_min_diameter_m": 0.3}}
+
+
 @pytest.fixture(scope="session")
 def nav_world(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The world, built once for every xdist worker (the sampler's cache in a shared folder)."""
     from marsscene.env import WorldSampler
 
-    sampler = WorldSampler(base={"terrain": {"source": "procedural", "size_m": [30.0, 30.0],
-                                             "post_m": 0.25, "rms_height_m": 0.05},
-                                 "craters": {"enabled": False},
-                                 "rocks": {"k": 0.05, "mjcf_min_diameter_m": 0.3}},
-                           count=1, seed=3, cache_dir=str(tmp_path_factory.mktemp("worlds")))
-    return sampler.path(0)
+    def sampler(folder: Path) -> WorldSampler:
+        return WorldSampler(base=_BASE, count=1, seed=3, cache_dir=str(folder))
+
+    folder = shared_folder(tmp_path_factory, "navworld", [_BASE, 3],
+                           lambda folder: sampler(folder).path(0))
+    return sampler(folder).path(0)

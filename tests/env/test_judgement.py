@@ -6,6 +6,7 @@ table is one function and one entry."""
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import math
 
 import numpy as np
@@ -19,7 +20,8 @@ from marsscene.env.state import RoverState
 from marsscene.env.task import NavTask
 from marsscene.env.taskmath import StuckClock
 from marsscene.rover.config import GOAL_TOLERANCE_M
-from marsscene.sim import goal, pursuit
+from marsscene.runs.tum import Trajectory
+from marsscene.sim import driver, goal, pursuit
 from marsscene.sim.pursuit import STOP_RADIUS_M, PurePursuit, PursuitConfig
 from marsscene.sim.route import Route
 
@@ -54,7 +56,11 @@ def _judge(xy: np.ndarray, goal_xy: np.ndarray, *, steps_left: int = 10,
 def test_every_judge_of_arrival_is_the_one_goal_test() -> None:
     one = goal.goal_reached
     assert judgement.goal_reached is one and terminate.goal_reached is one
-    assert pursuit.goal_reached is one
+    assert pursuit.goal_reached is one and driver.goal_reached is one  # a drive's summary
+    if importlib.util.find_spec("cyclonedds") is not None:
+        from marsscene.ros2 import bridge
+
+        assert bridge.goal_reached is one  # the live session's /marsscene/goal_reached
     assert TASK.goal_tolerance_m == GOAL_TOLERANCE_M == goal.GOAL_TOLERANCE_M
     # the pursuit's stopping radius is its own, named fact, inside the goal tolerance
     assert PursuitConfig().goal_tolerance_m == STOP_RADIUS_M < GOAL_TOLERANCE_M
@@ -79,6 +85,23 @@ def test_env_batch_and_pursuit_agree_with_the_goal_test(d: float, angle: float, 
     follower = PurePursuit(route)
     follower.command(float(xy[0, 0]), float(xy[0, 1]), 0.0)
     assert follower.done == bool(goal.goal_reached(xy[0], goal_xy[0], STOP_RADIUS_M))
+
+
+@pytest.mark.parametrize(("off_m", "reached"), [(0.1, True), (0.45, True), (0.55, False)])
+def test_a_drive_summary_says_goal_reached_by_the_goal_test(off_m: float, reached: bool) -> None:
+    """A drive along a route reports ``goal_reached`` when it ended within the goal tolerance
+    of the route's end, whatever its controller says (a pursuit stops at 0.25 m, a user's
+    controller anywhere); without a route, its controller's ``done``."""
+    route = Route(np.array([[0.0, 0.0], [10.0, 0.0]]))
+    gt = Trajectory(np.array([0.0, 1.0]), np.array([[0.0, 0.0, 0.0], [10.0 - off_m, 0.0, 0.0]]),
+                    np.tile([0.0, 0.0, 0.0, 1.0], (2, 1)))
+
+    class Stopped:
+        done = False
+
+    assert driver._goal_reached(gt, Stopped(), route) is reached
+    assert driver._goal_reached(gt, Stopped(), None) is False
+    assert driver._goal_reached(gt, object(), None) is None
 
 
 def test_codes_truncation_and_reward_sum() -> None:
