@@ -33,6 +33,7 @@ STAGE_IDS: dict[str, int] = {
     "terrain_detail_lod": 13,
     "albedo": 14,
     "soil": 15,
+    "orbital": 16,
 }
 
 
