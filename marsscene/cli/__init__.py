@@ -71,6 +71,7 @@ def _register() -> None:
     from marsscene.cli.serve import serve
     from marsscene.cli.sun import sun
     from marsscene.cli.sweep import sweep
+    from marsscene.cli.traversability import traversability
 
     main.add_command(build)
     main.add_command(info)
@@ -81,6 +82,7 @@ def _register() -> None:
     main.add_command(bag)
     main.add_command(export_cmd)
     main.add_command(sweep)
+    main.add_command(traversability)
     main.add_command(benchmark)
     benchmark.add_command(vpr)
     benchmark.add_command(vpr_eval)

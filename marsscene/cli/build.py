@@ -9,7 +9,7 @@ from typing import Any
 
 import click
 
-from marsscene.cli import options_assets, options_dem, options_lighting
+from marsscene.cli import options_assets, options_dem, options_lighting, traversability
 from marsscene.cli._common import user_errors
 
 log = logging.getLogger("marsscene")
@@ -76,6 +76,10 @@ def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[
                    "terrain centre, as `marsscene drive`.")
 @click.option("--rover-yaw-deg", type=click.FloatRange(-360.0, 360.0), default=None,
               help="The rover's heading (deg, counter-clockwise from east; implies --rover).")
+@click.option("--traversability", "write_traversability", is_flag=True,
+              help="Also write OUT/traversability/ (`marsscene traversability`: GeoTIFF layers, "
+                   "PNG preview, JSON summary); needs the mjcf output.")
+@traversability.cell_option("--traversability-cell-m")
 @options_assets.options
 @options_dem.options
 @options_lighting.options
@@ -90,6 +94,8 @@ def build(
     rover: bool | None,
     rover_xy: tuple[float, float] | None,
     rover_yaw_deg: float | None,
+    write_traversability: bool,
+    traversability_cell_m: float | None,
     **stage_options: Any,
 ) -> None:
     """Build a scene and write OUT/scene.usda, OUT/mjcf/scene.xml and OUT/manifest.json.
@@ -103,6 +109,7 @@ def build(
       marsscene build --preset main-crater --seed 7 --out scenes/crater
       marsscene build --preset mars-base --asset habitat.glb --asset-xy 120 -40
       marsscene build --seed 7 --rover --rover-xy 10 -5 --rover-yaw-deg 90
+      marsscene build --seed 7 --traversability
     """
     from marsscene import SceneConfig, build_scene, write_scene
     from marsscene.export import check_export_dependencies, check_output_dir
@@ -119,11 +126,17 @@ def build(
         cfg = options_lighting.apply(cfg, stage_options)
         cfg = options_assets.apply(cfg, stage_options)
         check_export_dependencies(cfg.export)
+        if write_traversability and "mjcf" not in cfg.export.formats:
+            raise click.UsageError("--traversability reads the scene's MJCF terrain: add "
+                                   "--format mjcf")
         use_seed = seed if seed is not None else (cfg.seed if cfg.seed is not None else 0)
         scene = build_scene(cfg, seed=use_seed)
         log.info("[export] writing %s", ", ".join(cfg.export.formats))
         written = write_scene(scene, out_dir)
+    if write_traversability:
+        written["traversability"] = traversability.write_map(out_dir, traversability_cell_m)
     for kind, paths in written.items():
         for p in paths:
-            if p.name in ("scene.usda", "scene.usdc", "scene.usdz", "scene.xml", "manifest.json"):
+            if p.name in ("scene.usda", "scene.usdc", "scene.usdz", "scene.xml", "manifest.json",
+                          "traversability.tif"):
                 click.echo(f"{kind:>8}: {p}")
