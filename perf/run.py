@@ -10,15 +10,12 @@ Usage::
 
 ``NAME`` is a module's name without ``bench_`` (``craters`` is ``perf/speed/bench_craters.py``).
 A run prints its figures and appends one JSON line per figure set to ``--json`` (default
-``perf/results/NAME.jsonl``). A script still at ``perf/bench_NAME.py`` (not yet registered)
-runs the old way: its ``main`` gets the remaining arguments, and nothing is recorded.
+``perf/results/NAME.jsonl``).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
-import inspect
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -28,27 +25,6 @@ if str(PERF.parent) not in sys.path:  # ``python perf/run.py``: the ``perf`` pac
     sys.path.insert(0, str(PERF.parent))
 
 from perf import results, suite  # noqa: E402
-
-
-def legacy_scripts() -> dict[str, Path]:
-    """Unregistered scripts left at the top of ``perf/`` (``bench_*.py`` with ``main``)."""
-    return {p.stem.removeprefix("bench_"): p for p in sorted(PERF.glob("bench_*.py"))}
-
-
-def run_legacy(path: Path, argv: Sequence[str]) -> int:
-    """Run a top-level script as ``perf/run.py`` always did: import it, call ``main``."""
-    if str(PERF) not in sys.path:
-        sys.path.insert(0, str(PERF))  # the old scripts import ``_measure`` and each other
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    assert spec and spec.loader
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    old_argv, sys.argv = sys.argv, [str(path), *argv]
-    try:
-        module.main(*([list(argv)] if inspect.signature(module.main).parameters else []))
-    finally:
-        sys.argv = old_argv
-    return 0
 
 
 def run_registered(bench: suite.Registered, argv: Sequence[str]) -> int:
@@ -66,16 +42,12 @@ def run_registered(bench: suite.Registered, argv: Sequence[str]) -> int:
 
 
 def list_benchmarks() -> str:
-    """The registered benchmarks by kind, with their one-line summaries, and the old scripts."""
+    """The registered benchmarks by kind, with their one-line summaries."""
     lines = []
     reg = suite.registry()
     for kind in suite.KINDS:
         lines.append(f"{kind}:")
         lines += [f"  {b.name:22s} {b.summary}" for b in reg.values() if b.kind == kind]
-    old = [n for n in legacy_scripts() if n not in reg]
-    if old:
-        lines.append("not yet registered (perf/bench_NAME.py, run the old way):")
-        lines += [f"  {n}" for n in old]
     return "\n".join(lines)
 
 
@@ -113,10 +85,6 @@ def main(argv: Sequence[str]) -> int:
         return 0
     if command in reg:
         return run_registered(reg[command], rest)
-    old = legacy_scripts()
-    if command in old:
-        print(f"== {old[command].stem} (not registered: run the old way) ==", flush=True)
-        return run_legacy(old[command], rest)
     print(f"perf/run.py: no benchmark {command!r}; `python perf/run.py list` lists them",
           file=sys.stderr)
     return 2

@@ -161,7 +161,7 @@ def parser(bench: Registered) -> argparse.ArgumentParser:
     ap.add_argument("--no-json", action="store_true", help="print only; write no record")
     for p in bench.params:
         kw: dict[str, Any] = {"dest": p.name, "default": None,
-                              "help": f"{p.help} (quick: {_shown(p.quick)}; "
+                              "help": f"{_escaped(p.help)} (quick: {_shown(p.quick)}; "
                                       f"full: {_shown(p.full)})"}
         if p.type is bool:
             ap.add_argument(p.flag, action=argparse.BooleanOptionalAction, **kw)
@@ -171,10 +171,15 @@ def parser(bench: Registered) -> argparse.ArgumentParser:
     return ap
 
 
+def _escaped(text: str) -> str:
+    """``text`` as argparse prints it (its help strings are %-format templates)."""
+    return text.replace("%", "%%")
+
+
 def _shown(value: Any) -> str:
     if isinstance(value, tuple):
-        return ",".join(str(v) for v in value) or "none"
-    return str(value).replace("%", "%%")
+        return _escaped(",".join(str(v) for v in value) or "none")
+    return _escaped(str(value))
 
 
 def resolve(bench: Registered, argv: Sequence[str]) -> tuple[argparse.Namespace, dict[str, Any]]:

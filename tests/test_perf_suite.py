@@ -195,14 +195,46 @@ def test_the_table_command_prints_markdown(tmp_path: Path) -> None:
     assert text == "| case | s |\n|---|---|\n| fresh | 1.1 |\n"
 
 
-def test_an_unregistered_script_runs_the_old_way(tmp_path: Path) -> None:
-    script = tmp_path / "bench_old.py"
-    got = tmp_path / "got.json"
-    script.write_text("import json, sys\n"
-                      "def main(argv):\n"
-                      f"    open({str(got)!r}, 'w').write(json.dumps([argv, sys.argv[1:]]))\n")
-    assert runner.run_legacy(script, ["--x", "1"]) == 0
-    assert json.loads(got.read_text()) == [["--x", "1"], ["--x", "1"]]
+def test_no_benchmark_is_left_at_the_top_of_perf() -> None:
+    """Every benchmark is registered in a kind folder; the runner has no other way to run one."""
+    assert sorted(p.name for p in (ROOT / "perf").glob("bench_*.py")) == []
+    assert not hasattr(runner, "run_legacy") and not hasattr(runner, "legacy_scripts")
+
+
+def test_an_unknown_benchmark_is_refused(capsys: pytest.CaptureFixture) -> None:
+    assert runner.main(["no_such_bench"]) == 2
+    assert "no benchmark 'no_such_bench'" in capsys.readouterr().err
+
+
+def test_a_percent_sign_in_a_help_text_is_printed_as_is() -> None:
+    bench = _bench(main=lambda share: None, params=(
+        suite.Param("share", suite.optional(float), "a policy's success (%)", quick=None,
+                    full=50.0),))
+    assert "a policy's success (%) (quick: None; full: 50.0)" in \
+        " ".join(suite.parser(bench).format_help().split())
+
+
+@pytest.mark.parametrize(("name", "argv", "message"), [
+    ("batch_env", ["--what", "sim2sim"], "needs --path"),
+    ("batch_env", ["--what", "run", "--path", "/nonexistent/worlds.npz"], "--what pack"),
+    ("mjwarp", ["--what", "run", "--path", "/nonexistent/rover.mjb"], "--what export"),
+])
+def test_a_missing_input_is_one_config_error(name: str, argv: list[str], message: str) -> None:
+    from marsscene.errors import ConfigError
+
+    bench = suite.registry()[name]
+    _, values = suite.resolve(bench, argv)
+    with pytest.raises(ConfigError, match=message):
+        bench.main(**values)
+
+
+def test_env_sections_are_checked_by_the_parser() -> None:
+    bench = suite.registry()["env"]
+    assert suite.resolve(bench, ["--sections", "physics,reset"])[1]["sections"] == \
+        ("physics", "reset")
+    assert suite.resolve(bench, ["--size", "quick"])[1]["sections"] == ("steps",)
+    with pytest.raises(SystemExit):
+        suite.resolve(bench, ["--sections", "steps,warp"])
 
 
 def test_every_registered_benchmark_imports_and_its_declaration_is_valid() -> None:
@@ -219,7 +251,8 @@ def test_every_registered_benchmark_imports_and_its_declaration_is_valid() -> No
             _, values = suite.resolve(bench, ["--size", size])
             assert set(values) == {p.name for p in bench.params}
             json.dumps(values, default=str)  # a record's parameters
-    assert {"craters", "camera", "newton", "kiss_start", "fastdds_check"} <= set(reg)
+    assert {"craters", "camera", "newton", "kiss_start", "fastdds_check", "env", "batch_env",
+            "mjwarp"} <= set(reg)
     assert {reg[n].kind for n in ("craters", "camera", "newton", "kiss_start")} == \
         set(suite.KINDS)
     listing = runner.list_benchmarks()

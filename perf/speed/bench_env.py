@@ -1,7 +1,8 @@
 """The Gymnasium navigation environment: physics rate and fidelity, steps per second, vector
 environments, reset times, and the classical navigator's success rate.
 
-Usage: ``python perf/bench_env.py [physics|steps|vector|reset|navigator ...]`` (all by default).
+Usage: ``python perf/run.py env [--sections physics,steps,vector,reset,navigator]`` (full: all
+of them; quick: steps).
 
 * physics: the rover's bare physics (CPU seconds; the real-time factor) at 500, 100 and 50 Hz
   with cylinder and sphere wheels, and how far each drives from the 500 Hz cylinder reference
@@ -17,15 +18,17 @@ Usage: ``python perf/bench_env.py [physics|steps|vector|reset|navigator ...]`` (
 from __future__ import annotations
 
 import os
-import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
+
+from perf.suite import Param, names
 
 CACHE = Path(tempfile.gettempdir()) / "marsscene_bench_env"
 
@@ -36,7 +39,7 @@ def _world(kind: str = "plain", seed: int = 0) -> Path:
     return WorldSampler(base=kind, count=1, seed=seed, cache_dir=str(CACHE)).path(0)
 
 
-def physics() -> None:
+def physics() -> list[dict[str, Any]]:
     import mujoco
 
     import marsscene as ms
@@ -45,7 +48,7 @@ def physics() -> None:
 
     world = _world("plain")
     wp = [[-15.0, -10.0], [5.0, -10.0], [8.0, 10.0]]
-    ref = None
+    ref, out = None, []
     print("physics Hz  wheels    CPU x real time   max gap to 500 Hz cylinder   cross-track RMS")
     for hz in (500.0, 100.0, 50.0):
         for wheel in ("cylinder", "sphere"):
@@ -63,6 +66,10 @@ def physics() -> None:
             gap = float(np.hypot(*(ref.gt.xyz_m[:n, :2] - run.gt.xyz_m[:n, :2]).T).max())
             print(f"{hz:10.0f}  {wheel:8s}  {rtf:14.0f}x   {gap:24.3f} m   "
                   f"{run.summary['cross_track_rms_m']:.3f} m")
+            out.append({"section": "physics", "physics_hz": hz, "wheels": wheel,
+                        "real_time_factor": rtf, "max_gap_m": gap,
+                        "cross_track_rms_m": float(run.summary["cross_track_rms_m"])})
+    return out
 
 
 def _route_drive(world: Path, wp: list[list[float]], hz: float, wheel: str) -> object:
@@ -98,13 +105,14 @@ def _rate(env: object, n: int, rng: np.random.Generator) -> tuple[float, float]:
     return n / (time.perf_counter() - w0), n / (time.process_time() - c0)
 
 
-def steps() -> None:
+def steps() -> list[dict[str, Any]]:
     import marsscene.env as me
 
     world = _world("plain")
     cases = {"state + height scan (5 m at 0.1 m)": me.ObsConfig(),
              "+ RGB-D 128 x 128": me.ObsConfig(camera=(128, 128), depth=True),
              "+ VLP-16 range image": me.ObsConfig(lidar="vlp16")}
+    out = []
     for name, obs in cases.items():
         for wheel in ("cylinder", "sphere"):
             from marsscene.rover.config import RoverConfig
@@ -115,15 +123,18 @@ def steps() -> None:
             wall, cpu = _rate(env, n, np.random.default_rng(0))
             env.close()
             print(f"{name:38s} {wheel:8s}: {wall:7.0f} steps/s wall, {cpu:7.0f} per CPU second")
+            out.append({"section": "steps", "case": name, "wheels": wheel,
+                        "steps_per_s": wall, "steps_per_cpu_s": cpu})
+    return out
 
 
-def _make(world: str) -> object:
+def _make(world: str) -> Any:
     import marsscene.env as me
 
     return me.RoverNavEnv(world)
 
 
-def vector() -> None:
+def vector() -> dict[str, Any]:
     import functools
 
     import gymnasium as gym
@@ -131,7 +142,7 @@ def vector() -> None:
     world = str(_world("plain"))
     one = _make(world)
     single, _ = _rate(one, 1500, np.random.default_rng(0))
-    one.close()  # type: ignore[attr-defined]
+    one.close()
     vec = gym.vector.AsyncVectorEnv([functools.partial(_make, world)] * 2, shared_memory=True)
     vec.reset(seed=[0, 1])
     act = np.random.default_rng(0).uniform(-1, 1, (1500, 2, 2)).astype(np.float32)
@@ -142,9 +153,11 @@ def vector() -> None:
     vec.close()
     print(f"one env {single:.0f} steps/s; AsyncVectorEnv(2) {both:.0f} steps/s "
           f"(x{both / single:.2f})")
+    return {"section": "vector", "one_env_steps_per_s": single, "async2_steps_per_s": both,
+            "speedup": both / single}
 
 
-def reset() -> None:
+def reset() -> dict[str, Any]:
     import marsscene.env as me
 
     fresh = Path(tempfile.mkdtemp(prefix="marsscene-worlds-"))
@@ -164,13 +177,16 @@ def reset() -> None:
     env.close()
     print(f"reset: same world {same * 1e3:.0f} ms, new world from the cache {cached:.2f} s, "
           f"new world built {built:.2f} s")
+    return {"section": "reset", "same_world_s": same, "cached_world_s": cached,
+            "built_world_s": built}
 
 
-def navigator(episodes: int = 50) -> None:
+def navigator(episodes: int = 50) -> list[dict[str, Any]]:
     import marsscene.env as me
 
     scan = me.HeightScan(size_m=10.0, resolution_m=0.1)
     nav = me.ArcNavigator(scan)
+    out = []
     for kind in ("plain", "craters", "rocks"):
         sampler = me.WorldSampler(base=kind, count=5, seed=11, cache_dir=str(CACHE))
         env = me.RoverNavEnv(sampler, observations=me.ObsConfig(height_scan=scan),
@@ -190,20 +206,38 @@ def navigator(episodes: int = 50) -> None:
                 times.append(info["t_s"])
         env.close()
         rate = ends.get("goal", 0) / episodes
+        per_s = steps / (time.perf_counter() - t0)
         print(f"{kind:8s}: success {100 * rate:5.1f} % of {episodes} ({ends}); goal in "
               f"{np.mean(times) if times else float('nan'):.0f} s on average; "
-              f"{steps / (time.perf_counter() - t0):.0f} steps/s")
+              f"{per_s:.0f} steps/s")
+        out.append({"section": "navigator", "kind": kind, "episodes": episodes,
+                    "success": rate, "ends": ends,
+                    "goal_time_s": float(np.mean(times)) if times else None,
+                    "steps_per_s": per_s})
+    return out
 
 
-SECTIONS = {"physics": physics, "steps": steps, "vector": vector, "reset": reset,
-            "navigator": navigator}
+SECTIONS: dict[str, Callable[[], Any]] = {
+    "physics": physics, "steps": steps, "vector": vector, "reset": reset, "navigator": navigator}
 
 
-def main(argv: list[str] | None = None) -> None:
-    for name in argv or list(SECTIONS):
+def section_names(text: str) -> tuple[str, ...]:
+    """A comma-separated list of section names (of :data:`SECTIONS`)."""
+    out = names(text)
+    for name in out:
+        if name not in SECTIONS:
+            raise ValueError(f"no section {name!r} (sections: {', '.join(SECTIONS)})")
+    return out
+
+
+PARAMS = (Param("sections", section_names, f"what to measure ({', '.join(SECTIONS)})",
+                quick=("steps",), full=tuple(SECTIONS)),)
+
+
+def main(sections: tuple[str, ...]) -> list[dict[str, Any]]:
+    out: list[dict[str, Any]] = []
+    for name in sections:
         print(f"-- {name}", flush=True)
-        SECTIONS[name]()
-
-
-if __name__ == "__main__":
-    main(sys.argv[1:])
+        got = SECTIONS[name]()
+        out += got if isinstance(got, list) else [got]
+    return out

@@ -3,12 +3,12 @@ and a trained policy's sim-to-sim check in the CPU environment.
 
 Usage::
 
-    python perf/bench_batch_env.py pack OUT.npz [--folders OUT.tar]   # 16 worlds, goals 20-50 m
-    python perf/bench_batch_env.py agree OUT.npz [--posts 0.25,0.125,0.1] [--device cpu]
-    python perf/bench_batch_env.py run OUT.npz [--envs 1,1024,4096,16384] [--folders DIR]
-    python perf/bench_batch_env.py repro OUT.npz [--envs 4096] [--variants cylinder/100/50/det]
-    python perf/bench_batch_env.py sim2sim POLICY.npz --folders DIR [--episodes 50]
-    python perf/bench_batch_env.py curve run/curve.csv --out curve.png [--gpu 91.0 --cpu 80]
+    python perf/run.py batch_env --what pack --path OUT.npz [--folders OUT.tar]  # 16 worlds
+    python perf/run.py batch_env --what agree --path OUT.npz [--posts 0.25,0.125,0.1]
+    python perf/run.py batch_env --what run --path OUT.npz [--envs 1,1024,4096] [--folders DIR]
+    python perf/run.py batch_env --what repro --path OUT.npz [--envs 4096]
+    python perf/run.py batch_env --what sim2sim --path POLICY.npz --folders DIR [--episodes 50]
+    python perf/run.py batch_env --what curve --path run/curve.csv --out curve.png [--gpu 91]
 
 ``pack`` builds the benchmark's worlds (the three world kinds with rock abundance k = 0.2: 6
 plain, 5 craters, 5 rocks) and draws 256 episodes on each. ``agree`` drives 32 rovers 10 s
@@ -20,58 +20,103 @@ core (one process a core). ``repro`` makes and drives the same batch twice and c
 bytes. ``--variants`` picks the wheels' collision shape, the solver's iteration limits and
 MuJoCo Warp's deterministic mode (``cylinder/100/50/det``). ``sim2sim`` runs a policy
 (``examples/train_batch_ppo.py``) in the CPU environment (MuJoCo C, mesh rocks) over seeded
-episodes.
+episodes. Without ``--path`` the batch is :data:`BATCH` (in the temporary folder); quick:
+``pack`` there, full: ``run`` on it.
 """
 
 from __future__ import annotations
 
-import argparse
+import functools
+import importlib.util
 import multiprocessing as mp
 import os
-import sys
 import tarfile
 import tempfile
 import time
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
+from marsscene.errors import ConfigError
+from perf.suite import Param, floats, ints, names, optional
+
+if TYPE_CHECKING:
+    from marsscene.env import ObsConfig, RoverNavEnv
+    from marsscene.env.batch import WarpPhysics
+    from marsscene.rover.config import RoverConfig
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "train_batch_ppo.py"
+BATCH = Path(tempfile.gettempdir()) / "marsscene_bench_batch_env" / "worlds.npz"
+WHAT = ("pack", "agree", "run", "repro", "sim2sim", "curve")
+PARAMS = (
+    Param("what", str, f"what to do: {', '.join(WHAT)} (the module's docstring)",
+          quick="pack", full="run", choices=WHAT),
+    Param("path", optional(Path), f"pack, agree, run, repro: the WorldBatch .npz (none: "
+          f"{BATCH}); sim2sim: the policy .npz; curve: the training's curve.csv",
+          quick=None, full=None),
+    Param("folders", optional(Path), "pack: a .tar of the scene folders to write; run, "
+          "sim2sim: the folder they were unpacked in (the CPU environment)", quick=None,
+          full=None),
+    Param("posts", floats, "agree: post spacings (m)", quick=(0.25,), full=(0.25, 0.125, 0.1)),
+    Param("device", str, "agree: Warp device", quick="cpu", full="cpu"),
+    Param("envs", ints, "run: batch sizes; repro: the first is the batch's", quick=(16,),
+          full=(1, 1024, 4096, 16384)),
+    Param("variants", names, "WHEELS/ITERATIONS/LS_ITERATIONS[/det]", quick=("sphere/100/50",),
+          full=("sphere/100/50",)),
+    Param("steps", int, "run, repro: timed steps", quick=50, full=50),
+    Param("episodes", int, "sim2sim: seeded episodes", quick=5, full=50),
+    Param("out", Path, "curve: the figure to write", quick=Path("curve.png"),
+          full=Path("curve.png")),
+    Param("gpu", optional(float), "curve: the policy's GPU success (%)", quick=None, full=None),
+    Param("cpu", optional(float), "curve: the policy's CPU success (%)", quick=None, full=None),
+)
 KINDS = {"plain": 6, "craters": 5, "rocks": 5}
 SECONDS_CPU = 20.0
 
 
-def _samplers(cache: str) -> list:
+@functools.cache
+def _example() -> ModuleType:
+    """``examples/train_batch_ppo.py`` (its task, height scan and training sizes)."""
+    spec = importlib.util.spec_from_file_location("train_batch_ppo", EXAMPLE)
+    assert spec and spec.loader
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _samplers(cache: str | None) -> list:
     from marsscene.env import WorldSampler
 
     return [WorldSampler(base=kind, vary={"rocks.k": [0.2]}, count=n, seed=100 * i,
                          cache_dir=cache) for i, (kind, n) in enumerate(KINDS.items())]
 
 
-def pack(out: Path, folders: Path | None) -> None:
-    from train_batch_ppo import TASK
-
+def pack(out: Path, folders: Path | None) -> dict[str, Any]:
     from marsscene.env.batch import WorldBatch
 
-    cache = (os.environ.get("MARSSCENE_CACHE")
-             or str(Path(tempfile.gettempdir()) / "marsscene-worlds"))
-    paths = [s.path(i) for s in _samplers(cache) for i in range(s.count)]
+    paths = [s.path(i) for s in _samplers(None) for i in range(s.count)]
     t0 = time.perf_counter()
-    batch = WorldBatch.build(paths, task=TASK, pool=256, seed=0)
+    batch = WorldBatch.build(paths, task=_example().TASK, pool=256, seed=0)
+    out.parent.mkdir(parents=True, exist_ok=True)
     batch.save(out)
+    built_s = time.perf_counter() - t0
     print(f"{out}: {batch.count} worlds, {batch.pool} episodes each, "
           f"{len(batch.rock_radius_m)} rocks, {out.stat().st_size / 1e6:.1f} MB "
-          f"({time.perf_counter() - t0:.1f} s)")
+          f"({built_s:.1f} s)")
     if folders is not None:
         with tarfile.open(folders, "w") as tar:
             for i, p in enumerate(paths):
                 tar.add(p, arcname=f"world{i:02d}")
         print(f"{folders}: the {len(paths)} scene folders")
+    return {"worlds": batch.count, "episodes": batch.pool, "rocks": len(batch.rock_radius_m),
+            "mb": out.stat().st_size / 1e6, "build_s": built_s}
 
 
-def _variant(spec: str) -> tuple[object, object]:
+def _variant(spec: str) -> tuple[RoverConfig, WarpPhysics]:
     """``WHEELS/ITERATIONS/LS_ITERATIONS[/det]`` -> (RoverConfig, WarpPhysics)."""
     from marsscene.env.batch import WarpPhysics
     from marsscene.rover.config import RoverConfig
@@ -81,7 +126,8 @@ def _variant(spec: str) -> tuple[object, object]:
             WarpPhysics(iterations=int(it), ls_iterations=int(ls), deterministic=bool(det)))
 
 
-def agree(batch_path: Path, posts: list[float], variants: list[str], device: str) -> None:
+def agree(batch_path: Path, posts: tuple[float, ...], variants: tuple[str, ...],
+          device: str) -> list[dict[str, Any]]:
     """The CPU environment's physics (cylinder wheels, MuJoCo's solver defaults) in MuJoCo C
     against each variant in MuJoCo Warp, at each post spacing."""
     import mujoco
@@ -98,6 +144,7 @@ def agree(batch_path: Path, posts: list[float], variants: list[str], device: str
     terr = b.rock_terrains()
     bare = [b.heightfield(w) for w in range(b.count)]
     n, steps = 32, (300, 1000)
+    out = []
     for post in posts:
         ref_model = tiled_model(terr, bare, rover=RoverConfig(), physics_hz=100.0, post_m=post)
         m, ids = ref_model.model, ref_model.ids
@@ -138,19 +185,24 @@ def agree(batch_path: Path, posts: list[float], variants: list[str], device: str
                   f"driving, {n} starts: median {np.median(err):.3f} m, 90th percentile "
                   f"{np.percentile(err, 90):.2f} m, {int((err > 0.5).sum())} over 0.5 m",
                   flush=True)
+            out.append({"post_m": post, "variant": spec, "starts": n,
+                        "median_m": float(np.median(err)),
+                        "p90_m": float(np.percentile(err, 90)),
+                        "over_0_5_m": int((err > 0.5).sum())})
+    return out
 
 
-def run(batch_path: Path, envs: list[int], variants: list[str], folders: Path | None,
-        steps: int) -> None:
+def run(batch_path: Path, envs: tuple[int, ...], variants: tuple[str, ...],
+        folders: Path | None, steps: int) -> list[dict[str, Any]]:
     import torch
 
-
+    out = []
     print(f"GPU: {torch.cuda.get_device_name()}; CPU cores: {os.cpu_count()}", flush=True)
     for spec in variants:
         print(f"-- wheels/iterations/line-search iterations[/deterministic]: {spec}")
         rover, physics = _variant(spec)
         for n in envs:
-            _run_one(batch_path, n, rover, physics, steps)
+            out.append({"variant": spec, **_run_one(batch_path, n, rover, physics, steps)})
     if folders is not None:
         cores = os.cpu_count() or 1
         one = _cpu_rate(str(folders))
@@ -158,9 +210,13 @@ def run(batch_path: Path, envs: list[int], variants: list[str], folders: Path | 
             every = sum(pool.map(_cpu_rate, [str(folders)] * cores))
         print(f"CPU environment (MuJoCo C, mesh rocks): {one:,.0f} env steps/s on one core, "
               f"{every:,.0f} on {cores} cores (one process a core)", flush=True)
+        out.append({"variant": "cpu_env", "envs": 1, "steps_per_s": one,
+                    "every_core_steps_per_s": every, "cores": cores})
+    return out
 
 
-def _run_one(batch_path: Path, n: int, rover: object, physics: object, steps: int) -> None:
+def _run_one(batch_path: Path, n: int, rover: RoverConfig, physics: WarpPhysics,
+             steps: int) -> dict[str, Any]:
     import torch
 
     from marsscene.env.batch import BatchNavEnv
@@ -183,16 +239,21 @@ def _run_one(batch_path: Path, n: int, rover: object, physics: object, steps: in
           f"steps/s; made in {made:.1f} s; {env.success_rate:.3f} of "
           f"{int(env.bk.to_numpy(env.episodes)[0])} random episodes reached the goal)",
           flush=True)
+    got = {"envs": n, "steps_per_s": n * steps / dt, "physics_steps_per_s": per_s,
+           "made_s": made, "success": float(env.success_rate)}
     del env
     torch.cuda.empty_cache()
+    return got
 
 
-def repro(batch_path: Path, n: int, variants: list[str], steps: int) -> None:
+def repro(batch_path: Path, n: int, variants: tuple[str, ...],
+          steps: int) -> list[dict[str, Any]]:
     """Two batches made and driven alike (same seed, same actions): how far apart they end."""
     import torch
 
     from marsscene.env.batch import BatchNavEnv
 
+    out = []
     for spec in variants:
         rover, physics = _variant(spec)
         ends, times = [], []
@@ -212,19 +273,24 @@ def repro(batch_path: Path, n: int, variants: list[str], steps: int) -> None:
               f" identical bytes; {int((gap > 0).sum())} rovers apart, median "
               f"{np.median(gap):.3f} m, max {gap.max():.2f} m; {n * steps / min(times):,.0f} "
               "env steps/s", flush=True)
+        out.append({"variant": spec, "envs": n, "steps": steps,
+                    "identical": ends[0].tobytes() == ends[1].tobytes(),
+                    "rovers_apart": int((gap > 0).sum()), "median_gap_m": float(np.median(gap)),
+                    "max_gap_m": float(gap.max()), "steps_per_s": n * steps / min(times)})
+    return out
 
 
-def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None) -> None:
+def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None) -> dict[str, Any]:
     """The learning curve of ``train_batch_ppo.py`` (success of the episodes ended in each
     iteration against wall time), with the trained policy's GPU and CPU success beside it."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from train_batch_ppo import TRAIN
 
     rows = np.genfromtxt(csv_path, delimiter=",", names=True)
-    rovers = int(rows["env_steps"][0] / rows["iteration"][0] / TRAIN["num_steps_per_env"])
+    per_env = _example().TRAIN["num_steps_per_env"]
+    rovers = int(rows["env_steps"][0] / rows["iteration"][0] / per_env)
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
     ax.set_title(f"PPO on BatchNavEnv: {rovers:,} rovers, goals 20-50 m", fontsize=10)
     ax.plot(rows["wall_s"] / 60.0, 100.0 * np.nan_to_num(rows["success"]), lw=1.2,
@@ -240,16 +306,17 @@ def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None) -> No
     fig.tight_layout()
     fig.savefig(out)
     print(f"{out}: {len(rows)} iterations")
+    return {"iterations": len(rows), "rovers": rovers}
 
 
-def _cpu_env(folders: str, observations: object = None) -> object:
-    from train_batch_ppo import SCAN, TASK
-
+def _cpu_env(folders: str, observations: ObsConfig | None = None) -> RoverNavEnv:
     from marsscene.env import ObsConfig, RoverNavEnv
 
+    example = _example()
+
     paths = sorted(p for p in Path(folders).iterdir() if (p / "mjcf" / "scene.xml").is_file())
-    obs = observations or ObsConfig(height_scan=SCAN, noise_profile="none")
-    return RoverNavEnv(paths, task=TASK, observations=obs, max_worlds_loaded=len(paths))
+    obs = observations or ObsConfig(height_scan=example.SCAN, noise_profile="none")
+    return RoverNavEnv(paths, task=example.TASK, observations=obs, max_worlds_loaded=len(paths))
 
 
 def _cpu_rate(folders: str) -> float:
@@ -265,7 +332,7 @@ def _cpu_rate(folders: str) -> float:
     return n / (time.perf_counter() - t0)
 
 
-def sim2sim(policy_path: Path, folders: Path, episodes: int) -> None:
+def sim2sim(policy_path: Path, folders: Path, episodes: int) -> dict[str, Any]:
     from marsscene.env.policy import MLPPolicy
 
     policy = MLPPolicy.load(policy_path)
@@ -285,38 +352,31 @@ def sim2sim(policy_path: Path, folders: Path, episodes: int) -> None:
     won = ends.get("goal", 0)
     print(f"CPU environment (MuJoCo C, mesh rocks): {won}/{episodes} = {won / episodes:.0%} "
           f"reached the goal; ends {ends} ({time.perf_counter() - t0:.0f} s)")
+    return {"episodes": episodes, "goal": won, "success": won / episodes, "ends": ends}
 
 
-def main(argv: list[str]) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=["pack", "agree", "run", "repro", "sim2sim", "curve"])
-    ap.add_argument("path", type=Path)
-    ap.add_argument("--folders", type=Path)
-    ap.add_argument("--posts", default="0.25,0.125,0.1")
-    ap.add_argument("--device", default="cpu")
-    ap.add_argument("--envs", default="1,1024,4096,16384")
-    ap.add_argument("--variants", default="sphere/100/50",
-                    help="WHEELS/ITERATIONS/LS_ITERATIONS[/det], comma-separated")
-    ap.add_argument("--steps", type=int, default=50)
-    ap.add_argument("--episodes", type=int, default=50)
-    ap.add_argument("--out", type=Path, default=Path("curve.png"))
-    ap.add_argument("--gpu", type=float, help="curve: the policy's GPU success (%%)")
-    ap.add_argument("--cpu", type=float, help="curve: the policy's CPU success (%%)")
-    a = ap.parse_args(argv)
-    if a.what == "pack":
-        pack(a.path, a.folders)
-    elif a.what == "agree":
-        agree(a.path, [float(p) for p in a.posts.split(",")], a.variants.split(","), a.device)
-    elif a.what == "run":
-        run(a.path, [int(n) for n in a.envs.split(",")], a.variants.split(","), a.folders,
-            a.steps)
-    elif a.what == "curve":
-        curve(a.path, a.out, a.gpu, a.cpu)
-    elif a.what == "repro":
-        repro(a.path, int(a.envs.split(",")[0]), a.variants.split(","), a.steps)
-    else:
-        sim2sim(a.path, a.folders, a.episodes)
-
-
-if __name__ == "__main__":
-    main(sys.argv[1:])
+def main(what: str, path: Path | None, folders: Path | None, posts: tuple[float, ...],
+         device: str, envs: tuple[int, ...], variants: tuple[str, ...], steps: int,
+         episodes: int, out: Path, gpu: float | None,
+         cpu: float | None) -> dict[str, Any] | list[dict[str, Any]]:
+    if what in ("sim2sim", "curve") and path is None:
+        raise ConfigError(f"batch_env --what {what} needs --path (the "
+                          f"{'policy .npz' if what == 'sim2sim' else 'curve.csv'})")
+    if what == "sim2sim" and folders is None:
+        raise ConfigError("batch_env --what sim2sim needs --folders (the scene folders)")
+    batch = path or BATCH
+    if what in ("agree", "run", "repro") and not batch.is_file():
+        raise ConfigError(f"no batch {batch}: make it with "
+                          f"`python perf/run.py batch_env --what pack --path {batch}`")
+    if what == "pack":
+        return pack(batch, folders)
+    if what == "agree":
+        return agree(batch, posts, variants, device)
+    if what == "run":
+        return run(batch, envs, variants, folders, steps)
+    if what == "repro":
+        return repro(batch, envs[0], variants, steps)
+    if what == "curve":
+        return curve(batch, out, gpu, cpu)
+    assert folders is not None
+    return sim2sim(batch, folders, episodes)
