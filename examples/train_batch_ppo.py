@@ -3,13 +3,13 @@
 
 Usage (a GPU machine, ``pip install "marsscene[gpu]" rsl-rl-lib``)::
 
-    python perf/bench_batch_env.py pack worlds.npz         # 16 worlds, goals 20-50 m (CPU)
+    python perf/run.py batch_env --what pack --path worlds.npz   # 16 worlds, goals 20-50 m (CPU)
     python examples/train_batch_ppo.py worlds.npz --minutes 9 --out run/
 
 It writes ``run/curve.csv`` (per PPO iteration: wall time, environment steps, the share of the
 episodes ended in it that reached their goal) and ``run/policy.npz``
-(:class:`~marsscene.env.policy.MLPPolicy`), which ``perf/bench_batch_env.py sim2sim`` runs in the
-CPU environment (MuJoCo C, mesh rocks).
+(:class:`~marsscene.env.policy.MLPPolicy`), which ``python perf/run.py batch_env --what sim2sim``
+runs in the CPU environment (MuJoCo C, mesh rocks).
 
 The CPU baseline: the same PPO on the CPU environment (:class:`~marsscene.env.RoverNavEnv`, the
 scene folders of ``pack --folders``), N rovers in worker processes, the policy on PyTorch's CPU::
@@ -217,7 +217,8 @@ def evaluate(vec: RslRlVecEnv, actor: object, max_s: float = 60.0) -> tuple[int,
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("batch", type=Path, help="a WorldBatch .npz (perf/bench_batch_env.py pack)")
+    ap.add_argument("batch", type=Path,
+                    help="a WorldBatch .npz (python perf/run.py batch_env --what pack)")
     ap.add_argument("--minutes", type=float, default=9.0)
     ap.add_argument("--envs", type=int, default=4096)
     ap.add_argument("--seed", type=int, default=0)

@@ -237,6 +237,49 @@ def test_env_sections_are_checked_by_the_parser() -> None:
         suite.resolve(bench, ["--sections", "steps,warp"])
 
 
+def _perf_commands(text: str) -> list[str]:
+    """What follows ``python perf/run.py`` in a page's code: its fenced blocks' lines and its
+    inline code spans (which may wrap), up to a comment or the next command."""
+    code: list[str] = []
+    prose: list[str] = []
+    fenced = False
+    for line in text.splitlines():
+        if re.match(r"^\s*(```|~~~)", line):
+            fenced = not fenced
+        else:
+            (code if fenced else prose).append(line)
+    spans = code + re.findall(r"`([^`]+)`", "\n".join(prose))
+    out = []
+    for span in spans:
+        for m in re.finditer(r"python perf/run\.py\s+(.+?)(?=\s#|&&|;|\|\||$)",
+                             span.replace("\\\n", " "), re.S):
+            out.append(" ".join(m.group(1).split()))
+    return out
+
+
+def test_the_docs_perf_commands_name_benchmarks_and_their_options() -> None:
+    """Every ``python perf/run.py NAME --option`` in README.md and docs/ names a registered
+    benchmark (or list, all, table) and options of its command line."""
+    reg = suite.registry()
+    found: dict[str, set[str]] = {}
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
+        if "_build" in page.parts:
+            continue
+        for command in _perf_commands(page.read_text(encoding="utf-8")):
+            name, *rest = command.split()
+            if name in ("list", "all", "table", "NAME") or name.startswith("-"):
+                continue
+            assert name in reg, f"{page.name}: `python perf/run.py {command}`: no {name!r}"
+            options = suite.parser(reg[name])._option_string_actions
+            for token in rest:
+                token = token.strip("[](),;:'\"")
+                if re.fullmatch(r"--[a-z][\w-]*", token):
+                    assert token in options, f"{page.name}: {name} has no option {token}"
+                    found.setdefault(name, set()).add(token)
+    assert {"--what", "--path", "--envs", "--folders", "--posts"} <= found["batch_env"]
+    assert found["env"] == {"--sections"} and "--what" in found["mjwarp"]
+
+
 def test_every_registered_benchmark_imports_and_its_declaration_is_valid() -> None:
     reg = suite.registry()
     assert len(reg) >= 29

@@ -13,7 +13,7 @@ Rocks are relief of the heightfield, not mesh geoms: MuJoCo Warp collides every 
 with the one heightfield instead of with thousands of static meshes. The posts are the scenes'
 own (0.25 m for :data:`~marsscene.env.worlds.WORLD_KINDS`): at 0.1 m a wheel overlaps more
 prisms than the 50 contacts MuJoCo Warp 4.0 keeps for a geom pair, and the rover parts from
-MuJoCo C's (``perf/bench_batch_env.py agree``). What this
+MuJoCo C's (``python perf/run.py batch_env --what agree``). What this
 changes against the CPU environment's mesh rocks (convex hulls with overhangs and sharp
 edges) is measured in :doc:`/results/gym`.
 
