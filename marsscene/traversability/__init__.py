@@ -24,14 +24,14 @@ NumPy grids; :mod:`marsscene.traversability.scene` reads a built scene folder an
 ``traversability/`` (GeoTIFF, PNG preview, JSON summary).
 
 References: Goldberg, S. B., Maimone, M. W., Matthies, L. (2002), Stereo vision and rover
-navigation software for planetary exploration, IEEE Aerospace Conference, vol. 5, 2025-2036,
-doi:10.1109/AERO.2002.1035370; Otsu, K., Matheron, G., Ghosh, S., Toupet, O., Ono, M. (2020),
-Fast approximate clearance evaluation for rovers with articulated suspension systems, J. Field
-Robotics 37(5), 768-785, doi:10.1002/rob.21892; Toupet, O. et al. (2020), A ROS-based simulator
-for testing the Enhanced Autonomous Navigation of the Mars 2020 rover, IEEE Aerospace
-Conference; Maimone, M., Cheng, Y., Matthies, L. (2007), Two years of visual odometry on the
-Mars Exploration Rovers, J. Field Robotics 24(3), 169-186; Ding et al. (2011), J.
-Terramechanics 48(1), 27-45 (slip sinkage).
+navigation software for planetary exploration, IEEE Aerospace Conference Proceedings (Big Sky,
+Montana), vol. 5, 2025-2036, doi:10.1109/AERO.2002.1035370; Otsu, K., Matheron, G., Ghosh, S.,
+Toupet, O., Ono, M. (2020), Fast approximate clearance evaluation for rovers with articulated
+suspension systems, J. Field Robotics 37(5), 768-785, arXiv:1808.00031; Toupet, O. et al.
+(2020), A ROS-based simulator for testing the Enhanced Autonomous Navigation of the Mars 2020
+rover, IEEE Aerospace Conference; Maimone, M., Cheng, Y., Matthies, L. (2007), Two years of
+visual odometry on the Mars Exploration Rovers, J. Field Robotics 24(3), 169-186; Ding et al.
+(2011), J. Terramechanics 48(1), 27-45 (slip sinkage).
 """
 
 from marsscene.traversability.compute import HAZARD_BITS, LAYERS, Traversability, compute

@@ -186,6 +186,7 @@ def compute(heightfield: Heightfield, *, rocks_xy_m: ArrayLike | None = None,
 
     rock = maximum_filter(rock_grid, footprint=ring, mode="constant", cval=0.0)
     wheels = fit_plane(z, cell, ring, correlator=corr, residual=False)
+    del corr  # the terrain's spectra
     belly = belly_intrusion(z + rock_grid, cell, wheels, fp.belly_radius_m)
     xs = origin[0] + cell * np.arange(z.shape[1])
     ys = origin[1] + cell * np.arange(z.shape[0])

@@ -50,10 +50,10 @@ def ring_kernel(radius_m: float, cell_m: float, inner_m: float = -1.0) -> NDArra
 
 class PlaneFit:
     """Per-cell plane fit over a kernel: height ``a`` at the cell, gradient ``(b, c)`` (x east,
-    y north), RMS residual and the number of posts fitted."""
+    y north) and RMS residual."""
 
-    def __init__(self, a: F64, b: F64, c: F64, rms_m: F64, count: F64) -> None:
-        self.a, self.b, self.c, self.rms_m, self.count = a, b, c, rms_m, count
+    def __init__(self, a: F64, b: F64, c: F64, rms_m: F64) -> None:
+        self.a, self.b, self.c, self.rms_m = a, b, c, rms_m
 
     @property
     def slope_deg(self) -> F64:
@@ -71,6 +71,7 @@ class _Correlator:
         self.reach = reach
         self.shape = tuple(next_fast_len(n + 2 * reach, real=True) for n in self.grid)
         self.spectra = {key: rfft2(f, self.shape) for key, f in fields.items()}
+        self.mean_m = 0.0  # what was taken off the fields' first (added back to the plane)
 
     def __call__(self, key: str, kernel: F64) -> F64:
         k = kernel.shape[0] // 2
@@ -81,26 +82,31 @@ class _Correlator:
         cols = np.arange(-k, k + 1) % self.shape[1]
         pad[np.ix_(rows, cols)] = flipped
         full = irfft2(self.spectra[key] * rfft2(pad), self.shape)
-        return full[:self.grid[0], :self.grid[1]]
+        return full[:self.grid[0], :self.grid[1]].copy()  # not a view: frees the padding
+
+
+#: Rows solved at a time (the per-cell algebra's temporaries stay small).
+_CHUNK_ROWS = 128
+
+
+def _edge_index(n: int, k: int) -> NDArray[np.intp]:
+    """Each of ``n`` rows' (or columns') row in a small grid that keeps ``k + 1`` at each edge
+    and one for the interior, where a kernel of reach ``k`` sees the same."""
+    i = np.arange(n)
+    if n <= 2 * k + 3:
+        return i
+    return np.where(i <= k, i, np.where(i >= n - k - 1, i - n + 2 * k + 3, k + 1))
 
 
 def _mask_moments(shape: tuple[int, int], kernel: F64, weights: dict[str, F64],
-                  ) -> dict[str, F64]:
+                  ) -> tuple[dict[str, F64], NDArray[np.intp], NDArray[np.intp]]:
     """Correlations of the grid's all-ones mask with ``kernel * weight``: they differ from
     the interior's only within the kernel's reach of an edge, so they are taken on a small grid
-    (edges kept, interior one row and column wide) and spread back."""
+    (:func:`_edge_index`); returns them with the rows' and columns' index into it."""
     k = kernel.shape[0] // 2
-    index = []
-    for n in shape:
-        if n <= 2 * k + 3:
-            index.append(np.arange(n))
-            continue
-        i = np.arange(n)
-        index.append(np.where(i <= k, i, np.where(i >= n - k - 1, i - n + 2 * k + 3, k + 1)))
-    small = (len(np.unique(index[0])), len(np.unique(index[1])))
-    corr = _Correlator({"1": np.ones(small)}, k)
-    return {key: corr("1", kernel * w)[np.ix_(index[0], index[1])]
-            for key, w in weights.items()}
+    rows, cols = _edge_index(shape[0], k), _edge_index(shape[1], k)
+    corr = _Correlator({"1": np.ones((int(rows.max()) + 1, int(cols.max()) + 1))}, k)
+    return {key: corr("1", kernel * w) for key, w in weights.items()}, rows, cols
 
 
 def fit_plane(z_m: NDArray[np.floating], cell_m: float, kernel: NDArray[np.bool_], *,
@@ -111,33 +117,47 @@ def fit_plane(z_m: NDArray[np.floating], cell_m: float, kernel: NDArray[np.bool_
     off = np.arange(-k, k + 1) * cell_m
     v, u = np.meshgrid(off, off, indexing="ij")  # v: north offset (rows), u: east (columns)
     w = kernel.astype(np.float64)
-    z0 = float(np.mean(z_m))
     corr = correlator if correlator is not None else plane_correlator(z_m, k)
-    m = _mask_moments(corr.grid, w, {"1": np.ones_like(u), "u": u, "v": v, "uu": u * u,
-                                     "uv": u * v, "vv": v * v})
-    s0, su, sv = (corr("z", w * f) for f in (np.ones_like(u), u, v))
+    small, rows, cols = _mask_moments(corr.grid, w, {
+        "1": np.ones_like(u), "u": u, "v": v, "uu": u * u, "uv": u * v, "vv": v * v})
+    sums = [corr("z", w * f) for f in (np.ones_like(u), u, v)]
+    if residual:
+        sums.append(corr("zz", w))
+    out = np.zeros((4, *corr.grid))
+    for r0 in range(0, corr.grid[0], _CHUNK_ROWS):
+        part = slice(r0, r0 + _CHUNK_ROWS)
+        m = {key: g[np.ix_(rows[part], cols)] for key, g in small.items()}
+        out[:, part] = _solve(m, [s[part] for s in sums])
+    out[0] += corr.mean_m
+    return PlaneFit(out[0], out[1], out[2], out[3])
+
+
+def _solve(m: dict[str, F64], sums: list[F64]) -> F64:
+    """Height, gradient and RMS residual from the normal equations' sums (rows of cells)."""
     n = np.maximum(m["1"], 1.0)
     # Centre the offsets on the fitted posts' mean (exact at cut kernels), then solve 2 x 2.
     mu, mv = m["u"] / n, m["v"] / n
     cuu, cuv, cvv = m["uu"] - n * mu * mu, m["uv"] - n * mu * mv, m["vv"] - n * mv * mv
-    zm = s0 / n
-    tu, tv = su - n * mu * zm, sv - n * mv * zm
+    zm = sums[0] / n
+    tu, tv = sums[1] - n * mu * zm, sums[2] - n * mv * zm
     det = cuu * cvv - cuv * cuv
     safe = np.where(np.abs(det) > 1e-12, det, np.inf)
     b, c = (cvv * tu - cuv * tv) / safe, (cuu * tv - cuv * tu) / safe
-    a = zm - b * mu - c * mv
-    rms = np.zeros_like(a)
-    if residual:
-        ss = corr("zz", w) - n * zm * zm - (b * tu + c * tv)
+    rms = np.zeros_like(zm)
+    if len(sums) > 3:
+        ss = sums[3] - n * zm * zm - (b * tu + c * tv)
         rms = np.sqrt(np.maximum(ss, 0.0) / n)
-    return PlaneFit(a + z0, b, c, rms, m["1"])
+    return np.stack([zm - b * mu - c * mv, b, c, rms])
 
 
 def plane_correlator(z_m: NDArray[np.floating], reach: int) -> _Correlator:
     """The shared FFTs of the terrain (less its mean) and its square for :func:`fit_plane`
     with kernels up to ``reach`` posts from their centre."""
-    z = np.asarray(z_m, dtype=np.float64) - float(np.mean(z_m))  # smaller sums, less round-off
-    return _Correlator({"z": z, "zz": z * z}, reach)
+    mean = float(np.mean(z_m))
+    z = np.asarray(z_m, dtype=np.float64) - mean  # smaller sums, less round-off
+    corr = _Correlator({"z": z, "zz": z * z}, reach)
+    corr.mean_m = mean
+    return corr
 
 
 def step_height(z_m: NDArray[np.floating], cell_m: float, wheel_radius_m: float,

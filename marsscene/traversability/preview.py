@@ -14,7 +14,7 @@ _GREEN, _AMBER, _RED = (np.array(c, np.float64) for c in
 
 
 def hillshade(z_m: NDArray[np.floating], cell_m: float, azimuth_deg: float = 315.0,
-              elevation_deg: float = 45.0) -> NDArray[np.float64]:
+              elevation_deg: float = 30.0) -> NDArray[np.float64]:
     """Lambertian shading in [0, 1] of a south-up grid lit from ``azimuth_deg`` (clockwise
     from north) at ``elevation_deg``."""
     dzdy, dzdx = np.gradient(np.asarray(z_m, dtype=np.float64), cell_m)
@@ -33,7 +33,7 @@ def preview_rgb(z_m: NDArray[np.floating], cell_m: float, cost: NDArray[np.float
     haz = np.asarray(hazard)[::step, ::step][..., None]
     tint = np.where(c < 0.5, _GREEN + (_AMBER - _GREEN) * (2 * c), _AMBER)
     tint = np.where(haz, _RED, tint)
-    alpha = np.where(haz, 0.65, 0.35)
-    grey = (40.0 + 200.0 * shade)[..., None]
+    alpha = np.where(haz, 0.7, 0.3)
+    grey = (15.0 + 240.0 * shade)[..., None]
     rgb = grey * (1.0 - alpha) + tint * alpha
     return np.ascontiguousarray(np.clip(np.rint(rgb), 0, 255).astype(np.uint8)[::-1])
