@@ -31,8 +31,8 @@ from marsscene.traversability.compute import (
 from marsscene.traversability.config import TraversabilityConfig
 from marsscene.traversability.preview import preview_rgb
 
-__all__ = ["TRAVERSABILITY_DIR", "SceneInputs", "read_scene_inputs", "scene_traversability",
-           "write_traversability"]
+__all__ = ["TRAVERSABILITY_DIR", "SceneInputs", "inputs_of_scene", "read_scene_inputs",
+           "scene_traversability", "write_traversability"]
 
 #: The scene folder's traversability files.
 TRAVERSABILITY_DIR = "traversability"
@@ -98,6 +98,19 @@ def read_scene_inputs(scene_dir: str | Path) -> SceneInputs:
     crs, origin = _frame(root)
     return SceneInputs(hf, np.column_stack([rocks["x_m"], rocks["y_m"]]), rocks["diameter_m"],
                        rocks["height_m"], read_soil_map(root), crs, origin)
+
+
+def inputs_of_scene(scene: Any) -> SceneInputs:
+    """The same inputs from a :class:`~marsscene.scene.Scene` in memory (before or without
+    writing it): its heightfield, rock table, soil map and frame."""
+    rocks, frame = scene.rocks, scene.provenance.frame
+    xy = rocks.position_xyz_m[:, :2] if rocks is not None else np.zeros((0, 2))
+    d = rocks.diameter_m if rocks is not None else np.zeros(0)
+    h = rocks.height_m if rocks is not None else np.zeros(0)
+    georef = bool(frame.crs_wkt) and frame.origin_projected_xy_m is not None
+    return SceneInputs(scene.heightfield, np.asarray(xy), np.asarray(d), np.asarray(h),
+                       scene.soil, frame.crs_wkt if georef else None,
+                       tuple(frame.origin_projected_xy_m) if georef else None)
 
 
 def scene_traversability(inputs: SceneInputs, *, rover: RoverConfig | None = None,

@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from marsscene.errors import ConfigError
+from marsscene.rover.config import RoverConfig
 from marsscene.rover.terramechanics import soil
 from marsscene.soil.map import SoilMap
 from marsscene.terrain.heightfield import Heightfield
@@ -144,11 +145,13 @@ def test_cost_is_monotone_in_each_term_and_one_at_a_hazard(ratios: list[float], 
 @given(rows=st.integers(2, 40), cols=st.integers(2, 40), post=st.floats(0.05, 2.0),
        relief=st.floats(0.0, 5.0), seed=st.integers(0, 2**16),
        cell=st.one_of(st.none(), st.floats(0.01, 5.0)), slope=st.floats(1.0, 89.0),
-       slip=st.floats(0.01, 1.0), n_rocks=st.integers(0, 20))
+       slip=st.floats(0.01, 1.0), n_rocks=st.integers(0, 20), wheel=st.floats(0.05, 0.6),
+       track=st.floats(1.5, 4.0))
 def test_any_valid_grid_gives_finite_layers_in_range(rows: int, cols: int, post: float,
                                                      relief: float, seed: int,
                                                      cell: float | None, slope: float,
-                                                     slip: float, n_rocks: int) -> None:
+                                                     slip: float, n_rocks: int, wheel: float,
+                                                     track: float) -> None:
     rng = np.random.default_rng(seed)
     hf = Heightfield.centered((relief * rng.random((rows, cols))).astype(np.float32), post)
     x0, y0, x1, y1 = hf.bounds_xy_m
@@ -157,7 +160,8 @@ def test_any_valid_grid_gives_finite_layers_in_range(rows: int, cols: int, post:
              "rocks_height_m": rng.uniform(0.0, 1.0, n_rocks)}
     try:
         cfg = TraversabilityConfig(cell_m=cell, max_slope_deg=slope, max_slip=slip)
-        t = compute(hf, config=cfg, **rocks)
+        rover = RoverConfig(wheel_radius_m=wheel, track_m=track, ride_height_m=wheel + 0.5)
+        t = compute(hf, config=cfg, rover=rover, **rocks)
     except ConfigError as err:
         assert "\n" not in str(err)
         return

@@ -97,3 +97,23 @@ def test_a_dem_scene_is_written_in_its_crs(synthetic_dem_path: Path, tmp_path: P
         x0, y0 = frame["origin_projected_xy_m"]
         cx, cy = ds.xy(ds.height // 2, ds.width // 2)  # the scene's centre is its origin
         assert abs(cx - x0) <= 1.0 and abs(cy - y0) <= 1.0
+
+
+def test_the_scene_in_memory_gives_the_map_of_its_folder(tmp_path: Path) -> None:
+    import marsscene as ms
+    from marsscene.traversability.scene import (
+        inputs_of_scene,
+        read_scene_inputs,
+        scene_traversability,
+    )
+
+    cfg = ms.SceneConfig.from_dict({"terrain": {"source": "procedural", "size_m": [24.0, 24.0],
+                                                "post_m": 0.25}, "soil": {"enabled": True}})
+    scene = ms.build_scene(cfg, seed=2)
+    ms.write_scene(scene, tmp_path / "s", formats=("mjcf",))
+    memory = scene_traversability(inputs_of_scene(scene))
+    folder = scene_traversability(read_scene_inputs(tmp_path / "s"))
+    assert memory.shape == folder.shape and memory.soils == folder.soils
+    np.testing.assert_allclose(memory.slope_deg, folder.slope_deg, atol=0.01)
+    np.testing.assert_allclose(memory.rock_m, folder.rock_m, atol=1e-3)  # 0.1 mm catalogue
+    assert np.mean(memory.hazard == folder.hazard) > 0.999
