@@ -122,7 +122,10 @@ def _dem_orbital_map(scene: Scene, hf: Heightfield, model: OrbitalModel) -> Orbi
 
         ortho = read_ortho(inputs["ortho"], bounds_xy_m=bounds)
     if ortho is not None:
-        img = np.nanmean(ortho.image, axis=2)[::-1].astype(np.float32)
+        bands = np.asarray(ortho.image, dtype=np.float64)
+        count = np.isfinite(bands).sum(axis=2)  # the bands' mean; NaN where none has data
+        mean = np.nansum(bands, axis=2) / np.maximum(count, 1)
+        img = np.where(count > 0, mean, np.nan)[::-1].astype(np.float32)
         img_px = ortho.pixel_m
         ix, iy = ortho.xy_of(ortho.shape[0] - 1, 0)
         img0 = (float(ix) - ox, float(iy) - oy)

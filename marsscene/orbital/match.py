@@ -2,7 +2,7 @@
 heading.
 
 For each heading of a sweep around the prior's, the local map is rotated into a north-up
-template on the orbital posts (bilinear, a cell kept where all its neighbours are observed);
+template on the orbital posts (cubic spline, a cell kept where all its neighbours are observed);
 template and map are high-passed (less their Gaussian mean over ``highpass_m``: the regional
 slope, which any tilted patch shares, and the unknown vertical datum go); the masked normalised
 cross-correlation (Padfield 2012, IEEE TIP 21(5), 2706-2718, doi:10.1109/TIP.2011.2181402) is
@@ -68,18 +68,29 @@ def _bandpass(z: NDArray[np.float64], mask: NDArray[np.bool_], smooth_px: float,
     return np.where(mask, low - base, 0.0)
 
 
-def _template(local: LocalMap, yaw: float, half: int, cell_m: float
-              ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def _spline(local: LocalMap) -> NDArray[np.float64]:
+    """Cubic B-spline coefficients of the local map, unobserved cells filled by the nearest
+    observed one (they are masked out after; the fill only keeps the spline finite)."""
+    idx = ndimage.distance_transform_edt(~local.mask, return_distances=False,
+                                         return_indices=True)
+    filled = np.where(local.mask, local.z_m, 0.0)[tuple(idx)]
+    return np.asarray(ndimage.spline_filter(filled, order=3, mode="nearest"), dtype=np.float64)
+
+
+def _template(local: LocalMap, coeffs: NDArray[np.float64], yaw: float, half: int,
+              cell_m: float) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """The local map rotated by ``yaw`` onto a north-up (2 half + 1)^2 grid of ``cell_m``
-    centred on the local origin."""
+    centred on the local origin: cubic spline (its smoothing hardly depends on the heading, a
+    bilinear one's does), a cell kept where its four neighbours are observed."""
     off = cell_m * np.arange(-half, half + 1)
     gx, gy = np.meshgrid(off, off)
     c, s = math.cos(yaw), math.sin(yaw)
     lx, ly = c * gx + s * gy, -s * gx + c * gy  # R(-yaw) of the world-aligned offsets
-    z0 = np.where(local.mask, local.z_m, 0.0)
-    z = sample_bilinear(z0, local.origin_xy_m, local.cell_m, lx, ly)
     m = sample_bilinear(local.mask.astype(np.float64), local.origin_xy_m, local.cell_m, lx, ly)
     mask = np.nan_to_num(m, nan=0.0) > 1.0 - 1e-6
+    rc = np.stack([(ly - local.origin_xy_m[1]) / local.cell_m,
+                   (lx - local.origin_xy_m[0]) / local.cell_m])
+    z = ndimage.map_coordinates(coeffs, rc, order=3, mode="nearest", prefilter=False)
     return np.where(mask, z, 0.0), mask
 
 
@@ -116,9 +127,9 @@ def _refine(surface: NDArray[np.float64], r: int, c: int) -> tuple[float, float]
 def _sweep(image: NDArray[np.float64], local: LocalMap, yaws: NDArray[np.float64], half: int,
            cell_m: float, smooth_px: float, highpass_px: float) -> NDArray[np.float64]:
     """NCC surfaces (yaws, shifts) of the rotated local map over ``image``."""
-    out = []
+    out, coeffs = [], _spline(local)
     for yaw in yaws:
-        t, mask = _template(local, float(yaw), half, cell_m)
+        t, mask = _template(local, coeffs, float(yaw), half, cell_m)
         out.append(_ncc(image, _bandpass(t, mask, smooth_px, highpass_px), mask))
     return np.stack(out)
 

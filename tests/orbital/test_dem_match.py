@@ -85,8 +85,11 @@ def test_matches_anywhere_in_the_search_window(world, dx: float, dy: float, yaw_
     local = local_elevation_map(_patch(hf, x, y, yaw, np.random.default_rng(7)))
     m = match_dem(local, omap, (x + dx, y + dy, yaw + math.radians(dyaw_deg)),
                   search_radius_m=25.0)
+    # every prior in the window gives a success at issue 67's strict threshold, 1 m / 2 deg
+    # (the heading error here is the orbital noise's: 0.1-0.9 deg at this place, whatever the
+    # prior)
     assert math.hypot(m.x_m - x, m.y_m - y) < 1.0
-    assert _yaw_err_deg(m.yaw_rad, yaw) < 1.0
+    assert _yaw_err_deg(m.yaw_rad, yaw) < 2.0
 
 
 def test_local_map_from_scans_and_poses() -> None:

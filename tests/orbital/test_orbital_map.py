@@ -148,3 +148,41 @@ def test_a_dem_scene_map_is_its_dtm_on_its_posts_with_its_crs(tmp_path: Path) ->
         (omap.origin_xy_m[0] + frame.origin_projected_xy_m[0],
          omap.origin_xy_m[1] + frame.origin_projected_xy_m[1]), abs=1e-6)
     np.testing.assert_array_equal(back.elevation_m[::-1], omap.dem_m)
+
+
+def test_a_dem_scene_map_carries_its_orthoimage_at_its_own_pixels(tmp_path: Path) -> None:
+    from marsscene.dem.io_write import write_geotiff
+
+    z = np.full((40, 50), -2500.0, np.float32)
+    z[10:20, 10:30] += 5.0
+    dtm = write_pds3_dtm(tmp_path / "DTEEC_ORTHO.IMG", z)
+    crs = read_dem(dtm).crs_wkt
+    x0, y0, x1, y1 = read_dem(dtm).bounds_xy_m
+
+    def dn(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return (0.2 + 1e-3 * (x - x0) + 2e-3 * (y - y0)).astype(np.float32)
+
+    px = 0.5
+    cx = x0 + px * (np.arange(round((x1 - x0) / px)) + 0.5)
+    cy = y0 + px * (np.arange(round((y1 - y0) / px)) + 0.5)  # row 0 south, as scene grids
+    ortho = write_geotiff(tmp_path / "ortho.tif", {"i_f": dn(*np.meshgrid(cx, cy))},
+                          origin_xy_m=(float(cx[0]), float(cy[0])), cell_m=px, crs_wkt=crs,
+                          origin_projected_xy_m=(0.0, 0.0))
+    cfg = ms.SceneConfig.from_dict({
+        "terrain": {"source": "dem", "dem_path": str(dtm), "ortho_path": str(ortho),
+                    "detail": False},
+        "craters": {"enabled": False}, "rocks": {"enabled": False},
+        "lighting": {"enabled": False}})
+    scene = ms.build_scene(cfg, seed=2)
+    omap = orbital_map(scene)
+    assert omap.image is not None and omap.image_pixel_m == px
+    assert omap.image_origin_xy_m is not None and omap.origin_projected_xy_m is not None
+    ox, oy = omap.origin_projected_xy_m
+    rows, cols = omap.image.shape
+    want = dn(*np.meshgrid(omap.image_origin_xy_m[0] + ox + px * np.arange(cols),
+                           omap.image_origin_xy_m[1] + oy + px * np.arange(rows)))
+    np.testing.assert_allclose(omap.image, want, atol=1e-6)  # every pixel where it was
+    fx0, fy0, fx1, fy1 = scene.heightfield.bounds_xy_m
+    assert omap.image_origin_xy_m[0] <= fx0 and omap.image_origin_xy_m[1] <= fy0
+    assert (omap.image_origin_xy_m[0] + px * (cols - 1) >= fx1
+            and omap.image_origin_xy_m[1] + px * (rows - 1) >= fy1)
