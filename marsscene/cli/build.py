@@ -80,6 +80,9 @@ def _apply_core(cfg: Any, *, dem: Path | None, procedural: bool, formats: tuple[
               help="Also write OUT/traversability/ (`marsscene traversability`: GeoTIFF layers, "
                    "PNG preview, JSON summary); needs the mjcf output.")
 @traversability.cell_option("--traversability-cell-m")
+@click.option("--orbital-map", "write_orbital", is_flag=True,
+              help="Also write OUT/orbital/: the scene as an orbiter sees it (dem.tif at 1 m "
+                   "posts, ortho.tif, orbital.json; docs/orbital.md).")
 @options_assets.options
 @options_dem.options
 @options_lighting.options
@@ -96,6 +99,7 @@ def build(
     rover_yaw_deg: float | None,
     write_traversability: bool,
     traversability_cell_m: float | None,
+    write_orbital: bool,
     **stage_options: Any,
 ) -> None:
     """Build a scene and write OUT/scene.usda, OUT/mjcf/scene.xml and OUT/manifest.json.
@@ -109,7 +113,7 @@ def build(
       marsscene build --preset main-crater --seed 7 --out scenes/crater
       marsscene build --preset mars-base --asset habitat.glb --asset-xy 120 -40
       marsscene build --seed 7 --rover --rover-xy 10 -5 --rover-yaw-deg 90
-      marsscene build --seed 7 --traversability
+      marsscene build --seed 7 --traversability --orbital-map
     """
     from marsscene import SceneConfig, build_scene, write_scene
     from marsscene.export import check_export_dependencies, check_output_dir
@@ -133,10 +137,14 @@ def build(
         scene = build_scene(cfg, seed=use_seed)
         log.info("[export] writing %s", ", ".join(cfg.export.formats))
         written = write_scene(scene, out_dir)
+        if write_orbital:
+            from marsscene.orbital import orbital_map, write_orbital_map
+
+            written["orbital"] = [write_orbital_map(orbital_map(scene), out_dir) / "dem.tif"]
     if write_traversability:
         written["traversability"] = traversability.write_map(out_dir, traversability_cell_m)
     for kind, paths in written.items():
         for p in paths:
             if p.name in ("scene.usda", "scene.usdc", "scene.usdz", "scene.xml", "manifest.json",
-                          "traversability.tif"):
+                          "traversability.tif", "dem.tif"):
                 click.echo(f"{kind:>8}: {p}")
