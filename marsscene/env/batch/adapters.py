@@ -5,7 +5,10 @@ Gymnasium's vector API (``gymnasium.vector.VectorEnv``, same-step autoreset as I
 The policy input of :class:`RslRlVecEnv` is one flat vector a rover: the 17 ``observation``
 values, then the height scan row by row (:func:`~marsscene.env.policy.policy_input`); a policy
 trained on it runs on :class:`~marsscene.env.nav.RoverNavEnv`'s observations through the same
-function.
+function. The camera's and the LiDAR's observations (:mod:`.sensing`) come as groups of
+their own, channels first, for a CNN encoder (rsl-rl's ``ActorCriticCNN`` takes the groups of
+three dimensions a rover to its CNNs, the others to its MLP): ``"depth"`` (N, 1, H, W) in m and
+``"lidar"`` (N, 2, channels, columns), the range in m then the mask (1: a return), float32.
 """
 
 from __future__ import annotations
@@ -17,14 +20,16 @@ import numpy as np
 from marsscene.env.batch.env import BatchNavEnv
 from marsscene.env.policy import policy_input
 
-__all__ = ["BatchVectorEnv", "RslRlVecEnv"]
+__all__ = ["BatchVectorEnv", "RslRlVecEnv", "groups"]
 
 
 class RslRlVecEnv:
     """:class:`BatchNavEnv` as rsl-rl's ``VecEnv`` (``rsl-rl-lib`` 3 or later; PyTorch).
 
-    Observations: a ``TensorDict`` with the group ``"policy"`` (the flat vector); give the
-    runner ``obs_groups={"actor": ["policy"], "critic": ["policy"]}``. ``dones`` is terminated
+    Observations: a ``TensorDict`` with the group ``"policy"`` (the flat vector) and, where
+    observed, ``"depth"`` and ``"lidar"`` (the module's docstring); give the runner e.g.
+    ``obs_groups={"actor": ["policy"], "critic": ["policy"]}`` (a blind MLP) or
+    ``{"actor": ["policy", "depth"], "critic": ["policy", "depth"]}``. ``dones`` is terminated
     or truncated; ``extras["time_outs"]`` the truncations (bootstrapped by PPO).
     """
 
@@ -54,8 +59,7 @@ class RslRlVecEnv:
     def _group(self, obs: dict[str, Any]) -> Any:
         from tensordict import TensorDict
 
-        return TensorDict({"policy": policy_input(obs)}, batch_size=[self.num_envs],
-                          device=self.device)
+        return TensorDict(groups(obs), batch_size=[self.num_envs], device=self.device)
 
     def get_observations(self) -> Any:
         return self._group(self._obs)
@@ -66,6 +70,21 @@ class RslRlVecEnv:
         dones = (terminated | truncated).long()
         return self._group(obs), reward.float(), dones, {"time_outs": truncated,
                                                          "termination": info["termination"]}
+
+
+def groups(obs: dict[str, Any]) -> dict[str, Any]:
+    """rsl-rl's observation groups of the batch's observations (PyTorch tensors or numpy
+    arrays): ``"policy"``, and ``"depth"`` and ``"lidar"`` where observed."""
+    from array_api_compat import array_namespace
+
+    out = {"policy": policy_input(obs)}
+    if "depth" in obs:
+        out["depth"] = obs["depth"]
+    if "lidar_range" in obs:
+        rng = obs["lidar_range"]
+        xp = array_namespace(rng)
+        out["lidar"] = xp.concat([rng, xp.astype(obs["lidar_mask"], rng.dtype)], axis=1)
+    return out
 
 
 def _vector_base() -> Any:
@@ -89,7 +108,7 @@ class BatchVectorEnv(_vector_base()):  # type: ignore[misc]
         self.env = env
         self.num_envs = env.num_envs
         self.metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
-        self.single_observation_space = spaces.Dict(env.obs_config.spaces())
+        self.single_observation_space = spaces.Dict(env.spaces())
         self.single_action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -97,7 +116,7 @@ class BatchVectorEnv(_vector_base()):  # type: ignore[misc]
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[dict[str, Any], dict[str, Any]]:
         if seed is not None:
-            self.env.bk.seed(seed)
+            self.env.seed(seed)
         return self.env.reset(), {}
 
     def step(self, actions: Any) -> tuple[Any, Any, Any, Any, dict[str, Any]]:

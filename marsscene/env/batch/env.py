@@ -12,7 +12,10 @@ it leans over ``task.start_max_tilt_deg`` is replaced by another of its world).
 Differences from the CPU environment, by design: the sensors are noise-free (the IMU and wheel
 encoders MuJoCo Warp computes; ``ObsConfig.noise_profile`` must be ``"none"``), the pose is the
 ground truth (``pose_source="truth"``), rocks are relief of the terrain (a wheel "collides"
-with a rock where it touches ground raised by one), and there is no camera or LiDAR.
+with a rock where it touches ground raised by one; the camera and LiDAR see that relief), and the
+camera gives depth only, channels first (:mod:`.sensing`). The height scan is privileged ground
+truth (the terrain's heights read from the world, no sensor's): a policy meant for a real rover
+observes ``depth`` or ``lidar_range`` instead (``ObsConfig(height_scan=None, ...)``).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from marsscene.env.batch.backend import Backend
 from marsscene.env.batch.judge import RockContacts, collided
 from marsscene.env.batch.model import WarpPhysics, tiled_model, warp_model
 from marsscene.env.batch.pool import settle_pool
+from marsscene.env.batch.sensing import BatchSensors, check_sensors, observation_spaces
 from marsscene.env.batch.worlds import WorldBatch
 from marsscene.env.observe import ObsConfig
 from marsscene.env.reward import RewardConfig
@@ -59,7 +63,8 @@ class BatchNavEnv:
     num_envs : int
         Rovers N.
     task, observations, reward, control_hz, physics_hz
-        As :class:`~marsscene.env.nav.RoverNavEnv`'s (observations: height scan only).
+        As :class:`~marsscene.env.nav.RoverNavEnv`'s (observations: the height scan, the
+        camera's depth, a LiDAR; :mod:`.sensing`).
     rover : RoverConfig, optional
         Default: :data:`BATCH_ROVER` (sphere wheels; the CPU environment's have cylinders).
     device : str, optional
@@ -67,7 +72,7 @@ class BatchNavEnv:
     library : {"torch", "numpy"}, optional
         Arrays returned (default: PyTorch where installed).
     seed : int
-        Seed of the episode draws.
+        Seed of the episode draws and the LiDAR's noise.
     physics : WarpPhysics, optional
         Heightfield posts, solver limits, buffers and determinism of MuJoCo Warp.
     """
@@ -117,6 +122,10 @@ class BatchNavEnv:
         self._con = {k: bk.view(getattr(con, k)) for k in ("geom", "worldid", "pos")}
         self._reset_mask = wp.zeros(self.num_envs, dtype=bool, device=self.device)
         self._task_arrays(terrains, tiled.offsets_xy_m)
+        obs = self.obs_config
+        self.sensors = (BatchSensors(self.mj_model, self.mjw_model, mjw, self.num_envs, obs,
+                                     self.control_hz, seed, bk)
+                        if obs.camera is not None or obs.lidar is not None else None)
         with bk.on_stream():
             self._pool, self.pool_level_fraction = settle_pool(
                 self.batch, terrains, model=self.mj_model, warp_model=self.mjw_model, data=data,
@@ -158,6 +167,16 @@ class BatchNavEnv:
         self.episodes = xp.zeros(2, dtype=xp.int64, device=device(self._offsets))  # ended, won
 
     # ---- episodes --------------------------------------------------------------------------
+    def seed(self, seed: int) -> None:
+        """Restart the episode draws and the LiDAR's noise from ``seed``."""
+        self.bk.seed(seed)
+        if self.sensors is not None:
+            self.sensors.restart(seed)
+
+    def spaces(self) -> dict[str, Any]:
+        """The ``gymnasium.spaces`` of one rover's observation keys (:mod:`.sensing`)."""
+        return observation_spaces(self.obs_config)
+
     def reset(self) -> dict[str, Any]:
         """Start a new episode on every rover; the observations."""
         with self.bk.on_stream():
@@ -246,13 +265,18 @@ class BatchNavEnv:
 
     def observe(self, state: RoverState | None = None) -> dict[str, Any]:
         """The observations of the rovers in ``state`` (now, by default; the CPU environment's
-        keys)."""
+        keys, images channels first). ``state`` must be the rovers' current state: the camera
+        and LiDAR see ``mjw_data``'s."""
         st = state if state is not None else self.state()
         out = st.observations(self.goal_xy_m, self.last_action)
         if self.obs_config.height_scan is not None:
             out["height_scan"] = taskmath.height_scan(
                 self._grids, self._grid_origins, self._cell_m, st.xyz_m, st.yaw_rad,
                 self._fwd, self._left, self.world)
+        if self.sensors is not None:
+            off = self._offsets[self.world]  # a reset rover may be on another world now
+            bounds = self._bounds[self.world] + self.xp.concat([off, off], axis=1)
+            out.update(self.sensors.observe(self.mjw_data, bounds))
         return out
 
     def _judge(self, state: RoverState, a: Any, moving: Any) -> judgement.Judgement:
@@ -274,9 +298,7 @@ class BatchNavEnv:
 
 
 def _check(obs: ObsConfig, num_envs: int, control_hz: float, physics_hz: float) -> None:
-    if obs.camera is not None or obs.lidar is not None:
-        raise ConfigError("the batched environment observes the state and a height scan; "
-                          "drop camera and lidar (RoverNavEnv has them)")
+    check_sensors(obs)
     if obs.noise_profile != "none" or obs.pose_source != "truth":
         raise ConfigError("the batched environment's sensors are noise-free and its pose the "
                           "truth: use ObsConfig(noise_profile='none', pose_source='truth')")
