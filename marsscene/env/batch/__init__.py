@@ -8,6 +8,8 @@
 - :class:`RslRlVecEnv`: the interface rsl-rl's runners train (``rsl-rl-lib``).
 - :class:`BatchVectorEnv`: Gymnasium's vector API.
 - :class:`WarpPhysics`: heightfield posts, solver limits and determinism of MuJoCo Warp.
+- :mod:`.sensing`: the navcam's depth and a LiDAR range image as observations
+  (``ObsConfig(camera=(W, H), depth=True, lidar=...)``), cast on the device.
 
 Docs: :doc:`/gym` (the batched environment); figures: :doc:`/results/gym`.
 """
