@@ -168,3 +168,32 @@ def test_same_seed_same_bytes_and_bad_input(batch: WorldBatch) -> None:
     with pytest.raises(ConfigError, match="depth only"):
         BatchNavEnv(batch, num_envs=1, device="cpu",
                     observations=ObsConfig(camera=(64, 64), noise_profile="none"))
+
+
+def test_final_sensors_off_casts_once_a_step_and_changes_no_observation(
+        env: BatchNavEnv, monkeypatch: Any) -> None:
+    sensors = env.sensors
+    assert sensors is not None
+    calls, cast = [], sensors.observe
+
+    def counted(*args: Any) -> dict[str, Any]:
+        calls.append(1)
+        return cast(*args)
+
+    monkeypatch.setattr(sensors, "observe", counted)
+    runs, finals = [], []
+    for final_sensors in (True, False):
+        env.final_sensors = final_sensors
+        env.seed(9)
+        env.reset()
+        calls.clear()
+        rng = np.random.default_rng(4)
+        steps = [env.step(rng.uniform(-1, 1, (N, 2))) for _ in range(3)]
+        runs.append(b"".join(s[0][k].tobytes() for s in steps
+                             for k in ("observation", "depth", "lidar_range")))
+        finals.append((len(calls), set(steps[-1][4]["final_observation"])))
+    env.final_sensors = True
+    assert runs[0] == runs[1]
+    assert finals[0][0] == 6 and finals[1][0] == 3
+    assert {"depth", "lidar_range", "lidar_mask"} <= finals[0][1]
+    assert finals[1][1] == {"observation", "achieved_goal", "desired_goal", "height_scan"}

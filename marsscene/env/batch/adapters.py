@@ -30,7 +30,9 @@ class RslRlVecEnv:
     observed, ``"depth"`` and ``"lidar"`` (the module's docstring); give the runner e.g.
     ``obs_groups={"actor": ["policy"], "critic": ["policy"]}`` (a blind MLP) or
     ``{"actor": ["policy", "depth"], "critic": ["policy", "depth"]}``. ``dones`` is terminated
-    or truncated; ``extras["time_outs"]`` the truncations (bootstrapped by PPO).
+    or truncated; ``extras["time_outs"]`` the truncations (bootstrapped by PPO). rsl-rl does
+    not read the final observation: make the environment with ``final_sensors=False`` to cast
+    its camera and LiDAR once a step instead of twice.
     """
 
     def __init__(self, env: BatchNavEnv) -> None:

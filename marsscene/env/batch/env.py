@@ -75,6 +75,10 @@ class BatchNavEnv:
         Seed of the episode draws and the LiDAR's noise.
     physics : WarpPhysics, optional
         Heightfield posts, solver limits, buffers and determinism of MuJoCo Warp.
+    final_sensors : bool
+        Whether ``info["final_observation"]`` holds the camera's and LiDAR's keys too (cast
+        twice a step: before the resets and after). False casts once a step (rsl-rl's PPO
+        never reads the final observation: it bootstraps time-outs from its values).
     """
 
     def __init__(self, worlds: Any, *, num_envs: int = 1024, task: NavTask | None = None,
@@ -82,7 +86,7 @@ class BatchNavEnv:
                  rover: RoverConfig | None = None, control_hz: float = 5.0,
                  physics_hz: float = 100.0, device: str | None = None,
                  library: str | None = None, seed: int = 0, pool: int = 256,
-                 physics: WarpPhysics | None = None) -> None:
+                 physics: WarpPhysics | None = None, final_sensors: bool = True) -> None:
         import mujoco_warp as mjw
         import warp as wp
 
@@ -93,6 +97,7 @@ class BatchNavEnv:
         self.rover = rover if rover is not None else BATCH_ROVER
         _check(self.obs_config, num_envs, control_hz, physics_hz)
         self.num_envs, self.control_hz = int(num_envs), float(control_hz)
+        self.final_sensors = bool(final_sensors)
         self.substeps = round(physics_hz / control_hz)
         self.steps_total = self.task.episode_steps(control_hz)
         self.batch = _batch(worlds, self.task, pool, seed)
@@ -245,7 +250,7 @@ class BatchNavEnv:
             state = self.state()
             j = self._judge(state, a, self.task.moving(v, w))
             self.last_distance_m = j.distance_m
-            final = self.observe(state)
+            final = self.observe(state, sensors=self.final_sensors)
             self.last_action = a
             done = j.terminated | j.truncated
             self.episodes = self.episodes + xp.stack([xp.sum(xp.astype(done, xp.int64)),
@@ -263,17 +268,18 @@ class BatchNavEnv:
         return RoverState.of_buffers(v["qpos"], v["qvel"], v["sensordata"], self.ids,
                                      self._offsets[self.world], self.rover)
 
-    def observe(self, state: RoverState | None = None) -> dict[str, Any]:
+    def observe(self, state: RoverState | None = None, *, sensors: bool = True
+                ) -> dict[str, Any]:
         """The observations of the rovers in ``state`` (now, by default; the CPU environment's
         keys, images channels first). ``state`` must be the rovers' current state: the camera
-        and LiDAR see ``mjw_data``'s."""
+        and LiDAR see ``mjw_data``'s (``sensors=False``: not cast)."""
         st = state if state is not None else self.state()
         out = st.observations(self.goal_xy_m, self.last_action)
         if self.obs_config.height_scan is not None:
             out["height_scan"] = taskmath.height_scan(
                 self._grids, self._grid_origins, self._cell_m, st.xyz_m, st.yaw_rad,
                 self._fwd, self._left, self.world)
-        if self.sensors is not None:
+        if self.sensors is not None and sensors:
             off = self._offsets[self.world]  # a reset rover may be on another world now
             bounds = self._bounds[self.world] + self.xp.concat([off, off], axis=1)
             out.update(self.sensors.observe(self.mjw_data, bounds))
