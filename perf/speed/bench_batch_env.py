@@ -68,6 +68,12 @@ PARAMS = (
     Param("variants", names, "WHEELS/ITERATIONS/LS_ITERATIONS[/det]", quick=("sphere/100/50",),
           full=("sphere/100/50",)),
     Param("steps", int, "run, repro: timed steps", quick=50, full=50),
+    Param("depth_px", int, "run: a square depth camera of this many pixels a side in the "
+          "observations (0: none)", quick=0, full=0),
+    Param("lidar", optional(str), "run: a LiDAR model in the observations (none: no LiDAR)",
+          quick=None, full=None),
+    Param("final_sensors", bool, "run: also cast the sensors for info['final_observation']",
+          quick=True, full=True),
     Param("episodes", int, "sim2sim: seeded episodes", quick=5, full=50),
     Param("out", Path, "curve: the figure to write", quick=Path("curve.png"),
           full=Path("curve.png")),
@@ -193,16 +199,20 @@ def agree(batch_path: Path, posts: tuple[float, ...], variants: tuple[str, ...],
 
 
 def run(batch_path: Path, envs: tuple[int, ...], variants: tuple[str, ...],
-        folders: Path | None, steps: int) -> list[dict[str, Any]]:
+        folders: Path | None, steps: int, sensors: dict[str, Any] | None = None
+        ) -> list[dict[str, Any]]:
+    """Environment steps a second; ``sensors``: ``depth_px``, ``lidar``, ``final_sensors``."""
     import torch
 
+    sensors = sensors or {}
     out = []
     print(f"GPU: {torch.cuda.get_device_name()}; CPU cores: {os.cpu_count()}", flush=True)
     for spec in variants:
         print(f"-- wheels/iterations/line-search iterations[/deterministic]: {spec}")
         rover, physics = _variant(spec)
         for n in envs:
-            out.append({"variant": spec, **_run_one(batch_path, n, rover, physics, steps)})
+            out.append({"variant": spec, **sensors,
+                        **_run_one(batch_path, n, rover, physics, steps, sensors)})
     if folders is not None:
         cores = os.cpu_count() or 1
         one = _cpu_rate(str(folders))
@@ -215,14 +225,25 @@ def run(batch_path: Path, envs: tuple[int, ...], variants: tuple[str, ...],
     return out
 
 
+def _observations(depth_px: int = 0, lidar: str | None = None, **_: Any) -> Any:
+    """The batch's default observations, plus a depth camera and a LiDAR when asked."""
+    from marsscene.env import ObsConfig
+
+    camera = (depth_px, depth_px) if depth_px else None
+    return ObsConfig(noise_profile="none", camera=camera, depth=bool(depth_px), lidar=lidar)
+
+
 def _run_one(batch_path: Path, n: int, rover: RoverConfig, physics: WarpPhysics,
-             steps: int) -> dict[str, Any]:
+             steps: int, sensors: dict[str, Any] | None = None) -> dict[str, Any]:
     import torch
 
     from marsscene.env.batch import BatchNavEnv
 
+    sensors = sensors or {}
     t0 = time.perf_counter()
-    env = BatchNavEnv(batch_path, num_envs=n, seed=0, rover=rover, physics=physics)
+    env = BatchNavEnv(batch_path, num_envs=n, seed=0, rover=rover, physics=physics,
+                      observations=_observations(**sensors),
+                      final_sensors=sensors.get("final_sensors", True))
     made = time.perf_counter() - t0
     gen = torch.Generator(device=env.bk.tdevice).manual_seed(0)
     actions = torch.rand((steps + 3, n, 2), generator=gen, device=env.bk.tdevice) * 2 - 1
@@ -357,7 +378,8 @@ def sim2sim(policy_path: Path, folders: Path, episodes: int) -> dict[str, Any]:
 
 def main(what: str, path: Path | None, folders: Path | None, posts: tuple[float, ...],
          device: str, envs: tuple[int, ...], variants: tuple[str, ...], steps: int,
-         episodes: int, out: Path, gpu: float | None,
+         episodes: int, out: Path, gpu: float | None, depth_px: int, lidar: str | None,
+         final_sensors: bool,
          cpu: float | None) -> dict[str, Any] | list[dict[str, Any]]:
     if what in ("sim2sim", "curve") and path is None:
         raise ConfigError(f"batch_env --what {what} needs --path (the "
@@ -373,7 +395,8 @@ def main(what: str, path: Path | None, folders: Path | None, posts: tuple[float,
     if what == "agree":
         return agree(batch, posts, variants, device)
     if what == "run":
-        return run(batch, envs, variants, folders, steps)
+        return run(batch, envs, variants, folders, steps,
+                   {"depth_px": depth_px, "lidar": lidar, "final_sensors": final_sensors})
     if what == "repro":
         return repro(batch, envs[0], variants, steps)
     if what == "curve":
