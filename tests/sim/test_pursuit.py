@@ -16,8 +16,8 @@ from marsscene.runtime import (
     author_route,
 )
 from marsscene.seeding import stage_rng
-from marsscene.sim.driver import drive_sim
 from marsscene.sim.cross_track import cross_track_m
+from marsscene.sim.driver import drive_sim
 from marsscene.sim.rover_sim import RoverSim
 from marsscene.terrain.heightfield import Heightfield
 

@@ -8,8 +8,8 @@ from typing import Any
 from marsscene._format import fmt
 from marsscene._layout import MJCF_HFIELD_ASSET, MJCF_TEXTURE_ASSET
 
-__all__ = ["HFIELD_ASSET", "INTEGRATOR", "REGOLITH_FRICTION", "TEXTURE_ASSET", "TORSION_ROLL_FRICTION",
-           "fmt", "png_bytes"]
+__all__ = ["HFIELD_ASSET", "INTEGRATOR", "REGOLITH_FRICTION", "TEXTURE_ASSET",
+           "TORSION_ROLL_FRICTION", "fmt", "png_bytes"]
 
 #: MuJoCo's torsional and rolling friction of every contact surface the scene and the rover write
 #: (MuJoCo's own defaults are 0.005 and 0.0001; these damp spinning and rolling on the hfield).
