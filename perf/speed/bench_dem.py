@@ -37,14 +37,20 @@ def _crop() -> tuple[int, int, int, int]:
     return (2 * lines // 5, samples // 6, lines // 5, 2 * samples // 3)
 
 
+def dtm_surface(x: np.ndarray, y: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A HiRISE-shaped DTM's elevations (m) at columns ``x`` (samples,) and rows ``y`` (rows, 1):
+    30 m swells, a gentle tilt and 0.3 m noise about -2,500 m (float32, rows x samples)."""
+    return (-2500.0 + 30.0 * np.sin(x / 700.0) * np.cos(y / 900.0) + 0.002 * y
+            + rng.standard_normal((y.shape[0], x.shape[0]), dtype=np.float32) * 0.3)
+
+
 def _blocks(rows_per_block: int = 500):
     lines, samples = _DTM["lines"], _DTM["samples"]
     rng = np.random.default_rng(7)
     x = np.arange(samples, dtype=np.float32)
     for r0 in range(0, lines, rows_per_block):
         y = np.arange(r0, r0 + rows_per_block, dtype=np.float32)[:, None]
-        z = (-2500.0 + 30.0 * np.sin(x / 700.0) * np.cos(y / 900.0) + 0.002 * y
-             + rng.standard_normal((rows_per_block, samples), dtype=np.float32) * 0.3)
+        z = dtm_surface(x, y, rng)
         z[:, :300] = np.nan  # outside the stereo strip (MISSING_CONSTANT)
         z[:, -300:] = np.nan
         if r0 <= lines // 2 < r0 + rows_per_block:

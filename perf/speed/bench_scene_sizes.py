@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from marsscene.testing.pds3 import write_pds3_dtm
+from perf.speed.bench_dem import dtm_surface
 from perf.suite import Param, ints
 
 SIZES_M = (1000, 1200, 1500, 2000, 2500, 3000, 3600)
@@ -53,8 +54,7 @@ def _dtm_blocks(rows_per_block: int = 500) -> Iterator[np.ndarray]:
     x = np.arange(DTM_SAMPLES, dtype=np.float32)
     for r0 in range(0, DTM_LINES, rows_per_block):
         y = np.arange(r0, r0 + rows_per_block, dtype=np.float32)[:, None]
-        z = (-2500.0 + 30.0 * np.sin(x / 700.0) * np.cos(y / 900.0) + 0.002 * y
-             + rng.standard_normal((rows_per_block, DTM_SAMPLES), dtype=np.float32) * 0.3)
+        z = dtm_surface(x, y, rng)
         centre = DTM_SAMPLES / 2 + STRIP_SLANT * (y - DTM_LINES / 2)
         z[np.abs(x - centre) > STRIP_HALF_WIDTH_POSTS] = np.nan  # outside the stereo strip
         yield z.astype(np.float32)
