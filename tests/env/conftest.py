@@ -29,3 +29,19 @@ def nav_world(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = shared_folder(tmp_path_factory, "navworld", [_BASE, 3],
                            lambda folder: sampler(folder).path(0))
     return sampler(folder).path(0)
+
+
+@pytest.fixture(scope="session")
+def batch(tmp_path_factory: pytest.TempPathFactory) -> object:
+    """The batched environments' two ``rocks`` worlds as a ``WorldBatch``, their scenes built
+    once for every xdist worker."""
+    pytest.importorskip("mujoco_warp")
+    from marsscene.env import WorldSampler
+    from marsscene.env.batch import WorldBatch
+
+    def sampler(folder: Path) -> WorldSampler:
+        return WorldSampler(base="rocks", count=2, cache_dir=str(folder))
+
+    folder = shared_folder(tmp_path_factory, "rocksworlds", ["rocks", 2],
+                           lambda folder: [sampler(folder).path(i) for i in range(2)])
+    return WorldBatch.build(sampler(folder), pool=4)

@@ -13,7 +13,7 @@ import pytest
 
 pytest.importorskip("mujoco_warp")
 
-from marsscene.env import NavEpisode, RoverNavEnv, WorldSampler, judgement
+from marsscene.env import NavEpisode, RoverNavEnv, judgement
 from marsscene.env.batch import BatchNavEnv, BatchVectorEnv, WarpPhysics, WorldBatch
 from marsscene.env.batch.judge import collided
 from marsscene.env.batch.model import tiled_model, warp_model
@@ -23,12 +23,6 @@ from marsscene.errors import ConfigError
 from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S, RoverConfig
 
 N = 3
-
-
-@pytest.fixture(scope="module")
-def batch(tmp_path_factory: pytest.TempPathFactory) -> WorldBatch:
-    cache = tmp_path_factory.mktemp("worlds")
-    return WorldBatch.build(WorldSampler(base="rocks", count=2, cache_dir=str(cache)), pool=4)
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,6 @@ pytest.importorskip("mujoco_warp")
 
 import warp as wp
 
-from marsscene.env import WorldSampler
 from marsscene.env.batch import BatchNavEnv, BatchVectorEnv, WorldBatch
 from marsscene.env.batch.adapters import groups
 from marsscene.env.observe import HeightScan, ObsConfig
@@ -29,12 +28,6 @@ from marsscene.sensors.lidar import beam_geometry
 N, PX = 3, 16
 SENSED = ObsConfig(noise_profile="none", camera=(PX, PX), depth=True, lidar="simple",
                    height_scan=HeightScan(size_m=1.0, resolution_m=0.5))
-
-
-@pytest.fixture(scope="module")
-def batch(tmp_path_factory: pytest.TempPathFactory) -> WorldBatch:
-    cache = tmp_path_factory.mktemp("worlds")
-    return WorldBatch.build(WorldSampler(base="rocks", count=2, cache_dir=str(cache)), pool=4)
 
 
 @pytest.fixture(scope="module")
