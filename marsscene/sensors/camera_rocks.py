@@ -22,7 +22,8 @@ from numpy.typing import NDArray
 from marsscene.sensors.camera_shadow import shadowed_normals
 from marsscene.terrain.horizon import SunShadow
 
-__all__ = ["ATLAS", "PEBBLE_MAX_M", "RockLOD", "read_rock_catalog", "rock_arrays"]
+__all__ = ["ATLAS", "PEBBLE_MAX_M", "RockLOD", "read_rock_catalog", "read_rock_columns",
+           "rock_arrays"]
 
 ATLAS = 8  # rock texture atlas: 8 x 8 colour cells
 _VARIANTS = 8
@@ -30,40 +31,36 @@ _VARIANTS = 8
 PEBBLE_MAX_M = 0.15
 
 
-def _read_parquet_catalog(path: Path, include_mjcf: bool = False) -> NDArray[np.float64]:
-    from marsscene._optional import require_pyarrow
+def read_rock_columns(scene_dir: Path) -> dict[str, NDArray[np.float64]] | None:
+    """Every column of a scene folder's rock catalogue as float64 arrays, by name
+    (``rocks.csv``, else ``rocks.parquet``); None where the scene has no catalogue."""
+    path = scene_dir / "rocks.csv"
+    if path.is_file():
+        with open(path, encoding="utf-8") as fh:
+            header = next(csv.reader(fh))
+        raw = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2).reshape(-1, len(header))
+        return {name: raw[:, i] for i, name in enumerate(header)}
+    if (scene_dir / "rocks.parquet").is_file():
+        from marsscene._optional import require_pyarrow
 
-    require_pyarrow()
-    import pyarrow.parquet as pq
+        require_pyarrow()
+        import pyarrow.parquet as pq
 
-    t = pq.read_table(str(path))
-    col = {name: t.column(name).to_numpy().astype(np.float64) for name in t.column_names}
-    keep = (col["in_mjcf"] == 0) | include_mjcf
-    return np.column_stack([col[k][keep] for k in ("id", "x_m", "y_m", "z_m", "diameter_m")]
-                           + [(col["height_m"] + col["burial_m"])[keep]]).reshape(-1, 6)
+        t = pq.read_table(str(scene_dir / "rocks.parquet"))
+        return {name: t.column(name).to_numpy().astype(np.float64) for name in t.column_names}
+    return None
 
 
 def read_rock_catalog(scene_dir: Path, *, include_mjcf: bool = False) -> NDArray[np.float64]:
     """``rocks.csv`` (else ``rocks.parquet``) rows not already MJCF geoms (all rows with
     ``include_mjcf``): (N, 6) id, x, y, z, d, h+burial (m)."""
-    path = scene_dir / "rocks.csv"
-    if not path.is_file():
-        if (scene_dir / "rocks.parquet").is_file():
-            return _read_parquet_catalog(scene_dir / "rocks.parquet", include_mjcf)
+    col = read_rock_columns(scene_dir)
+    if col is None or len(col["x_m"]) == 0:
         return np.zeros((0, 6))
-    with open(path, encoding="utf-8") as fh:
-        header = next(csv.reader(fh))
-    col = {name: i for i, name in enumerate(header)}
-    raw = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    if raw.size == 0:
-        return np.zeros((0, 6))
-    keep = (raw[:, col["in_mjcf"]] == 0 if "in_mjcf" in col and not include_mjcf
-            else np.ones(len(raw), bool))
-    r = raw[keep]
-    return np.column_stack([
-        r[:, col["id"]], r[:, col["x_m"]], r[:, col["y_m"]], r[:, col["z_m"]],
-        r[:, col["diameter_m"]], r[:, col["height_m"]] + r[:, col["burial_m"]],
-    ])
+    keep = (col["in_mjcf"] == 0 if "in_mjcf" in col and not include_mjcf
+            else np.ones(len(col["x_m"]), bool))
+    return np.column_stack([col[k][keep] for k in ("id", "x_m", "y_m", "z_m", "diameter_m")]
+                           + [(col["height_m"] + col["burial_m"])[keep]])
 
 
 def _icosphere(subdivide: bool) -> tuple[NDArray[np.float64], NDArray[np.int32]]:

@@ -7,7 +7,6 @@ scene frame's CRS), ``preview.png`` (hazards in red over a hillshade) and ``summ
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 from dataclasses import dataclass
@@ -55,22 +54,11 @@ class SceneInputs:
 def _rock_columns(scene_dir: Path) -> dict[str, NDArray[np.float64]]:
     """x, y, diameter and exposed height of every catalogue rock (``rocks.csv``, else
     ``rocks.parquet``; none without a catalogue)."""
+    from marsscene.sensors.camera_rocks import read_rock_columns
+
     names = ("x_m", "y_m", "diameter_m", "height_m")
-    path = scene_dir / "rocks.csv"
-    if path.is_file():
-        with open(path, encoding="utf-8") as fh:
-            header = next(csv.reader(fh))
-        raw = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2).reshape(-1, len(header))
-        return {k: raw[:, header.index(k)] for k in names}
-    if (scene_dir / "rocks.parquet").is_file():
-        from marsscene._optional import require_pyarrow
-
-        require_pyarrow()
-        import pyarrow.parquet as pq
-
-        table = pq.read_table(str(scene_dir / "rocks.parquet"), columns=list(names))
-        return {k: table.column(k).to_numpy().astype(np.float64) for k in names}
-    return {k: np.zeros(0) for k in names}
+    col = read_rock_columns(scene_dir)
+    return {k: col[k] if col is not None else np.zeros(0) for k in names}
 
 
 def _frame(scene_dir: Path) -> tuple[str | None, tuple[float, float] | None]:
