@@ -62,6 +62,7 @@ def main(verbose: int, quiet: int) -> None:
 def _register() -> None:
     from marsscene.cli.bag import bag
     from marsscene.cli.benchmark import benchmark
+    from marsscene.cli.benchmark_loc import loc
     from marsscene.cli.benchmark_vpr import vpr, vpr_eval
     from marsscene.cli.build import build
     from marsscene.cli.drive import drive
@@ -86,6 +87,7 @@ def _register() -> None:
     main.add_command(benchmark)
     benchmark.add_command(vpr)
     benchmark.add_command(vpr_eval)
+    benchmark.add_command(loc)
 
 
 _register()
