@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import functools
 import json
 import math
@@ -18,8 +19,9 @@ from marsscene.rover.lidar import LidarConfig
 from marsscene.rover.rates import check_rate
 
 __all__ = [
-    "GOAL_TOLERANCE_M", "OMEGA_MAX_RAD_S", "V_MAX_M_S", "CameraConfig", "LidarConfig",
-    "NoiseConfig", "RoverConfig", "RunConfig", "noise_profiles",
+    "GOAL_TOLERANCE_M", "OMEGA_MAX_RAD_S", "PERSEVERANCE_BODY", "V_MAX_M_S", "CameraConfig",
+    "LidarConfig", "NoiseConfig", "RoverBody", "RoverConfig", "RoverType", "RunConfig",
+    "noise_profiles", "rover_body", "rover_types",
 ]
 
 #: The MarsLab protocol's bounds on ``cmd_vel``: forward speed (m/s) and yaw rate (rad/s). The
@@ -93,6 +95,137 @@ class RoverConfig:
         check_range("rover.friction", self.friction, 0.05, 2.0)
         check_range("rover.mast_height_m", self.mast_height_m, self.ride_height_m, 5.0)
         check_choice("rover.wheel_collision", self.wheel_collision, ("cylinder", "sphere"))
+
+    @classmethod
+    def load(cls, name: str) -> RoverConfig:
+        """A rover type by name: ``"perseverance"`` (the default :class:`RoverConfig`) or a
+        file ``data/rovers/NAME.toml`` (:func:`rover_types`), or a path to such a file.
+
+        Examples
+        --------
+        >>> RoverConfig.load("mer").mass_kg
+        185.0
+        """
+        if name == "perseverance":
+            return RoverConfig()
+        path = Path(name)
+        if path.suffix != ".toml":
+            types = rover_types()
+            if name not in types:
+                raise ConfigError(f"rover type {name!r} is unknown; known: "
+                                  f"{', '.join(['perseverance', *types])}")
+            path = types[name]
+        return _rover_type(path)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RoverBody:
+    """A rover type's suspension, link masses, chassis and sensor mounts (lengths in m, masses
+    in kg, ``base_link`` frame); the defaults are the Perseverance-class rover's
+    (:doc:`/runtime`). The link table (:mod:`marsscene.rover.links`) and the sensor mounts
+    (:mod:`marsscene.rover.geometry`) read them."""
+
+    rocker_kg: float = 30.0
+    bogie_kg: float = 20.0
+    steer_kg: float = 4.0
+    wheel_kg: float = 20.0
+    rocker_y_frac: float = 0.375
+    """Rocker pivot |y| as a fraction of the track."""
+    pivot_above_ground_m: float = 0.65
+    """Rocker pivot height on flat ground."""
+    bogie_above_ground_m: float = 0.45
+    """Bogie pivot height on flat ground."""
+    bogie_half_m: float = 0.5
+    """Half the bogie's length (middle to rear axle / 2: the middle axle sits at x = 0)."""
+    rocker_rise_m: float = 0.2
+    """The rocker's front end above the front wheel centre."""
+    chassis_half_m: tuple[float, float, float] = (0.9, 0.55, 0.2)
+    chassis_z_m: float = 0.05
+    mast_x_m: float = 0.7
+    mast_radius_m: float = 0.06
+    rocker_radius_m: float = 0.06
+    bogie_radius_m: float = 0.05
+    steer_unit_m: tuple[float, float, float] = (0.05, 0.15, 0.2)
+    """Steering unit: radius, half height, z of the centre above the wheel centre."""
+    diff_bar_half_m: tuple[float, float, float] = (0.04, 0.75, 0.03)
+    diff_x_m: float = -0.6
+    diff_z_m: float = 0.35
+    lidar_x_m: float = 0.7
+    lidar_above_camera_m: float = 0.12
+    camera_x_m: float = 0.75
+    camera_tilt_deg: float = 20.0
+
+    def __post_init__(self) -> None:
+        for key in ("rocker_kg", "bogie_kg", "steer_kg", "wheel_kg"):
+            check_range(f"body.{key}", getattr(self, key), 0.0, 500.0, lo_open=True)
+        check_range("body.rocker_y_frac", self.rocker_y_frac, 0.05, 0.5)
+        check_range("body.camera_tilt_deg", self.camera_tilt_deg, -90.0, 90.0)
+        for key in ("chassis_half_m", "steer_unit_m", "diff_bar_half_m"):
+            value = tuple(float(v) for v in getattr(self, key))
+            if len(value) != 3 or min(value[:2]) <= 0:
+                raise ConfigError(f"body.{key} = {value!r} must be 3 numbers, the first two > 0")
+            object.__setattr__(self, key, value)
+
+
+#: The Perseverance-class rover's body: the default of every :class:`RoverConfig`.
+PERSEVERANCE_BODY = RoverBody()
+
+
+@dataclass(frozen=True, kw_only=True)
+class RoverType(RoverConfig):
+    """A named rover type (``data/rovers/NAME.toml``): a :class:`RoverConfig` with its own
+    ``body`` and top speed. ``sources`` cites every number of the file (not compared)."""
+
+    name: str
+    body: RoverBody = PERSEVERANCE_BODY
+    max_speed_m_s: float = 0.5
+    """The published top speed on flat ground (m/s); the wheel speed limit follows from it."""
+    sources: tuple[tuple[str, str], ...] = field(default=(), compare=False)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_range("rover.max_speed_m_s", self.max_speed_m_s, 0.001, 5.0)
+        rear = self.wheelbase_rear_m / 2.0
+        if abs(self.body.bogie_half_m - rear) > 1e-9:
+            raise ConfigError(f"rover {self.name}: body.bogie_half_m = {self.body.bogie_half_m} "
+                              f"must be half the rear wheelbase ({rear})")
+
+
+def rover_body(cfg: RoverConfig) -> RoverBody:
+    """The body of ``cfg``: its type's, else the Perseverance-class rover's."""
+    return cfg.body if isinstance(cfg, RoverType) else PERSEVERANCE_BODY
+
+
+def rover_types() -> dict[str, Path]:
+    """The rover types shipped as data (``data/rovers/*.toml``): name -> file."""
+    folder = resources.files("marsscene.rover").joinpath("data/rovers")
+    return {Path(str(p)).stem: Path(str(p)) for p in sorted(folder.iterdir(), key=str)
+            if str(p).endswith(".toml")}
+
+
+@functools.cache
+def _rover_type(path: Path) -> RoverType:
+    doc = _read_doc(path, "rover type")
+    if not isinstance(doc, dict) or not isinstance(doc.get("rover"), dict):
+        raise ConfigError(f"{path}: a rover type has a [rover] table")
+    rover = dict(doc["rover"])
+    sources = doc.get("sources", {})
+    if not isinstance(sources, dict):
+        raise ConfigError(f"{path}: [sources] maps each number to its reference")
+    known = set(RoverType.__dataclass_fields__) | set(RoverBody.__dataclass_fields__)
+    uncited = sorted(k for k in (*rover, *doc.get("body", {})) if k != "name" and k not in sources)
+    if uncited or set(sources) - known:
+        raise ConfigError(f"{path}: uncited numbers {uncited} or unknown sources "
+                          f"{sorted(set(sources) - known)}")
+    if "steer_limit_deg" in rover:
+        rover["steer_limit_rad"] = math.radians(rover.pop("steer_limit_deg"))
+    if "max_speed_m_s" in rover and "wheel_radius_m" in rover:  # the speed limit's wheel rate
+        limit = rover["max_speed_m_s"] / rover["wheel_radius_m"]
+        rover.setdefault("wheel_speed_limit_rad_s", limit)
+    rover.setdefault("name", path.stem)
+    typed = dataclass_from_mapping(RoverType, {**rover, "body": doc.get("body", {})}, "rover")
+    return dataclasses.replace(typed, sources=tuple(sorted(sources.items())))
+
 
 
 def noise_profiles() -> dict[str, dict[str, Any]]:

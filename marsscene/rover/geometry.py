@@ -21,7 +21,8 @@ from array_api_compat import device
 from numpy.typing import NDArray
 
 from marsscene._xp import namespace
-from marsscene.rover.config import RoverConfig
+from marsscene.rover.config import PERSEVERANCE_BODY as _P
+from marsscene.rover.config import RoverConfig, rover_body
 
 __all__ = [
     "DRIVE_JOINTS",
@@ -40,13 +41,15 @@ DRIVE_JOINTS = ("drive_fl", "drive_fr", "drive_ml", "drive_mr", "drive_rl", "dri
 STEER_JOINTS = ("steer_fl", "steer_fr", "steer_rl", "steer_rr")
 _STEERED = [0, 1, 4, 5]  # indices into DRIVE_JOINTS
 
-ROCKER_Y_FRAC = 0.375  # rocker pivot |y| as a fraction of the track
-PIVOT_ABOVE_GROUND_M = 0.65
-BOGIE_ABOVE_GROUND_M = 0.45
-BOGIE_HALF_M = 0.5
+# The Perseverance-class rover's suspension and sensor mounts (a rover type's own: its
+# RoverConfig body, marsscene.rover.config.rover_body).
+ROCKER_Y_FRAC = _P.rocker_y_frac  # rocker pivot |y| as a fraction of the track
+PIVOT_ABOVE_GROUND_M = _P.pivot_above_ground_m
+BOGIE_ABOVE_GROUND_M = _P.bogie_above_ground_m
+BOGIE_HALF_M = _P.bogie_half_m
 # Sensor mounts in base_link (m): LiDAR on the mast top, navcam at the mast height, tilted down.
-LIDAR_X_M, LIDAR_ABOVE_CAMERA_M = 0.7, 0.12
-CAMERA_X_M, CAMERA_TILT_DEG = 0.75, 20.0
+LIDAR_X_M, LIDAR_ABOVE_CAMERA_M = _P.lidar_x_m, _P.lidar_above_camera_m
+CAMERA_X_M, CAMERA_TILT_DEG = _P.camera_x_m, _P.camera_tilt_deg
 
 
 def wheel_positions_xy(cfg: RoverConfig) -> NDArray[np.float64]:
@@ -150,11 +153,11 @@ def sensor_mounts(cfg: RoverConfig) -> dict[str, tuple[tuple[float, float, float
     ``lidar`` and ``camera`` (the navcam body: x forward, y left, z up, pitched down by
     ``pitch``); the IMU sits at the ``base_link`` origin. The MJCF below uses the same numbers.
     """
-    mast = cfg.mast_height_m - cfg.ride_height_m
+    mast, b = cfg.mast_height_m - cfg.ride_height_m, rover_body(cfg)
     return {
         "imu": ((0.0, 0.0, 0.0), 0.0),
-        "lidar": ((LIDAR_X_M, 0.0, mast + LIDAR_ABOVE_CAMERA_M), 0.0),
-        "camera": ((CAMERA_X_M, 0.0, mast), math.radians(CAMERA_TILT_DEG)),
+        "lidar": ((b.lidar_x_m, 0.0, mast + b.lidar_above_camera_m), 0.0),
+        "camera": ((b.camera_x_m, 0.0, mast), math.radians(b.camera_tilt_deg)),
     }
 
 
@@ -162,9 +165,10 @@ def navcam_mount(cfg: RoverConfig) -> tuple[tuple[float, float, float], tuple[fl
     """The mast camera's position in the chassis body frame (m) and its MJCF ``xyaxes`` (the
     camera's x and y axes in that frame; it looks along its -z, tilted down by
     ``CAMERA_TILT_DEG``)."""
-    tilt = math.radians(CAMERA_TILT_DEG)
+    b = rover_body(cfg)
+    tilt = math.radians(b.camera_tilt_deg)
     mast = cfg.mast_height_m - cfg.ride_height_m
-    return (CAMERA_X_M, 0.0, mast), (0.0, -1.0, 0.0, math.sin(tilt), 0.0, math.cos(tilt))
+    return (b.camera_x_m, 0.0, mast), (0.0, -1.0, 0.0, math.sin(tilt), 0.0, math.cos(tilt))
 
 
 @lru_cache(maxsize=16)

@@ -27,13 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.rover.config import RoverConfig
-from marsscene.rover.geometry import (
-    BOGIE_ABOVE_GROUND_M,
-    BOGIE_HALF_M,
-    PIVOT_ABOVE_GROUND_M,
-    ROCKER_Y_FRAC,
-)
+from marsscene.rover.config import PERSEVERANCE_BODY as _P
+from marsscene.rover.config import RoverBody, RoverConfig, rover_body
 
 __all__ = [
     "BOGIE_KG",
@@ -54,14 +49,12 @@ __all__ = [
     "rover_links",
 ]
 
-# Masses (kg): rockers, bogies, corner steering units, wheels; the chassis body (incl. mast, arm,
-# RTG) takes the rest of RoverConfig.mass_kg.
-ROCKER_KG, BOGIE_KG, STEER_KG, WHEEL_KG = 30.0, 20.0, 4.0, 20.0
-CHASSIS_HALF_M = (0.9, 0.55, 0.2)
-CHASSIS_Z_M = 0.05
-MAST_RADIUS_M = 0.06
-ROCKER_RADIUS_M, BOGIE_RADIUS_M = 0.06, 0.05
-STEER_UNIT_M = (0.05, 0.15, 0.2)  # radius, half height, z of the centre
+# The Perseverance-class rover's body (a rover type's own: rover_body(cfg)). Masses (kg):
+# rockers, bogies, corner steering units, wheels; the chassis body (incl. mast, arm, RTG) takes
+# the rest of RoverConfig.mass_kg.
+ROCKER_KG, BOGIE_KG, STEER_KG, WHEEL_KG = _P.rocker_kg, _P.bogie_kg, _P.steer_kg, _P.wheel_kg
+CHASSIS_HALF_M = _P.chassis_half_m
+CHASSIS_Z_M = _P.chassis_z_m
 ROCKER_RANGE_RAD, BOGIE_RANGE_RAD = 0.5, 0.6
 ROCKER_DAMPING_NM_S = BOGIE_DAMPING_NM_S = 20.0
 STEER_ARMATURE_KG_M2, STEER_DAMPING_NM_S = 1.0, 50.0
@@ -70,8 +63,6 @@ STEER_ACT_KV_NM_S = 200.0
 DRIVE_ARMATURE_KG_M2, DRIVE_DAMPING_NM_S = 0.5, 0.5
 # The USD differential: a bar on the deck and two rods (masses taken from the chassis).
 DIFF_BAR_KG, DIFF_ROD_KG = 2.0, 0.5
-DIFF_X_M, DIFF_Z_M = -0.6, 0.35  # bar pivot in base_link (behind the rocker pivots, on the deck)
-DIFF_BAR_HALF_M = (0.04, 0.75, 0.03)
 DIFF_ROD_RADIUS_M = 0.02
 
 
@@ -135,18 +126,20 @@ class Link:
 def chassis_mass_kg(cfg: RoverConfig, *, differential: bool = False) -> float:
     """Mass of the chassis body: the rover's mass minus every other link (and, for the USD
     rover, the differential's bar and rods)."""
-    rest = 2 * (ROCKER_KG + BOGIE_KG) + 4 * STEER_KG + 6 * WHEEL_KG
+    b = rover_body(cfg)
+    rest = 2 * (b.rocker_kg + b.bogie_kg) + 4 * b.steer_kg + 6 * b.wheel_kg
     return cfg.mass_kg - rest - (DIFF_BAR_KG + 2 * DIFF_ROD_KG if differential else 0.0)
 
 
 def _wheel(cfg: RoverConfig, tag: str, parent: str, pos: tuple[float, float, float],
            steered: bool) -> tuple[Link, ...]:
     r, hw = cfg.wheel_radius_m, cfg.wheel_width_m / 2.0
+    b = rover_body(cfg)
     shapes: tuple[Shape, ...]
     if cfg.wheel_collision == "cylinder":
-        shapes = (Shape("cylinder", (r, hw), WHEEL_KG, True, axis="y", name=f"wheel_{tag}"),)
+        shapes = (Shape("cylinder", (r, hw), b.wheel_kg, True, axis="y", name=f"wheel_{tag}"),)
     else:  # collision sphere + visual cylinder
-        shapes = (Shape("sphere", (r,), WHEEL_KG, True, name=f"wheel_{tag}",
+        shapes = (Shape("sphere", (r,), b.wheel_kg, True, name=f"wheel_{tag}",
                         rgba=(0.0, 0.0, 0.0, 0.0)),
                   Shape("cylinder", (r, hw), 0.0, False, axis="y", rgba=(0.6, 0.6, 0.6, 1.0)))
     drive = Joint(f"drive_{tag}", axis="y", damping_nm_s=DRIVE_DAMPING_NM_S,
@@ -155,41 +148,41 @@ def _wheel(cfg: RoverConfig, tag: str, parent: str, pos: tuple[float, float, flo
         return (Link(f"hub_{tag}", parent, pos, None),
                 Link(f"wheel_{tag}", f"hub_{tag}", (0.0, 0.0, 0.0), drive, shapes))
     lim = cfg.steer_limit_rad
-    rad, half, z = STEER_UNIT_M
+    rad, half, z = b.steer_unit_m
     steer = Joint(f"steer_{tag}", axis="z", range_rad=(-lim, lim),
                   damping_nm_s=STEER_DAMPING_NM_S, armature_kg_m2=STEER_ARMATURE_KG_M2)
-    unit = (Shape("cylinder", (rad, half), STEER_KG, False, pos_m=(0.0, 0.0, z)),)
+    unit = (Shape("cylinder", (rad, half), b.steer_kg, False, pos_m=(0.0, 0.0, z)),)
     return (Link(f"steer_{tag}", parent, pos, steer, unit),
             Link(f"wheel_{tag}", f"steer_{tag}", (0.0, 0.0, 0.0), drive, shapes))
 
 
 def _side(cfg: RoverConfig, side: str, sign: float) -> tuple[Link, ...]:
-    r, ride = cfg.wheel_radius_m, cfg.ride_height_m
-    y_rocker = sign * ROCKER_Y_FRAC * cfg.track_m
+    r, ride, b = cfg.wheel_radius_m, cfg.ride_height_m, rover_body(cfg)
+    y_rocker = sign * b.rocker_y_frac * cfg.track_m
     dy = sign * cfg.track_m / 2.0 - y_rocker
     s = side[0]
-    pz = PIVOT_ABOVE_GROUND_M
-    bz = BOGIE_ABOVE_GROUND_M - pz
-    xb = -cfg.wheelbase_rear_m + BOGIE_HALF_M  # bogie pivot x
+    pz = b.pivot_above_ground_m
+    bz = b.bogie_above_ground_m - pz
+    xb = -cfg.wheelbase_rear_m + b.bogie_half_m  # bogie pivot x
     xf = cfg.wheelbase_front_m
     rocker = Link(
         f"rocker_{side}", "base_link", (0.0, y_rocker, pz - ride),
         Joint(f"rocker_{side}", range_rad=(-ROCKER_RANGE_RAD, ROCKER_RANGE_RAD),
               damping_nm_s=ROCKER_DAMPING_NM_S),
-        (Shape("capsule", (ROCKER_RADIUS_M,), ROCKER_KG, False,
-               fromto_m=(xb, 0.0, bz, xf, 0.0, r - pz + 0.2)),),
+        (Shape("capsule", (b.rocker_radius_m,), b.rocker_kg, False,
+               fromto_m=(xb, 0.0, bz, xf, 0.0, r - pz + b.rocker_rise_m)),),
     )
     bogie = Link(
         f"bogie_{side}", rocker.name, (xb, 0.0, bz),
         Joint(f"bogie_{side}", range_rad=(-BOGIE_RANGE_RAD, BOGIE_RANGE_RAD),
               damping_nm_s=BOGIE_DAMPING_NM_S),
-        (Shape("capsule", (BOGIE_RADIUS_M,), BOGIE_KG, False,
-               fromto_m=(-BOGIE_HALF_M, 0.0, 0.0, BOGIE_HALF_M, 0.0, 0.0)),),
+        (Shape("capsule", (b.bogie_radius_m,), b.bogie_kg, False,
+               fromto_m=(-b.bogie_half_m, 0.0, 0.0, b.bogie_half_m, 0.0, 0.0)),),
     )
-    zb = r - BOGIE_ABOVE_GROUND_M
+    zb = r - b.bogie_above_ground_m
     return (rocker, *_wheel(cfg, f"f{s}", rocker.name, (xf, dy, r - pz), True), bogie,
-            *_wheel(cfg, f"m{s}", bogie.name, (BOGIE_HALF_M, dy, zb), False),
-            *_wheel(cfg, f"r{s}", bogie.name, (-BOGIE_HALF_M, dy, zb), True))
+            *_wheel(cfg, f"m{s}", bogie.name, (b.bogie_half_m, dy, zb), False),
+            *_wheel(cfg, f"r{s}", bogie.name, (-b.bogie_half_m, dy, zb), True))
 
 
 def rover_links(cfg: RoverConfig | None = None, *,
@@ -202,12 +195,12 @@ def rover_links(cfg: RoverConfig | None = None, *,
     (:func:`differential_links`) and the chassis is lighter by their mass.
     """
     cfg = cfg if cfg is not None else RoverConfig()
-    mast = cfg.mast_height_m - cfg.ride_height_m
+    mast, b = cfg.mast_height_m - cfg.ride_height_m, rover_body(cfg)
     base = Link("base_link", None, (0.0, 0.0, cfg.ride_height_m), None, (
-        Shape("box", CHASSIS_HALF_M, chassis_mass_kg(cfg, differential=differential), True,
-              pos_m=(0.0, 0.0, CHASSIS_Z_M), name="chassis"),
-        Shape("cylinder", (MAST_RADIUS_M, mast / 2), 0.0, False,
-              pos_m=(0.7, 0.0, 0.25 + mast / 2 - 0.125)),
+        Shape("box", b.chassis_half_m, chassis_mass_kg(cfg, differential=differential), True,
+              pos_m=(0.0, 0.0, b.chassis_z_m), name="chassis"),
+        Shape("cylinder", (b.mast_radius_m, mast / 2), 0.0, False,
+              pos_m=(b.mast_x_m, 0.0, 0.25 + mast / 2 - 0.125)),
     ))
     links = (base, *_side(cfg, "left", 1.0), *_side(cfg, "right", -1.0))
     return links + (differential_links(cfg) if differential else ())
@@ -216,32 +209,36 @@ def rover_links(cfg: RoverConfig | None = None, *,
 def differential_links(cfg: RoverConfig) -> tuple[Link, ...]:
     """The differential as a mechanism (USD rover): the bar and its two rods.
 
-    The bar pivots about x at ``(DIFF_X_M, 0, DIFF_Z_M)`` in ``base_link``; each rod hangs on
-    a ball joint from a bar end straight down to its rocker, where :func:`loop_joints` ties it
-    (``-DIFF_X_M`` behind the rocker pivot). A rocker turning by ``a`` lifts its rod by
-    ``-DIFF_X_M sin a``, which tilts the bar and lowers the other rod as much: the rockers
-    turn by opposite angles, as the MJCF equality ``rocker_left = -rocker_right`` says.
+    The bar pivots about x at the body's ``(diff_x_m, 0, diff_z_m)`` in ``base_link``; each
+    rod hangs on a ball joint from a bar end straight down to its rocker, where
+    :func:`loop_joints` ties it (``-diff_x_m`` behind the rocker pivot). A rocker turning by
+    ``a`` lifts its rod by ``-diff_x_m sin a``, which tilts the bar and lowers the other rod as
+    much: the rockers turn by opposite angles, as the MJCF equality
+    ``rocker_left = -rocker_right`` says.
     """
-    bar = Link("diff_bar", "base_link", (DIFF_X_M, 0.0, DIFF_Z_M),
+    b = rover_body(cfg)
+    bar = Link("diff_bar", "base_link", (b.diff_x_m, 0.0, b.diff_z_m),
                Joint("differential", axis="x"),
-               (Shape("box", DIFF_BAR_HALF_M, DIFF_BAR_KG, False),))
+               (Shape("box", b.diff_bar_half_m, DIFF_BAR_KG, False),))
     rod = Shape("capsule", (DIFF_ROD_RADIUS_M,), DIFF_ROD_KG, False,
                 fromto_m=(0.0, 0.0, 0.0, 0.0, 0.0, -_rod_length_m(cfg)))
-    y_r = ROCKER_Y_FRAC * cfg.track_m
+    y_r = b.rocker_y_frac * cfg.track_m
     return (bar, *(Link(f"diff_rod_{side}", "diff_bar", (0.0, sign * y_r, 0.0),
                         Joint(f"diff_rod_{side}", kind="ball"), (rod,))
                    for side, sign in (("left", 1.0), ("right", -1.0))))
 
 
 def _rod_length_m(cfg: RoverConfig) -> float:
-    return DIFF_Z_M - (PIVOT_ABOVE_GROUND_M - cfg.ride_height_m)
+    b: RoverBody = rover_body(cfg)
+    return b.diff_z_m - (b.pivot_above_ground_m - cfg.ride_height_m)
 
 
 def loop_joints(cfg: RoverConfig | None = None) -> tuple[LoopJoint, ...]:
     """The joints closing the differential's loops: each rod's lower end to its rocker."""
     cfg = cfg if cfg is not None else RoverConfig()
     return tuple(LoopJoint(f"diff_link_{side}", f"rocker_{side}", f"diff_rod_{side}",
-                           (DIFF_X_M, 0.0, 0.0), (0.0, 0.0, -_rod_length_m(cfg)))
+                           (rover_body(cfg).diff_x_m, 0.0, 0.0),
+                           (0.0, 0.0, -_rod_length_m(cfg)))
                  for side in ("left", "right"))
 
 

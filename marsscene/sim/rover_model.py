@@ -8,13 +8,7 @@ from __future__ import annotations
 from marsscene._format import fmt
 from marsscene.export.mjcf.common import TORSION_ROLL_FRICTION
 from marsscene.rover.config import CameraConfig, RoverConfig
-from marsscene.rover.geometry import (
-    DRIVE_JOINTS,
-    LIDAR_ABOVE_CAMERA_M,
-    LIDAR_X_M,
-    STEER_JOINTS,
-    navcam_mount,
-)
+from marsscene.rover.geometry import DRIVE_JOINTS, STEER_JOINTS, navcam_mount, sensor_mounts
 from marsscene.rover.links import STEER_ACT_KV_NM_S, Joint, Link, Shape, rover_links
 
 __all__ = ["rover_mjcf"]
@@ -69,12 +63,11 @@ def rover_mjcf(cfg: RoverConfig | None = None, *, camera_fovy_deg: float | None 
     for link in links[1:]:
         assert link.parent is not None
         children.setdefault(link.parent, []).append(link)
-    mast = cfg.mast_height_m - cfg.ride_height_m
     cam_pos, cam_xyaxes = navcam_mount(cfg)
     mu = fmt((cfg.friction, *TORSION_ROLL_FRICTION))
     sensors = (
         '<site name="imu" pos="0 0 0" size="0.02"/>'
-        f'<site name="lidar" pos="{fmt((LIDAR_X_M, 0.0, mast + LIDAR_ABOVE_CAMERA_M))}" '
+        f'<site name="lidar" pos="{fmt(sensor_mounts(cfg)["lidar"][0])}" '
         'size="0.03"/>'
         f'<camera name="navcam" pos="{fmt(cam_pos)}" xyaxes="{fmt(cam_xyaxes)}" '
         f'fovy="{fmt(camera_fovy_deg)}"/>'
