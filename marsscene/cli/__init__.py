@@ -63,6 +63,7 @@ def _register() -> None:
     from marsscene.cli.bag import bag
     from marsscene.cli.benchmark import benchmark
     from marsscene.cli.benchmark_loc import loc
+    from marsscene.cli.benchmark_nav import nav
     from marsscene.cli.benchmark_vpr import vpr, vpr_eval
     from marsscene.cli.build import build
     from marsscene.cli.drive import drive
@@ -88,6 +89,7 @@ def _register() -> None:
     benchmark.add_command(vpr)
     benchmark.add_command(vpr_eval)
     benchmark.add_command(loc)
+    benchmark.add_command(nav)
 
 
 _register()
