@@ -1,0 +1,222 @@
+"""The mast camera's RGB and depth (and segmentation) in every world of a batch, ray traced in
+Warp: the world the CPU camera (:class:`~marsscene.sensors.camera.MastCamera`) sees.
+
+**Why a ray tracer of its own**, not MuJoCo Warp's batch renderer with Warp kernels after it.
+The renderer draws the physics model: its rocks are the heightfield's relief (blocky domes of
+0.25 m posts), its terrain one grey material; it has no texture on a heightfield, no sky, no
+fog and one set of lights for all worlds. Post-processing its depth could add the ground's
+albedo (the hit point from the depth), the sky and the fog, but not the rocks' meshes (thousands
+of mesh geoms in the physics model slow every step; a second render model needs a second BVH
+and render pass) nor a sun per world (its shadows come from the model's lights): the shading
+pass would cast its own shadow rays anyway, so only the primary ray would be the renderer's.
+That primary ray is the cheap part: on one H200 a plain Warp kernel marching a heightfield
+traced 2.37 G rays/s where the renderer's depth pass gave 1.49 G pixels/s (issue 64; on this
+machine's CPU device ``perf/speed/bench_batch_sensors.py --what rgbd-choice`` compares the
+two). So one kernel (:mod:`._trace`) does it all: the terrain posts marched cell by cell, every
+rock of the batch in one static ``wp.Mesh`` BVH, the albedo looked up by world xy, a shadow ray
+to the sun, the sky for misses, fog; then exposure and sRGB (:mod:`._expose`). Each camera has
+its own lighting.
+
+What it draws (:mod:`.appearance`): the CPU camera's regolith detail tile (micro-relief shading
+baked in) times each world's large-scale albedo field, on the world's full-resolution posts
+(the CPU camera's near mesh; its far mesh, beyond 8 m or so, has every second post); the
+batch's rocks (the MJCF rocks its physics has, footprint radius and exposed height) as jittered
+80-face icospheres with the CPU camera's rock colours. What differs from the CPU camera
+(measured in :doc:`/batch_sensors`): the catalogue's small rocks below the scene's MJCF size
+are not in a :class:`~marsscene.env.batch.worlds.WorldBatch` and are not drawn; shadows are
+hard (the CPU's terrain shadows have the sun disc's penumbra); the rover itself is not drawn
+and casts no shadow; sensor noise is not modelled. Depth is planar, 0 where the pixel sees sky.
+The same inputs give the same bytes (no atomics but the exposure's integer histograms).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from marsscene.errors import ConfigError
+from marsscene.sensors.batch.appearance import (
+    GAIN_STEP_M,
+    appearance,
+    light_arrays,
+    rock_mesh,
+)
+from marsscene.sensors.camera import MAX_EXPOSURE_GAIN
+from marsscene.sensors.exposure import Exposure
+
+__all__ = ["BatchCamera", "camera_rays", "scene_lights"]
+
+#: The CPU camera's near clip (m).
+NEAR_M = 0.05
+#: A shadow ray starts this far off the surface along its normal (m).
+SHADOW_LIFT_M = 0.01
+#: The CPU camera's auto-exposure settings (clipped share, smoothing).
+_AE = Exposure()
+
+
+def camera_rays(config: Any) -> np.ndarray:
+    """Camera-frame rays of every pixel (H * W, 3), row 0 at the top, MuJoCo's camera frame
+    (x right, y up, looking along -z), z = -1: a ray's parameter is planar depth."""
+    w, h = int(config.width_px), int(config.height_px)
+    f = 0.5 * h / math.tan(math.radians(config.fovy_deg) / 2.0)
+    c, r = np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5)
+    return np.stack([(c - w / 2.0) / f, -(r - h / 2.0) / f, -np.ones_like(c)],
+                    axis=-1).reshape(-1, 3).astype(np.float32)
+
+
+def scene_lights(config: Any, scene_dir: Any = None) -> Any:
+    """The CPU camera's :class:`~marsscene.lighting.Lighting`: the scene folder's lighting (or
+    the lighting stage's defaults), with the camera config's tau, sun and irradiance scale."""
+    from marsscene.sensors.camera_scene import scaled_irradiance, scene_lighting
+
+    folder = Path(scene_dir) if scene_dir is not None else Path(__file__)  # no manifest
+    return scaled_irradiance(scene_lighting(
+        folder, tau=config.tau, sun_elevation_deg=config.sun_elevation_deg,
+        sun_azimuth_deg=config.sun_azimuth_deg), config.irradiance_scale)
+
+
+class BatchCamera:
+    """RGB-D cameras of N rovers on the worlds of a ``WorldBatch``, on one Warp device.
+
+    Parameters
+    ----------
+    batch : WorldBatch
+        The worlds (terrain posts, rocks).
+    num_cameras : int
+        Cameras N.
+    config : CameraConfig, optional
+        Size, field of view, exposure (``"auto"`` or ``"fixed"``); default ``CameraConfig()``.
+    lighting : Lighting, optional
+        Every camera's lighting (default :func:`scene_lights` of ``config``).
+    offsets_xy_m : array (W, 2), optional
+        The tile frame the poses are in, minus world coordinates (the batch model's
+        ``TiledModel.offsets_xy_m``); default 0 (one world, or poses in world coordinates).
+    seeds : sequence of int, optional
+        Each world's scene seed (its albedo field; default ``0 .. W-1``); ``texture_seed`` the
+        detail tile's and the rocks' colours (default ``seeds[0]``).
+    device : str, optional
+        Warp device (default the current one).
+    """
+
+    def __init__(self, batch: Any, num_cameras: int, *, config: Any = None,
+                 lighting: Any = None, offsets_xy_m: Any = None, seeds: Any = None,
+                 texture_seed: int | None = None, device: str | None = None) -> None:
+        import warp as wp
+
+        from marsscene.rover.config import CameraConfig
+
+        self.config = cfg = config if config is not None else CameraConfig()
+        if cfg.exposure not in ("auto", "fixed"):
+            raise ConfigError(f"exposure {cfg.exposure!r}; use 'auto' or 'fixed'")
+        self.width, self.height, self.n = int(cfg.width_px), int(cfg.height_px), int(num_cameras)
+        self.device = wp.get_device(device)
+        self.lighting = lighting if lighting is not None else scene_lights(cfg)
+        self.lights = light_arrays(self.lighting)
+        nw = batch.count
+        seeds = list(seeds) if seeds is not None else list(range(nw))
+        off = (np.zeros((nw, 2)) if offsets_xy_m is None
+               else np.asarray(offsets_xy_m, dtype=np.float64).reshape(nw, 2))
+        look = appearance(batch, self.lighting, seeds=seeds,
+                          texture_seed=seeds[0] if texture_seed is None else texture_seed,
+                          tile_m=cfg.texture_tile_m, tile_px=cfg.texture_px)
+        verts, faces, vnormal, albedo = rock_mesh(batch, off, look.rng)
+        sx, sy = batch.size_m
+        self.far_m = float(math.hypot(sx, sy) + 10.0)
+        def arr(a: Any, t: Any) -> Any:
+            return wp.array(np.ascontiguousarray(a), dtype=t, device=self.device)
+
+        self._points = arr(verts, wp.vec3)
+        self._faces = arr(faces.ravel(), int)
+        self.mesh = wp.Mesh(points=self._points, indices=self._faces)
+        lt, n, hw = self.lights, self.n, self.width * self.height
+        self._static = dict(
+            rays=arr(camera_rays(cfg), wp.vec3),
+            posts=arr(batch.posts_z_m.astype(np.float32), float),
+            grid_origin=arr(np.asarray(batch.origins_xy_m) + off, wp.vec2),
+            z_top=arr(batch.posts_z_m.reshape(nw, -1).max(axis=1)
+                      + np.array([_rock_top(batch, w) for w in range(nw)]), float),
+            offset=arr(off, wp.vec2), vnormal=arr(vnormal, wp.vec3),
+            face_albedo=arr(albedo, wp.vec3),
+            tile=arr(np.concatenate([t.reshape(-1, 3) for t in look.tile_rgb]), wp.vec3),
+            gain=arr(look.gain, float), gain_corner=arr(look.gain_origin_xy_m, wp.vec2),
+            sun_dir=arr(np.tile(lt.sun_dir, (n, 1)), wp.vec3),
+            sun_rgb=arr(np.tile(lt.sun_rgb, (n, 1)), wp.vec3),
+            sky_rgb=arr(np.tile(lt.sky_rgb, (n, 1)), wp.vec3),
+            visibility_m=arr(np.full(n, lt.visibility_m), float))
+        self._cell_m, self._texel_m = float(batch.cell_m), float(look.tile_texel_m)
+        self._levels, self._tile_px = len(look.tile_rgb), int(look.tile_rgb[0].shape[0])
+        zeros = lambda shape, t: wp.zeros(shape, dtype=t, device=self.device)  # noqa: E731
+        self.linear = zeros((n, hw), wp.vec3)
+        self._depth, self._seg = zeros((n, hw), float), zeros((n, hw), wp.uint8)
+        self.rgb = zeros((n, 3, self.height, self.width), wp.uint8)
+        self.depth = self._depth.reshape((n, self.height, self.width))
+        self.segmentation = self._seg.reshape((n, self.height, self.width))
+        self.gain = zeros(n, float)
+        self._hist, self._peak = zeros((n, 256), int), zeros((n, 256), int)
+        self._world: Any = None
+
+    def intrinsics(self) -> tuple[float, float, float, float]:
+        """``fx, fy, cx, cy`` in pixels (pinhole; the CPU camera's)."""
+        f = 0.5 * self.height / math.tan(math.radians(self.config.fovy_deg) / 2.0)
+        return f, f, self.width / 2.0, self.height / 2.0
+
+    def restart(self) -> None:
+        """Forget the auto exposure's gains (a new drive's first frame sets them afresh)."""
+        self.gain.zero_()
+
+    def render(self, cam_xpos: Any, cam_xmat: Any, world: Any, *, camera: int = 0) -> Any:
+        """Render every camera: poses ``cam_xpos[i, camera]`` (vec3) and ``cam_xmat[i, camera]``
+        (mat33, MuJoCo's camera frame) in the tile frame, camera ``i`` on world ``world[i]``
+        (int32 Warp array or array-like (N,)). Fills :attr:`rgb` (N, 3, H, W) uint8 sRGB,
+        :attr:`depth` (N, H, W) float32 planar m (0: sky), :attr:`segmentation` (N, H, W)
+        uint8 (0 sky, 1 terrain, 2 rock) and :attr:`linear`; returns :attr:`rgb`. The
+        buffers are the camera's own, overwritten by the next call (``wp.to_torch`` views
+        them); nothing is copied to the host."""
+        import warp as wp
+
+        from marsscene.sensors.batch import _expose, _trace
+
+        if tuple(cam_xpos.shape[:1]) != (self.n,):
+            raise ConfigError(f"BatchCamera was made for {self.n} cameras; the poses hold "
+                              f"{cam_xpos.shape[0]}")
+        self._world = w = (world if isinstance(world, wp.array) else
+                           wp.array(np.asarray(world, dtype=np.int32), dtype=int,
+                                    device=self.device))
+        s, n, hw, dev = self._static, self.n, self.width * self.height, self.device
+        wp.launch(_trace.trace, dim=(n, hw), device=dev, inputs=[
+            cam_xpos, cam_xmat, int(camera), s["rays"], w, s["posts"], s["grid_origin"],
+            s["z_top"], self._cell_m, s["offset"], self.mesh.id, self._faces, s["vnormal"],
+            s["face_albedo"], s["tile"], self._levels, self._tile_px, self._texel_m,
+            1.0 / self.intrinsics()[0], s["gain"], s["gain_corner"],
+            GAIN_STEP_M, s["sun_dir"], s["sun_rgb"], s["sky_rgb"], s["visibility_m"], NEAR_M,
+            self.far_m, SHADOW_LIFT_M], outputs=[self.linear, self._depth, self._seg])
+        cfg = self.config
+        if cfg.exposure == "fixed":
+            self.gain.fill_(float(cfg.exposure_gain) * self.lights.fixed_scale)
+        else:
+            sub_r, sub_c = -(-self.height // 4), -(-self.width // 4)
+            self._hist.zero_()
+            self._peak.zero_()
+            wp.launch(_expose.histogram, dim=(n, sub_r * sub_c), device=dev,
+                      inputs=[self.linear, self.width, sub_c], outputs=[self._hist, self._peak])
+            wp.launch(_expose.auto_gain, dim=n, device=dev, inputs=[
+                self._hist, self._peak, float(cfg.target_mean), _AE.max_saturated,
+                MAX_EXPOSURE_GAIN * self.lights.fixed_scale, _AE.smoothing],
+                outputs=[self.gain])
+        wp.launch(_expose.encode, dim=(n, hw), device=dev,
+                  inputs=[self.linear, self.gain, self.width], outputs=[self.rgb])
+        return self.rgb
+
+    def render_data(self, data: Any, world: Any, camera_id: int) -> Any:
+        """:meth:`render` from a MuJoCo Warp ``Data``'s camera poses (``cam_xpos``, after
+        ``kinematics`` and ``camlight``) of the model's camera ``camera_id``."""
+        return self.render(data.cam_xpos, data.cam_xmat, world, camera=camera_id)
+
+
+def _rock_top(batch: Any, w: int) -> float:
+    """How far world ``w``'s rocks rise above its highest post at most (m)."""
+    k = np.asarray(batch.rock_world) == w
+    return float(np.max(batch.rock_height_m[k], initial=0.0)) + 0.01
