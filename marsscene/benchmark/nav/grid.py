@@ -5,7 +5,10 @@ A 1 m cell is a hazard when any of the traversability cells inside it is (the ma
 configuration-space map for the rover's centre, so hazards stay where the rover may not
 stand), and its cost is their largest. Shortest paths are Dijkstra's algorithm on the grid
 graph (``scipy.sparse.csgraph.dijkstra``: an A* with a zero heuristic, so the same optimal
-paths), step cost = step length x (1 + w x cost), hazard cells removed. Searches run in a
+paths), step cost = step length x (1 + w x cost), hazard cells removed; the path is then
+pulled taut (each node joined to the farthest later node in straight line of sight over free
+cells), so a path's length is not the 8-connected grid's, up to 8 % longer than the straight
+line. Searches run in a
 window around the start and the goal (their bounding box widened by half their distance, at
 least 20 m), which keeps a 3.6 km scene's searches as small as a 0.5 km scene's.
 
@@ -44,7 +47,7 @@ class PlanGrid:
     def of(cls, t: object, cell_m: float = PLAN_CELL_M) -> PlanGrid:
         """A :class:`~marsscene.traversability.Traversability` pooled to ``cell_m`` cells."""
         cost = np.asarray(t.cost, dtype=np.float32)  # type: ignore[attr-defined]
-        hazard = np.asarray(t.hazard, dtype=bool)  # type: ignore[attr-defined]
+        hazard: NDArray[np.bool_] = np.asarray(t.hazard, dtype=np.bool_)  # type: ignore[attr-defined]
         src = float(t.cell_m)  # type: ignore[attr-defined]
         k = max(1, round(cell_m / src))
         rows, cols = (cost.shape[0] // k) * k, (cost.shape[1] // k) * k
@@ -52,7 +55,8 @@ class PlanGrid:
         ox, oy = t.origin_xy_m  # type: ignore[attr-defined]
         off = 0.5 * (k - 1) * src
         return cls(cost[:rows, :cols].reshape(shape).max(axis=(1, 3)),
-                   hazard[:rows, :cols].reshape(shape).any(axis=(1, 3)), src * k,
+                   np.asarray(hazard[:rows, :cols].reshape(shape).any(axis=(1, 3)), np.bool_),
+                   src * k,
                    (float(ox) + off, float(oy) + off))
 
     @property
@@ -113,10 +117,31 @@ class PlanGrid:
                       (int(b[0] - win[0].start), int(b[1] - win[1].start)))
         if nodes is None:
             return None, math.inf
+        nodes = _shortcut(~self.hazard[win], nodes)
         nodes = nodes + np.array([win[0].start, win[1].start])
         xy = self.xy(nodes)
         return xy, float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum()) if len(xy) > 1 \
             else 0.0
+
+
+def _clear(free: NDArray[np.bool_], a: NDArray[np.int64], b: NDArray[np.int64]) -> bool:
+    """Every cell the segment a-b crosses (sampled at a quarter cell) is free."""
+    n = int(4 * np.abs(b - a).max()) + 2
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    rc = np.rint(a + t * (b - a)).astype(np.int64)
+    return bool(free[rc[:, 0], rc[:, 1]].all())
+
+
+def _shortcut(free: NDArray[np.bool_], nodes: NDArray[np.int64]) -> NDArray[np.int64]:
+    """The path through the fewest of its own nodes with straight, free segments between."""
+    keep, i, n = [0], 0, len(nodes)
+    while i < n - 1:
+        j = i + 1
+        while j + 1 < n and _clear(free, nodes[i], nodes[j + 1]):
+            j += 1
+        keep.append(j)
+        i = j
+    return nodes[keep]
 
 
 def _path(free: NDArray[np.bool_], cost: NDArray[np.float32], weight: float,

@@ -8,8 +8,8 @@
   (:func:`marsscene.orbital.orbital_map`: the terrain at HiRISE-like 1 m posts, rocks under
   1 m missing, no soil), driven on the real scene (the realistic case);
 - ``arc-navigator``: :class:`marsscene.env.ArcNavigator` closing the loop every control step on
-  the height scan around the rover (the terrain and rocks within 2.5 m, as the navigation
-  environments observe it) with the goal from the ground-truth pose;
+  a 10 m height scan around the rover (the terrain and rocks, as the navigation environments
+  observe it) with the goal from the ground-truth pose;
 - ``controller``: a user's ``MODULE:NAME``, a callable ``controller(obs) -> (v, omega)`` or a
   class, instantiated with those of ``goal_xy_m``, ``route`` (the straight route) and ``sim``
   its constructor takes; the drive ends at its ``done`` or at the goal.
@@ -39,6 +39,8 @@ from marsscene.sim.route import Route, resample_xy
 __all__ = ["GoalArcController", "MethodPlan", "plan_method", "straight_route"]
 
 ROUTE_SPACING_M = 0.1
+#: The arc navigator's height scan side (m): the 10 m scan its results were measured with.
+ARC_SCAN_M = 10.0
 SMOOTH_M = 1.0
 
 
@@ -91,7 +93,7 @@ class GoalArcController:
         from marsscene.env.observe import HeightScanner
         from marsscene.sim.world import scene_obstacles
 
-        scan = HeightScan()
+        scan = HeightScan(size_m=ARC_SCAN_M, resolution_m=0.1)
         self.nav = ArcNavigator(scan)
         self.scanner = HeightScanner(scan, sim.heightfield, scene_obstacles(sim))
         self.goal = np.asarray(goal_xy_m, dtype=np.float64)
@@ -123,7 +125,7 @@ class _Stopping:
         cmd = self.inner(obs)
         self.done = bool(getattr(self.inner, "done", False)) or bool(
             goal_reached(np.asarray(obs.gt_xyz_m[:2]), self.goal))
-        return cmd  # type: ignore[no-any-return]
+        return cmd
 
 
 def load_controller(ref: str) -> Any:

@@ -3,6 +3,7 @@ ground-truth traversability map, success against start-goal distance, ``report.m
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 from typing import Any
 
@@ -19,11 +20,15 @@ _COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "t
 
 
 def _plt() -> Any:
-    import matplotlib
+    from marsscene.errors import missing_dependency
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    try:
+        import matplotlib  # noqa: TID251  (the report's figures are this module's product)
 
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt  # noqa: TID251
+    except ImportError:
+        raise missing_dependency("matplotlib", "bench") from None
     return plt
 
 
@@ -71,7 +76,7 @@ def plot_success(rows: list[dict[str, Any]], spec: NavSpec, root: Path) -> Path:
     mids = 0.5 * (edges[:-1] + edges[1:])
     for k, m in enumerate(spec.methods):
         rate = []
-        for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        for lo, hi in itertools.pairwise(edges):
             sel = [r for r in rows if r.get("method") == m.name and "distance_m" in r
                    and lo <= float(r["distance_m"]) <= hi]
             rate.append(np.mean([bool(r.get("success")) for r in sel]) if sel else np.nan)
