@@ -53,12 +53,21 @@ Examples:
   marsscene drive scenes/demo --route route.tum --seconds 60 --camera
   marsscene drive scenes/demo --waypoints wp.txt --camera --bag --dataset euroc
   marsscene drive scenes/demo --waypoints wp.txt --lidar --controller my_nav:Planner
+  marsscene drive scenes/demo --waypoints wp.txt --lidar --device cuda --out runs/g1
+  marsscene drive --batch drives.toml --lidar --camera --device cuda
 """
 
 
 @click.command(short_help="Drive the rover on a built scene and log GT, odometry, IMU, sensors.",
                help=_HELP)
-@click.argument("scene_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.argument("scene_dir", required=False,
+                type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--device", default=None, metavar="DEVICE",
+              help="Drive on MuJoCo Warp on this Warp device (cuda, cuda:0, cpu; needs "
+              "marsscene[gpu]): the batch's rover and physics (docs/gpu_drives.md).")
+@click.option("--batch", "batch_path", type=_PATH, default=None,
+              help="A TOML file of [[drive]] tables (scene, waypoints or route, out, seed): "
+              "all driven at once on --device (default: the GPU), instead of SCENE_DIR.")
 @click.option("--route", "route_path", type=_PATH, help="Route as a TUM file (x, y are used).")
 @click.option(
     "--waypoints",
@@ -134,7 +143,8 @@ Examples:
               help="With --bag and --lidar: keep RUN_DIR/lidar/*.ply beside the bag (by "
               "default the scans are kept once, in the bag).")
 @bag_options
-def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
+def drive(scene_dir: Path | None, device: str | None, batch_path: Path | None,
+          route_path: Path | None, waypoints_path: Path | None,
           seconds: float | None, out_dir: Path, seed: int, lookahead: float, max_slope: float,
           corridor: float, write_rover_xml: bool, controller_ref: str | None, write_bag: bool,
           datasets: tuple[str, ...], overwrite: bool, dataset_images: str,
@@ -147,9 +157,22 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
 
     if route_path is not None and waypoints_path is not None:
         raise click.UsageError("give --route or --waypoints, not both")
+    bag_values = {k: opts.pop(k) for k in list(opts) if k in BAG_OPTION_NAMES}
+    if batch_path is not None or device is not None:
+        if controller_ref or write_bag or datasets:
+            raise click.UsageError("--device/--batch drive with pure pursuit and write run "
+                                   "folders only (no --controller, --bag or --dataset yet)")
+        with user_errors():
+            run = run_config(opts)
+            options = DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
+                                   pursuit=PursuitConfig(lookahead_m=lookahead))
+            _drive_batch(scene_dir, batch_path, device, route_path, waypoints_path, seconds,
+                         out_dir, seed, run, options)
+        return
+    if scene_dir is None:
+        raise click.UsageError("give SCENE_DIR (or --batch FILE)")
     if route_path is None and waypoints_path is None and controller_ref is None:
         raise click.UsageError("give --route or --waypoints (or a --controller)")
-    bag_values = {k: opts.pop(k) for k in list(opts) if k in BAG_OPTION_NAMES}
     with user_errors():
         run = run_config(opts)
         options = DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
@@ -182,6 +205,32 @@ def drive(scene_dir: Path, route_path: Path | None, waypoints_path: Path | None,
                               f"drive (`marsscene bag {out_dir}` writes the bag)")
         meter.close()
     _report(res, out_dir)
+
+
+def _drive_batch(scene_dir: Path | None, batch_path: Path | None, device: str | None,
+                 route_path: Path | None, waypoints_path: Path | None, seconds: float | None,
+                 out_dir: Path, seed: int, run: Any, options: Any) -> None:
+    """``--device`` / ``--batch``: the drives on MuJoCo Warp (:func:`marsscene.drive_batch`)."""
+    from marsscene.sim.batch import BatchDrive, drive_batch, read_batch_file
+
+    if batch_path is not None:
+        if scene_dir is not None or route_path or waypoints_path:
+            raise click.UsageError("--batch lists the drives: no SCENE_DIR, --route or "
+                                   "--waypoints with it")
+        drives = read_batch_file(batch_path)
+    else:
+        if scene_dir is None or (route_path is None and waypoints_path is None):
+            raise click.UsageError("give SCENE_DIR and --route or --waypoints")
+        drives = [BatchDrive(scene=scene_dir, route=route_path, out_dir=out_dir, seed=seed,
+                             seconds=seconds, waypoints=(_read_waypoints(waypoints_path)
+                                                         if waypoints_path else None))]
+    res = drive_batch(drives, config=run, options=options, device=device or "cuda", seed=seed)
+    for out, s in zip(res.out_dirs, res.summaries, strict=True):
+        click.echo(f"   drove: {s['path_length_m']:.2f} m in {s['sim_time_s']:.2f} sim s, goal "
+                   f"reached: {s['goal_reached']}, cross-track RMS "
+                   f"{s['cross_track_rms_m']:.3f} m -> {out}")
+    click.echo(f"   batch: {len(drives)} drive(s) on {res.device} in {res.wall_s:.1f} s "
+               f"({res.realtime_factor:.2f}x real time per rover)")
 
 
 def _load_controller(ref: str) -> Any:
