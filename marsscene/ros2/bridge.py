@@ -33,6 +33,7 @@ from typing import Any
 from marsscene.errors import RuntimeSimError
 from marsscene.ros2.dds import Participant, RawWriter
 from marsscene.ros2.options import Ros2Options
+from marsscene.ros2.stats import SessionStats
 from marsscene.runs.export.sample_messages import SampleMessages
 from marsscene.sim.goal import goal_reached
 from marsscene.transforms import yaw_of_quat
@@ -68,31 +69,6 @@ _CONTROL_TOPICS = {"/marsscene/reset": "std_msgs/msg/Empty",
                    "/marsscene/goal": "geometry_msgs/msg/PoseStamped"}
 
 
-class SessionStats:
-    """Counts of a live session: messages, bytes and write seconds per topic, message-building
-    seconds per sample stream (image codecs included), commands, resets, the goal."""
-
-    def __init__(self) -> None:
-        self.messages: dict[str, int] = {}
-        self.bytes: dict[str, int] = {}
-        self.write_s: dict[str, float] = {}  # per topic: CDR + DDS write
-        self.build_s: dict[str, float] = {}  # per sample stream: building the messages
-        self.commands = 0
-        self.timeouts = 0
-        self.resets = 0
-        self.teleports = 0
-        self.goal_reached_t_s: float | None = None
-        self.sleep_s = 0.0
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"messages": dict(self.messages), "bytes": dict(self.bytes),
-                "write_s": {k: round(v, 6) for k, v in self.write_s.items()},
-                "build_s": {k: round(v, 6) for k, v in self.build_s.items()},
-                "commands": self.commands, "command_timeouts": self.timeouts,
-                "resets": self.resets, "teleports": self.teleports,
-                "goal_reached_t_s": self.goal_reached_t_s, "pacing_sleep_s": round(self.sleep_s, 3)}
-
-
 class Bridge:
     """Controller and listener of one live drive (:func:`marsscene.ros2.serve` makes it).
 
@@ -124,7 +100,8 @@ class Bridge:
         cmd_type = ("geometry_msgs/msg/TwistStamped" if opts.cmd_vel_stamped
                     else "geometry_msgs/msg/Twist")
         self.cmd_type = cmd_type
-        self.cmd_reader = part.reader(self.store, opts.cmd_vel_topic, cmd_type, "default")
+        self.cmd_readers = [part.reader(self.store, t, cmd_type, "default")
+                            for t in opts.cmd_vel_topics]
         self.control_readers = {t: part.reader(self.store, t, mt, "default")
                                 for t, mt in _CONTROL_TOPICS.items()}
         self.goal_writer = part.writer(self.store, "/marsscene/goal_reached",
@@ -137,6 +114,11 @@ class Bridge:
         self.goal_xy: tuple[float, float] | None = None
         self.wall0: float | None = None
         self.wall_start: float | None = None  # perf_counter() at the first control step
+        self.control_srv: Any = None  # simulation_interfaces' services (:mod:`.sim_control`)
+        if opts.services:
+            from marsscene.ros2.sim_control import SimControl
+
+            self.control_srv = SimControl(self, opts.sim_namespace)
 
     # ---- publishing (listener) -------------------------------------------------------------
     def wanted(self, topic: str) -> bool:
@@ -182,9 +164,19 @@ class Bridge:
 
     # ---- the control step (controller) -----------------------------------------------------
     def __call__(self, obs: Any) -> tuple[float, float]:
-        if self.lockstep:
-            return self._lockstep(obs)
-        self._pace(obs.t_s)
+        srv = self.control_srv
+        stepped = False
+        while srv is not None and not self.done:
+            stepped = srv.gate(obs)  # serves requests; holds while paused
+            if stepped or not self.lockstep:
+                break
+            held = self._lockstep(obs)
+            if held is not None:
+                return held  # else paused while it waited: the gate holds
+        if self.lockstep and srv is None:
+            return self._lockstep(obs) or (0.0, 0.0)
+        if not stepped:
+            self._pace(obs.t_s)
         for cmd in self._read_commands():
             self.cmd, self.cmd_t_s = cmd, obs.t_s
         self._read_control()
@@ -197,16 +189,21 @@ class Bridge:
             return 0.0, 0.0
         return self.cmd
 
-    def _lockstep(self, obs: Any) -> tuple[float, float]:
+    def _lockstep(self, obs: Any) -> tuple[float, float] | None:
         """Hold sim time until a command comes; drive each for ``lockstep_steps`` control
         steps. Before waiting, the LiDAR scan being cast goes out and ``/clock`` says that
-        every sample before ``obs.t_s`` is out."""
+        every sample before ``obs.t_s`` is out. None: paused (a service) while waiting."""
         if self.wall0 is None:
             self.wall_start = self.wall0 = time.perf_counter()
         if self.steps_left == 0:
             obs.lidar  # noqa: B018 (reading it hands the scan being cast to the listeners)
             said, since = -math.inf, time.perf_counter()
+            srv = self.control_srv
             while not self.queued and not self.done:
+                if srv is not None:
+                    srv.poll()
+                    if not srv.playing:
+                        return None
                 if time.perf_counter() - said > _CLOCK_AGAIN_S and self.wanted("/clock"):
                     self.publish([("/clock", self.msgs.b.clock(obs.t_s))])  # best effort:
                     said = time.perf_counter()  # said again while waiting
@@ -245,12 +242,13 @@ class Bridge:
     def _read_commands(self) -> list[tuple[float, float]]:
         """The finite commands waiting, oldest first (bad ones dropped with a warning)."""
         out = []
-        for raw in self.cmd_reader.take():
+        raws = [(r.topic, raw) for r in self.cmd_readers for raw in r.take()]
+        for topic, raw in raws:
             try:
                 msg: Any = self.store.deserialize_cdr(raw, self.cmd_type)
             except Exception as err:
                 self.bad_input.warn("%s: a message that is not a %s dropped (%s)",
-                                    self.opts.cmd_vel_topic, self.cmd_type, err)
+                                    topic, self.cmd_type, err)
                 continue
             tw = msg.twist if self.opts.cmd_vel_stamped else msg
             v, w = float(tw.linear.x), float(tw.angular.z)
@@ -258,7 +256,7 @@ class Bridge:
                 out.append((v, w))
             else:
                 self.bad_input.warn("%s: a command with linear.x = %r, angular.z = %r "
-                                    "dropped (not finite)", self.opts.cmd_vel_topic, v, w)
+                                    "dropped (not finite)", topic, v, w)
         self.stats.commands += len(out)
         return out
 

@@ -71,16 +71,18 @@ _BASE = {"bool": bool, "int8": _t.int8, "uint8": _t.uint8, "byte": _t.byte, "cha
          "int16": _t.int16, "uint16": _t.uint16, "int32": _t.int32, "uint32": _t.uint32,
          "int64": _t.int64, "uint64": _t.uint64, "float32": _t.float32,
          "float64": _t.float64}
-_TYPES: dict[tuple[int, str], Any] = {}
+_TYPES: dict[tuple[int, str, bool], Any] = {}
 _DOMAINS: dict[int, tuple[str, Any]] = {}
 
 
-def dds_type(store: Any, msgtype: str) -> Any:
+def dds_type(store: Any, msgtype: str, request_header: bool = False) -> Any:
     """The Cyclone DDS type of a ROS 2 message (``sensor_msgs/msg/Imu`` ->
     ``sensor_msgs::msg::dds_::Imu_``), built from ``store``'s (a ``rosbags`` typestore)
     definition: ``@final``, no key, an empty message holding ``uint8
-    structure_needs_at_least_one_member`` as ROS 2's IDL does."""
-    key = (id(store), msgtype)
+    structure_needs_at_least_one_member`` as ROS 2's IDL does. ``request_header``: a service
+    request's or reply's type as ``rmw_cyclonedds`` sends it, the request's id first (the
+    client's ``uint64`` writer handle and the ``int64`` sequence number)."""
+    key = (id(store), msgtype, request_header)
     if key in _TYPES:
         return _TYPES[key]
     _, fields = store.fielddefs[msgtype]
@@ -88,6 +90,8 @@ def dds_type(store: Any, msgtype: str) -> Any:
     members = {fname: _field(store, node, spec) for fname, (node, spec) in fields}
     if not members:
         members = {"structure_needs_at_least_one_member": _t.uint8}
+    if request_header:
+        members = {"client_guid": _t.uint64, "sequence_number": _t.int64, **members}
     cls = make_idl_struct(f"{name}_", f"{pkg}::{kind}::dds_::{name}_", members)
     _TYPES[key] = _ann.final(cls)
     return _TYPES[key]
@@ -210,19 +214,25 @@ class Participant:
         return bytes(self.dp.guid.bytes)
 
     def writer(self, store: Any, topic: str, msgtype: str, qos: str, *,
-               ros_topic: bool = True) -> RawWriter:
+               ros_topic: bool = True, user_data: str = "") -> RawWriter:
         """A writer of ``topic`` (a ROS topic, ``rt/`` on DDS, unless ``ros_topic`` is false)
-        with the QoS profile named ``qos`` (:data:`QOS`)."""
-        w = RawWriter(self, dds_type(store, msgtype), dds_topic(topic) if ros_topic else topic,
-                      QOS[qos] + _type_hash(store, msgtype))
+        with the QoS profile named ``qos`` (:data:`QOS`); ``user_data`` goes before the type
+        hash in the endpoint's USER_DATA (a service's reply writer: its header, its
+        ``serviceid=``)."""
+        w = RawWriter(self, dds_type(store, msgtype, not ros_topic and bool(user_data)),
+                      dds_topic(topic) if ros_topic else topic,
+                      QOS[qos] + _type_hash(store, msgtype, user_data))
         w.topic = topic
         self.writers.append(w)
         return w
 
-    def reader(self, store: Any, topic: str, msgtype: str, qos: str) -> RawReader:
-        """A reader of the ROS topic ``topic`` with the QoS profile named ``qos``."""
-        r = RawReader(self, dds_type(store, msgtype), dds_topic(topic),
-                      QOS[qos] + _type_hash(store, msgtype))
+    def reader(self, store: Any, topic: str, msgtype: str, qos: str, *,
+               ros_topic: bool = True, user_data: str = "") -> RawReader:
+        """A reader of the ROS topic ``topic`` with the QoS profile named ``qos`` (``ros_topic``
+        and ``user_data`` as for :meth:`writer`: a service's request reader)."""
+        r = RawReader(self, dds_type(store, msgtype, not ros_topic and bool(user_data)),
+                      dds_topic(topic) if ros_topic else topic,
+                      QOS[qos] + _type_hash(store, msgtype, user_data))
         r.topic = topic
         self.readers.append(r)
         return r
@@ -232,9 +242,9 @@ class Participant:
         self.dp.__del__()  # cyclonedds deletes an entity (and its children) this way
 
 
-def _type_hash(store: Any, msgtype: str) -> Any:
+def _type_hash(store: Any, msgtype: str, before: str = "") -> Any:
     """The endpoint USER_DATA that carries the type's RIHS01 hash, as ROS 2 Jazzy writes it."""
-    return _qos.Qos(_P.Userdata(f"typehash={store.hash_rihs01(msgtype)};".encode()))
+    return _qos.Qos(_P.Userdata(f"{before}typehash={store.hash_rihs01(msgtype)};".encode()))
 
 
 def dds_topic(topic: str) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -49,6 +50,9 @@ class Ros2Options:
         The node ``ros2 node list`` shows (``ros_discovery_info``).
     cmd_vel_topic : str
         Velocity commands the rover obeys.
+    rover_cmd_vel : bool
+        Also obey ``/rover/cmd_vel`` (the topic a MarsLab stack publishes; the bag records the
+        command there) besides ``cmd_vel_topic``.
     cmd_vel_stamped : bool
         ``geometry_msgs/TwistStamped`` on ``cmd_vel_topic`` (Nav2's ``enable_stamped_cmd_vel``)
         instead of ``Twist``.
@@ -79,6 +83,12 @@ class Ros2Options:
         End the session when the goal is reached.
     distro : str
         ``"jazzy"`` or ``"humble"`` message definitions (they differ in ``ros_discovery_info``).
+    services : bool
+        Serve ``simulation_interfaces``' services and the ``SimulateSteps`` action
+        (:mod:`.sim_control`; clients on ``rmw_cyclonedds_cpp``).
+    sim_namespace : str
+        In front of the services' names (``/`` : ``/get_simulation_state``; ``/gzserver`` for
+        scripts written for Gazebo).
     map_tf : bool
         Publish ``map -> odom`` on ``/tf`` (from ground truth: a perfect localiser); turn it off
         when a SLAM or localisation stack publishes its own.
@@ -88,6 +98,7 @@ class Ros2Options:
     localhost: bool | None = None
     node_name: str = "marsscene_rover"
     cmd_vel_topic: str = "/cmd_vel"
+    rover_cmd_vel: bool = True
     cmd_vel_stamped: bool = False
     cmd_timeout_s: float = 0.5
     pace: str = "realtime"
@@ -99,6 +110,8 @@ class Ros2Options:
     stop_at_goal: bool = False
     distro: str = "jazzy"
     map_tf: bool = True
+    services: bool = True
+    sim_namespace: str = "/"
 
     def __post_init__(self) -> None:
         if self.domain_id is not None:
@@ -117,9 +130,19 @@ class Ros2Options:
         if not self.cmd_vel_topic.startswith("/") or " " in self.cmd_vel_topic:
             raise ConfigError(f"ros2.cmd_vel_topic = {self.cmd_vel_topic!r} must be an "
                               "absolute topic name such as /cmd_vel")
+        if not re.fullmatch(r"(/[A-Za-z_][A-Za-z0-9_]*)*/?", self.sim_namespace) \
+                or not self.sim_namespace.startswith("/"):
+            raise ConfigError(f"ros2.sim_namespace = {self.sim_namespace!r} must be an "
+                              "absolute ROS namespace such as / or /gzserver")
         if not self.node_name.isidentifier():
             raise ConfigError(f"ros2.node_name = {self.node_name!r} must be a ROS name "
                               "(letters, digits, underscores)")
+
+    @property
+    def cmd_vel_topics(self) -> tuple[str, ...]:
+        """The command topics obeyed, in the order they are read."""
+        extra = ("/rover/cmd_vel",) if self.rover_cmd_vel else ()
+        return tuple(dict.fromkeys((self.cmd_vel_topic, *extra)))
 
     @property
     def domain(self) -> int:

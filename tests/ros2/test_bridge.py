@@ -21,6 +21,8 @@ from marsscene.sim.mission import prepare_drive
 class Inbox:
     """Stands in for a DDS reader: ``take()`` returns what was put since the last take."""
 
+    topic = "/cmd_vel"
+
     def __init__(self) -> None:
         self.items: list[bytes] = []
 
@@ -36,6 +38,7 @@ def bridge(gentle_scene):
     b = _bridge(sim, config, Ros2Options(domain_id=214, localhost=True, pace="max",
                                          stop_at_goal=True, cmd_timeout_s=0.5))
     b.cmd_reader = Inbox()
+    b.cmd_readers = [b.cmd_reader]
     b.control_readers = {t: Inbox() for t in b.control_readers}
     yield b
     b.part.close()

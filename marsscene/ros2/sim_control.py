@@ -1,0 +1,361 @@
+"""Simulation control as ``simulation_interfaces`` has it: the services and the action of a
+served session (one rover, entity ``rover``, on a static world).
+
+States: playing (the session's ``pace``), paused (sim time stands still: no step is taken,
+``/clock`` says the same time again) and stopped (paused, the rover back at its start).
+A *step* is one pass of the simulation loop, one control step (``1 / control_hz`` s, the
+physics sub-steps within it): ``StepSimulation(n)`` and ``SimulateSteps`` take exactly n of
+them, with the command in force (the newest ``cmd_vel`` and its time-out), publish every
+sample they make and answer once the last one is out. A reset puts the rover back at its start
+at rest; sim time runs on (``SIMULATION_RESET_TIME`` is not offered: the clock never jumps).
+``SetEntityState`` teleports as ``/marsscene/teleport`` does: x, y and yaw from the request,
+z, roll and pitch from the ground, at rest.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from typing import Any
+
+import numpy as np
+
+from marsscene.ros2.services import Service
+from marsscene.ros2.sim_types import ACTION, SERVICES, register
+from marsscene.transforms import yaw_of_quat
+
+__all__ = ["FEATURES", "SimControl"]
+
+_P = "simulation_interfaces"
+#: ``SimulatorFeatures`` codes offered (exactly what is served).
+FEATURES = (10, 11, 12, 8, 20, 22, 23, 24, 25, 26, 31, 32, 33)
+STOPPED, PLAYING, PAUSED, QUITTING = 0, 1, 2, 3
+UNSUPPORTED, OK, NOT_FOUND, INCORRECT_STATE, FAILED = 0, 1, 2, 3, 4
+ROVER, ROBOT = "rover", 1
+_ALREADY, _INCORRECT_TRANSITION = 101, 103
+_ACCEPTED, _EXECUTING, _SUCCEEDED, _CANCELED = 1, 2, 4, 5
+
+
+class _Run:
+    """Steps asked for by one call: the service's reply or the action's goal."""
+
+    def __init__(self, n: int, finish: Any, goal_id: Any = None) -> None:
+        self.n, self.started, self.completed = int(n), 0, 0
+        self.finish, self.goal_id = finish, goal_id
+
+
+class SimControl:
+    """The services of a session's bridge, and its pause / step gate.
+
+    Parameters
+    ----------
+    bridge : Bridge
+    namespace : str
+        In front of every service and the action (``/`` or e.g. ``/gzserver``).
+    """
+
+    def __init__(self, bridge: Any, namespace: str = "/") -> None:
+        self.b, self.store, self.T = bridge, bridge.store, bridge.store.types
+        register(self.store)
+        ns = namespace.rstrip("/")
+        part = bridge.part
+        self.services = [Service(part, self.store, f"{ns}/{name}", f"{_P}/srv/{srv}",
+                                 getattr(self, "_" + name)) for name, srv in SERVICES.items()]
+        act = f"{ns}/{ACTION[0]}/_action"
+        atype = f"{_P}/action/{ACTION[1]}"
+        self.services += [
+            Service(part, self.store, f"{act}/send_goal", f"{atype}_SendGoal", self._send_goal),
+            Service(part, self.store, f"{act}/get_result", f"{atype}_GetResult",
+                    self._get_result),
+            Service(part, self.store, f"{act}/cancel_goal", "action_msgs/srv/CancelGoal",
+                    self._cancel_goal)]
+        self.feedback = part.writer(self.store, f"{act}/feedback", f"{atype}_FeedbackMessage",
+                                    "default")
+        self.status = part.writer(self.store, f"{act}/status", "action_msgs/msg/GoalStatusArray",
+                                  "latched")
+        self.atype = atype
+        self.state = PLAYING
+        self.run: _Run | None = None
+        self.results: dict[bytes, tuple[int, Any]] = {}  # goal id -> (status, result)
+        self.waiting: dict[bytes, list[Any]] = {}  # get_result replies held until the end
+        self.obs: Any = None
+        self.steps = 0  # steps taken while not playing (by the services and the action)
+
+    # ---- the gate: called at the start of every control step -------------------------------
+    @property
+    def playing(self) -> bool:
+        return self.state == PLAYING
+
+    def poll(self) -> None:
+        for s in self.services:
+            s.poll()
+
+    def gate(self, obs: Any) -> bool:
+        """Serve requests; while not playing, hold sim time until a step is asked for. True:
+        this control step is one asked for (drive it, unpaced)."""
+        self.obs = obs
+        run = self.run
+        if run is not None and run.started > run.completed:
+            run.completed += 1
+            if run.goal_id is not None:
+                self._feedback(run)
+        self.poll()
+        if self.playing or self.b.done:
+            return False
+        b, said, since = self.b, -math.inf, time.perf_counter()
+        obs.lidar  # noqa: B018 (the scan being cast goes out before the wait)
+        while not self.b.done and self.state != PLAYING:
+            run = self.run
+            if run is not None and run.completed >= run.n:
+                self.run = None
+                run.finish(run)
+                continue
+            if run is not None:
+                run.started += 1
+                self.steps += 1
+                return True
+            if time.perf_counter() - said > 0.1 and b.wanted("/clock"):
+                b.publish([("/clock", b.msgs.b.clock(obs.t_s))])
+                said = time.perf_counter()
+            for cmd in b._read_commands():  # the command the next steps drive
+                b.cmd, b.cmd_t_s = cmd, obs.t_s
+            b._read_control()
+            self.poll()
+            time.sleep(0.0005 if time.perf_counter() - since < 0.1 else 0.005)
+        b.wall0 = None  # realtime pacing starts again from here
+        return False
+
+    # ---- helpers ------------------------------------------------------------------------------
+    def _result(self, code: int = OK, text: str = "") -> Any:
+        return self.T[f"{_P}/msg/Result"](result=code, error_message=text)
+
+    def _reply(self, srv: str, **fields: Any) -> Any:
+        return self.T[f"{_P}/srv/{srv}_Response"](**fields)
+
+    def _stamp(self) -> Any:
+        return self.b.msgs.b.header(self.obs.t_s if self.obs is not None else 0.0, "map")
+
+    # ---- simulation state --------------------------------------------------------------------
+    def _get_simulator_features(self, req: Any, _r: Any) -> Any:
+        feats = self.T[f"{_P}/msg/SimulatorFeatures"](
+            features=np.array(FEATURES, dtype=np.uint16), spawn_formats=[],
+            custom_info="marsscene: one rover (entity 'rover') on a static world; a step is "
+                        "one control step; reset keeps sim time running")
+        return self._reply("GetSimulatorFeatures", features=feats)
+
+    def _get_simulation_state(self, req: Any, _r: Any) -> Any:
+        return self._reply("GetSimulationState", result=self._result(),
+                           state=self.T[f"{_P}/msg/SimulationState"](state=self.state))
+
+    def _set_simulation_state(self, req: Any, _r: Any) -> Any:
+        want, now = int(req.state.state), self.state
+        if want == now:
+            res = self._result(_ALREADY, "already in that state")
+        elif want == STOPPED:
+            self._abort_run()
+            self.b._place(*self.b.start_pose)
+            self.state, res = STOPPED, self._result()
+        elif want in (PLAYING, PAUSED):
+            if want == PLAYING:
+                self._abort_run()
+            self.state, res = want, self._result()
+        elif want == QUITTING:
+            self.b.done, res = True, self._result()
+        else:
+            res = self._result(UNSUPPORTED, "no world loading: one static scene a session")
+        return self._reply("SetSimulationState", result=res)
+
+    def _reset_simulation(self, req: Any, _r: Any) -> Any:
+        scope = int(req.scope)
+        if scope not in (0, 255) and not scope & 6:  # SCOPE_TIME alone
+            return self._reply("ResetSimulation", result=self._result(
+                UNSUPPORTED, "sim time is not reset (SIMULATION_RESET_TIME)"))
+        ok = self.b._place(*self.b.start_pose)
+        if ok:
+            self.b.stats.resets += 1
+        return self._reply("ResetSimulation", result=self._result(
+            OK if ok else FAILED, "" if scope & 2 and not scope & 1 else
+            "the rover is back at its start; sim time keeps running"))
+
+    def _step_simulation(self, req: Any, reply: Any) -> Any:
+        if self.state != PAUSED or self.run is not None:
+            return self._reply("StepSimulation", result=self._result(
+                FAILED, "pause the simulation first" if self.state != PAUSED
+                else "steps are being taken"))
+        self.run = _Run(max(int(req.steps), 1), lambda run: reply(
+            self._reply("StepSimulation", result=self._result())))
+        return None
+
+    def _abort_run(self) -> None:
+        run, self.run = self.run, None
+        if run is not None:
+            run.finish(run)
+
+    # ---- entities ----------------------------------------------------------------------------
+    def _get_entities(self, req: Any, _r: Any) -> Any:
+        f = req.filters
+        if len(f.tags.tags) or int(f.bounds.type) != 0:
+            return self._reply("GetEntities", result=self._result(
+                UNSUPPORTED, "no entity tags or bounds"), entities=[])
+        try:
+            named = not f.filter or re.search(f.filter, ROVER) is not None
+        except re.error as err:
+            return self._reply("GetEntities", result=self._result(FAILED, str(err)),
+                               entities=[])
+        cats = {int(c.category) for c in f.categories}
+        found = [ROVER] if named and (not cats or ROBOT in cats) else []
+        return self._reply("GetEntities", result=self._result(), entities=found)
+
+    def _missing(self, srv: str, name: str, **extra: Any) -> Any:
+        return self._reply(srv, result=self._result(
+            NOT_FOUND, f"no entity {name!r}; the one entity is {ROVER!r}"), **extra)
+
+    def _get_entity_info(self, req: Any, _r: Any) -> Any:
+        info = self.T[f"{_P}/msg/EntityInfo"](
+            category=self.T[f"{_P}/msg/EntityCategory"](category=ROBOT),
+            description="the served rover (base_link; its topics under /rover)", tags=[])
+        if req.entity.strip("/") != ROVER:
+            return self._missing("GetEntityInfo", req.entity, info=info)
+        return self._reply("GetEntityInfo", result=self._result(), info=info)
+
+    def _entity_state(self) -> Any:
+        b, sim = self.b.msgs.b, self.b.sim
+        xyz, q = sim.pose()
+        ang: tuple[float, ...] = (0.0, 0.0, 0.0)
+        lin: tuple[float, ...] = ang
+        qvel = getattr(getattr(sim, "data", None), "qvel", None)
+        if qvel is not None:  # MuJoCo's free joint: linear (world), angular (body) velocity
+            i = sim.qvel_root
+            lin = tuple(float(v) for v in qvel[i:i + 3])
+            ang = tuple(float(v) for v in _rotate(q, qvel[i + 3:i + 6]))
+        V3 = self.T["geometry_msgs/msg/Vector3"]
+        P = self.T["geometry_msgs/msg/Point"]
+        pose = self.T["geometry_msgs/msg/Pose"](
+            position=P(x=float(xyz[0]), y=float(xyz[1]), z=float(xyz[2])),
+            orientation=b.quat((float(q[1]), float(q[2]), float(q[3]), float(q[0]))))
+        twist = self.T["geometry_msgs/msg/Twist"](linear=V3(x=lin[0], y=lin[1], z=lin[2]),
+                                                   angular=V3(x=ang[0], y=ang[1], z=ang[2]))
+        zero = V3(x=0.0, y=0.0, z=0.0)
+        return self.T[f"{_P}/msg/EntityState"](
+            header=self._stamp(), pose=pose, twist=twist,
+            acceleration=self.T["geometry_msgs/msg/Accel"](linear=zero, angular=zero))
+
+    def _get_entity_state(self, req: Any, _r: Any) -> Any:
+        if req.entity.strip("/") != ROVER:
+            return self._missing("GetEntityState", req.entity, state=self._entity_state())
+        return self._reply("GetEntityState", result=self._result(), state=self._entity_state())
+
+    def _set_entity_state(self, req: Any, _r: Any) -> Any:
+        if req.entity.strip("/") != ROVER:
+            return self._missing("SetEntityState", req.entity)
+        st = req.state
+        tw = st.twist
+        if req.set_twist and any(abs(v) > 0 for v in (
+                tw.linear.x, tw.linear.y, tw.linear.z, tw.angular.x, tw.angular.y,
+                tw.angular.z)):
+            return self._reply("SetEntityState", result=self._result(
+                FAILED, "the rover is placed at rest: a twist other than zero is not set"))
+        if st.header.frame_id not in ("", "world", "map"):
+            return self._reply("SetEntityState", result=self._result(
+                FAILED, f"frame {st.header.frame_id!r}: poses are in the map (world) frame"))
+        if req.set_pose:
+            q = st.pose.orientation
+            if not all(math.isfinite(v) for v in (q.w, q.x, q.y, q.z, st.pose.position.x,
+                                                     st.pose.position.y)) \
+                    or abs(q.w**2 + q.x**2 + q.y**2 + q.z**2 - 1.0) > 1e-3:
+                return self._reply("SetEntityState", result=self._result(
+                    101, "a pose with a unit quaternion and finite x, y"))
+            yaw = float(yaw_of_quat((q.w, q.x, q.y, q.z)))
+            if not self.b._place((st.pose.position.x, st.pose.position.y), yaw):
+                return self._reply("SetEntityState", result=self._result(
+                    101, "off the terrain"))
+            self.b.stats.teleports += 1
+        elif req.set_twist:
+            self.b._place(self.b.sim.pose()[0][:2], self.b.sim.yaw_rad())
+        return self._reply("SetEntityState", result=self._result(
+            OK, "z, roll and pitch from the ground" if req.set_pose else ""))
+
+    def _get_spawnables(self, req: Any, _r: Any) -> Any:
+        return self._reply("GetSpawnables", result=self._result(
+            UNSUPPORTED, "a static world: nothing to spawn"), spawnables=[])
+
+    def _spawn_entity(self, req: Any, _r: Any) -> Any:
+        return self._reply("SpawnEntity", result=self._result(
+            UNSUPPORTED, "a static world: nothing is spawned"), entity_name="")
+
+    def _delete_entity(self, req: Any, _r: Any) -> Any:
+        return self._reply("DeleteEntity", result=self._result(
+            UNSUPPORTED, "a static world: nothing is deleted"))
+
+    # ---- the SimulateSteps action ------------------------------------------------------------
+    def _send_goal(self, req: Any, _r: Any) -> Any:
+        gid = bytes(req.goal_id.uuid)
+        ok = self.state == PAUSED and self.run is None and int(req.goal.steps) > 0
+        if ok:
+            self.run = _Run(int(req.goal.steps), self._goal_done, req.goal_id)
+            self._status(req.goal_id, _EXECUTING)
+        else:
+            msg = "pause the simulation first" if self.state != PAUSED else "steps are running"
+            self.results[gid] = (6, self._result(FAILED, msg))
+        return self.T[f"{self.atype}_SendGoal_Response"](accepted=ok, stamp=self._stamp().stamp)
+
+    def _goal_done(self, run: _Run) -> None:
+        done = run.completed >= run.n
+        status = _SUCCEEDED if done else _CANCELED
+        gid = bytes(run.goal_id.uuid)
+        self.results[gid] = (status, self._result(OK if done else FAILED,
+                                                  "" if done else "stopped before the end"))
+        self._status(run.goal_id, status)
+        for reply in self.waiting.pop(gid, []):
+            reply(self._result_reply(gid))
+
+    def _result_reply(self, gid: bytes) -> Any:
+        status, result = self.results[gid]
+        return self.T[f"{self.atype}_GetResult_Response"](
+            status=status, result=self.T[f"{self.atype}_Result"](result=result))
+
+    def _get_result(self, req: Any, reply: Any) -> Any:
+        gid = bytes(req.goal_id.uuid)
+        if gid in self.results:
+            return self._result_reply(gid)
+        run = self.run
+        if run is not None and run.goal_id is not None and bytes(run.goal_id.uuid) == gid:
+            self.waiting.setdefault(gid, []).append(reply)
+            return None
+        return self.T[f"{self.atype}_GetResult_Response"](  # an unknown goal
+            status=0, result=self.T[f"{self.atype}_Result"](result=self._result(NOT_FOUND)))
+
+    def _cancel_goal(self, req: Any, _r: Any) -> Any:
+        run = self.run
+        info = req.goal_info
+        mine = run is not None and run.goal_id is not None and (
+            bytes(info.goal_id.uuid) in (bytes(run.goal_id.uuid), bytes(16)))
+        goals = []
+        if mine and run is not None:
+            goals = [self.T["action_msgs/msg/GoalInfo"](goal_id=run.goal_id,
+                                                        stamp=self._stamp().stamp)]
+            self._abort_run()
+        return self.T["action_msgs/srv/CancelGoal_Response"](return_code=0 if mine else 2,
+                                                             goals_canceling=goals)
+
+    def _feedback(self, run: _Run) -> None:
+        fb = self.T[f"{self.atype}_Feedback"](completed_steps=run.completed,
+                                              remaining_steps=run.n - run.completed)
+        msg = self.T[f"{self.atype}_FeedbackMessage"](goal_id=run.goal_id, feedback=fb)
+        self.feedback.write(self.store.serialize_cdr(msg, msg.__msgtype__))
+
+    def _status(self, goal_id: Any, status: int) -> None:
+        info = self.T["action_msgs/msg/GoalInfo"](goal_id=goal_id, stamp=self._stamp().stamp)
+        arr = self.T["action_msgs/msg/GoalStatusArray"](
+            status_list=[self.T["action_msgs/msg/GoalStatus"](goal_info=info, status=status)])
+        self.status.write(self.store.serialize_cdr(arr, arr.__msgtype__))
+
+
+def _rotate(q_wxyz: Any, v: Any) -> Any:
+    """``v`` (body frame) in the world frame, by the unit quaternion ``q_wxyz``."""
+    w, x, y, z = (float(c) for c in q_wxyz)
+    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    return r @ np.asarray(v, dtype=float)
