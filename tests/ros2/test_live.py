@@ -105,12 +105,13 @@ def test_every_topic_arrives_at_its_rate_and_decodes(session):
         assert len(stamps) >= 0.9 * (hz * SECONDS + 1), (topic, len(stamps))
         assert stamps[0] == pytest.approx(0.0) and np.all(np.diff(stamps) > 0), topic
     assert got["/tf_static"]["n"] == 1 and got["/rover/robot_description"]["n"] == 1
-    # the node as `ros2 node list` reads it: 4 readers (cmd_vel, reset, teleport, goal) and a
-    # writer per published topic
+    # the node as `ros2 node list` reads it: 5 readers (/cmd_vel, /rover/cmd_vel, reset,
+    # teleport, goal) and a writer per published topic, and the services' (12 + the action's
+    # 3: a request reader and a reply writer each; the action's feedback and status writers)
     ns, name, readers, writers = got["ros_discovery_info"]["nodes"][-1]
-    assert (ns, name, readers) == ("/", "marsscene_rover", 4)
+    assert (ns, name, readers) == ("/", "marsscene_rover", 5 + 15)
     table = topic_table(camera=True, depth=True, lidar=True, images="both")
-    assert writers == len(table) - 1 + 1  # not /rover/cmd_vel (subscribed); + goal_reached
+    assert writers == len(table) - 1 + 1 + 15 + 2  # not /rover/cmd_vel; + goal_reached
 
 
 def test_cmd_vel_moves_the_rover_as_drive_with_the_same_commands(session, gentle_scene):

@@ -133,3 +133,15 @@ def test_options_are_checked_with_one_line_errors(monkeypatch):
     monkeypatch.setenv("ROS_DOMAIN_ID", "x")
     with pytest.raises(ConfigError, match="ROS_DOMAIN_ID"):
         _ = Ros2Options().domain
+
+
+def test_both_command_topics_are_obeyed_by_default_and_the_namespace_is_checked():
+    from marsscene.errors import ConfigError
+
+    assert Ros2Options().cmd_vel_topics == ("/cmd_vel", "/rover/cmd_vel")
+    assert Ros2Options(rover_cmd_vel=False).cmd_vel_topics == ("/cmd_vel",)
+    assert Ros2Options(cmd_vel_topic="/rover/cmd_vel").cmd_vel_topics == ("/rover/cmd_vel",)
+    assert Ros2Options(sim_namespace="/gzserver").sim_namespace == "/gzserver"
+    for bad in ("gzserver", "/gz server", "/9x"):
+        with pytest.raises(ConfigError, match="sim_namespace"):
+            Ros2Options(sim_namespace=bad)
