@@ -64,6 +64,7 @@ __all__ = [
     "__version__",
     "build_scene",
     "drive",
+    "drive_batch",
     "read_dem",
     "show_versions",
     "write_scene",
@@ -78,6 +79,7 @@ _LAZY = {
     **dict.fromkeys(("DriveRun", "drive"), "marsscene.runtime.api"),
     "Observation": "marsscene.sim.control",
     "DriveOptions": "marsscene.sim.mission",
+    "drive_batch": "marsscene.sim.batch.api",
 }
 
 __getattr__ = lazy_attributes(__name__, _LAZY)
