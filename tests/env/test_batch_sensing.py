@@ -59,20 +59,23 @@ def test_shapes_dtypes_and_spaces(env: BatchNavEnv) -> None:
     space = vec.single_observation_space
     channels, columns = SENSED.lidar_shape  # type: ignore[misc]
     assert obs["depth"].shape == (N, 1, PX, PX) and obs["depth"].dtype == np.float32
+    assert obs["rgb"].shape == (N, 3, PX, PX) and obs["rgb"].dtype == np.uint8
     assert obs["lidar_range"].shape == (N, 1, channels, columns) == (N, 1, 16, 360)
     assert obs["lidar_range"].dtype == np.float32 and obs["lidar_mask"].dtype == np.int8
-    assert "rgb" not in obs and "rgb" not in space.spaces
+    assert space.spaces["rgb"].shape == (3, PX, PX) and space.spaces["rgb"].dtype == np.uint8
     assert set(obs) == set(space.spaces)
     for key, box in space.spaces.items():
         assert box.shape == obs[key].shape[1:] and box.dtype == obs[key].dtype, key
         assert all(box.contains(obs[key][i]) for i in range(N)), key
     assert vec.observation_space["depth"].shape == (N, 1, PX, PX)
+    assert vec.observation_space["rgb"].shape == (N, 3, PX, PX)
     np.testing.assert_array_equal(obs["lidar_mask"] == 1, obs["lidar_range"] > 0)
     assert 0.1 < obs["lidar_mask"].mean() < 0.9 and 0.2 < (obs["depth"] > 0).mean() < 0.95
     *_, info = vec.step(np.zeros((N, 2), np.float32))
     assert info["final_obs"]["depth"].shape == (N, 1, PX, PX)
     grouped = groups(obs)
     assert grouped["depth"] is obs["depth"]
+    np.testing.assert_array_equal(grouped["rgb"] * 255.0, obs["rgb"])
     assert grouped["lidar"].shape == (N, 2, 16, 360) and grouped["lidar"].dtype == np.float32
     np.testing.assert_array_equal(grouped["lidar"][:, 1], obs["lidar_mask"][:, 0])
     assert grouped["policy"].shape == (N, 17 + 9)
@@ -155,12 +158,13 @@ def test_same_seed_same_bytes_and_bad_input(batch: WorldBatch) -> None:
         e = BatchNavEnv(batch, num_envs=2, device="cpu", library="numpy", seed=5,
                         observations=obs_cfg)
         rng = np.random.default_rng(3)
-        runs.append([b"".join(o[k].tobytes() for k in ("depth", "lidar_range", "lidar_mask"))
+        runs.append([b"".join(o[k].tobytes() for k in ("rgb", "depth", "lidar_range",
+                                                       "lidar_mask"))
                      for o in (e.step(rng.uniform(-1, 1, (2, 2)))[0] for _ in range(2))])
     assert runs[0] == runs[1]
-    with pytest.raises(ConfigError, match="depth only"):
+    with pytest.raises(ConfigError, match="needs camera"):
         BatchNavEnv(batch, num_envs=1, device="cpu",
-                    observations=ObsConfig(camera=(64, 64), noise_profile="none"))
+                    observations=ObsConfig(depth=True, noise_profile="none"))
 
 
 def test_final_sensors_off_casts_once_a_step_and_changes_no_observation(

@@ -7,8 +7,9 @@ values, then the height scan row by row (:func:`~marsscene.env.policy.policy_inp
 trained on it runs on :class:`~marsscene.env.nav.RoverNavEnv`'s observations through the same
 function. The camera's and the LiDAR's observations (:mod:`.sensing`) come as groups of
 their own, channels first, for a CNN encoder (rsl-rl's ``ActorCriticCNN`` takes the groups of
-three dimensions a rover to its CNNs, the others to its MLP): ``"depth"`` (N, 1, H, W) in m and
-``"lidar"`` (N, 2, channels, columns), the range in m then the mask (1: a return), float32.
+three dimensions a rover to its CNNs, the others to its MLP): ``"rgb"`` (N, 3, H, W) the sRGB
+codes over 255, ``"depth"`` (N, 1, H, W) in m and ``"lidar"`` (N, 2, channels, columns), the
+range in m then the mask (1: a return), float32.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ class RslRlVecEnv:
     """:class:`BatchNavEnv` as rsl-rl's ``VecEnv`` (``rsl-rl-lib`` 3 or later; PyTorch).
 
     Observations: a ``TensorDict`` with the group ``"policy"`` (the flat vector) and, where
-    observed, ``"depth"`` and ``"lidar"`` (the module's docstring); give the runner e.g.
+    observed, ``"rgb"``, ``"depth"`` and ``"lidar"`` (the module's docstring); give the runner e.g.
     ``obs_groups={"actor": ["policy"], "critic": ["policy"]}`` (a blind MLP) or
     ``{"actor": ["policy", "depth"], "critic": ["policy", "depth"]}``. ``dones`` is terminated
     or truncated; ``extras["time_outs"]`` the truncations (bootstrapped by PPO). rsl-rl does
@@ -76,10 +77,13 @@ class RslRlVecEnv:
 
 def groups(obs: dict[str, Any]) -> dict[str, Any]:
     """rsl-rl's observation groups of the batch's observations (PyTorch tensors or numpy
-    arrays): ``"policy"``, and ``"depth"`` and ``"lidar"`` where observed."""
+    arrays): ``"policy"``, and ``"rgb"``, ``"depth"`` and ``"lidar"`` where observed."""
     from array_api_compat import array_namespace
 
     out = {"policy": policy_input(obs)}
+    if "rgb" in obs:
+        xp = array_namespace(obs["rgb"])
+        out["rgb"] = xp.astype(obs["rgb"], xp.float32) / 255.0
     if "depth" in obs:
         out["depth"] = obs["depth"]
     if "lidar_range" in obs:

@@ -11,9 +11,9 @@ it leans over ``task.start_max_tilt_deg`` is replaced by another of its world).
 
 Differences from the CPU environment, by design: the sensors are noise-free (the IMU and wheel
 encoders MuJoCo Warp computes; ``ObsConfig.noise_profile`` must be ``"none"``), the pose is the
-ground truth (``pose_source="truth"``), rocks are relief of the terrain (a wheel "collides"
-with a rock where it touches ground raised by one; the camera and LiDAR see that relief), and the
-camera gives depth only, channels first (:mod:`.sensing`). The height scan is privileged ground
+ground truth (``pose_source="truth"``), rocks are relief of the terrain (a wheel "collides" with
+a rock where it touches ground raised by one; the LiDAR sees that relief, the camera the rocks'
+meshes), and images come channels first (:mod:`.sensing`). The height scan is privileged ground
 truth (the terrain's heights read from the world, no sensor's): a policy meant for a real rover
 observes ``depth`` or ``lidar_range`` instead (``ObsConfig(height_scan=None, ...)``).
 """
@@ -129,7 +129,8 @@ class BatchNavEnv:
         self._task_arrays(terrains, tiled.offsets_xy_m)
         obs = self.obs_config
         self.sensors = (BatchSensors(self.mj_model, self.mjw_model, mjw, self.num_envs, obs,
-                                     self.control_hz, seed, bk)
+                                     self.control_hz, seed, bk, batch=self.batch,
+                                     offsets_xy_m=tiled.offsets_xy_m)
                         if obs.camera is not None or obs.lidar is not None else None)
         with bk.on_stream():
             self._pool, self.pool_level_fraction = settle_pool(
@@ -282,7 +283,7 @@ class BatchNavEnv:
         if self.sensors is not None and sensors:
             off = self._offsets[self.world]  # a reset rover may be on another world now
             bounds = self._bounds[self.world] + self.xp.concat([off, off], axis=1)
-            out.update(self.sensors.observe(self.mjw_data, bounds))
+            out.update(self.sensors.observe(self.mjw_data, bounds, self.world))
         return out
 
     def _judge(self, state: RoverState, a: Any, moving: Any) -> judgement.Judgement:

@@ -62,10 +62,10 @@ def auto_gain(hist: wp.array2d[int], peak: wp.array2d[int], target_mean: float,
               gain: wp.array[float]):
     """Camera ``i``'s gain from its histograms, smoothed with its last (0: none yet)."""
     i = wp.tid()
-    total = 0
+    total = wp.int32(0)
     for b in range(BINS):
         total += peak[i, b]
-    above = 0
+    above = wp.int32(0)
     bright = _centre(BINS - 1)
     for k in range(BINS):
         b = BINS - 1 - k
@@ -74,11 +74,11 @@ def auto_gain(hist: wp.array2d[int], peak: wp.array2d[int], target_mean: float,
             bright = _centre(b)
             break
     hi = 0.98 / wp.max(bright, 1.0e-6)
-    lo_g = 1.0e-3
-    hi_g = 1.0e4
+    lo_g = wp.float32(1.0e-3)
+    hi_g = wp.float32(1.0e4)
     for _ in range(24):
         mid = wp.sqrt(lo_g * hi_g)
-        acc = 0.0
+        acc = wp.float32(0.0)
         for b in range(BINS):
             acc += float(hist[i, b]) * srgb(_centre(b) * mid)
         if acc < target_mean * float(3 * total):

@@ -90,13 +90,13 @@ def march(posts: wp.array3d[float], w: int, o: wp.vec3, d: wp.vec3, t_min: float
     p = o + t * d
     c = wp.clamp(int(wp.floor(p[0])), 0, cols - 2)
     r = wp.clamp(int(wp.floor(p[1])), 0, rows - 2)
-    sc = 1
-    sr = 1
+    sc = wp.int32(1)
+    sr = wp.int32(1)
     if d[0] < 0.0:
         sc = -1
     if d[1] < 0.0:
         sr = -1
-    big = 1.0e30
+    big = wp.float32(1.0e30)
     nx = big
     ny = big
     if wp.abs(d[0]) > 1.0e-12:
@@ -166,14 +166,11 @@ def _albedo(tile: wp.array[wp.vec3], levels: int, n: int, texel_m: float, footpr
     """Ground albedo at world point (x, y): the world-anchored detail tile's texel under it
     at the mip level of the pixel's footprint (``tile`` holds the levels n, n/2, ... one
     after the other), times the bilinear gain (grid from ``corner`` every ``step_m``)."""
-    lv = 0
+    lv = wp.int32(0)
     if footprint_m > texel_m:
         lv = wp.min(int(wp.log2(footprint_m / texel_m)), levels - 1)
-    base = 0
-    size = n
-    for _ in range(lv):
-        base += size * size
-        size = size // 2
+    size = n >> lv
+    base = (n * n - size * size) * 4 // 3  # the levels before lv: n^2 (1 + 1/4 + ...)
     texel = texel_m * float(n // size)
     ti = ((int(wp.floor(y / texel + 1.0e-6)) % size) + size) % size
     tj = ((int(wp.floor(x / texel + 1.0e-6)) % size) + size) % size
@@ -237,7 +234,7 @@ def trace(
         t_ground = hit[0]
     rock = _rock(mesh, o, d, t_ground)
     kind = wp.uint8(0)
-    t = 0.0
+    t = wp.float32(0.0)
     n = wp.vec3(0.0, 0.0, 1.0)
     a = wp.vec3(0.0)
     if rock[0] >= near_m:
