@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 
 from marsscene.errors import ConfigError
 from marsscene.orbital.grid import OrbitalMap, sample_bilinear
-from marsscene.orbital.model import OrbitalModel, apply_psf
+from marsscene.orbital.model import OrbitalModel, apply_psf, correlated_noise
 from marsscene.rocks.table import RockTable
 from marsscene.scene import Scene
 from marsscene.seeding import stage_rng
@@ -76,7 +76,7 @@ def procedural_orbital_map(hf: Heightfield, rocks: RockTable | None, seed: int,
                            model: OrbitalModel | None = None, *, image: bool = True
                            ) -> OrbitalMap:
     """A terrain seen from orbit: resolved rocks raised in, the DTM's PSF, resampled to
-    ``model.dem_post_m`` posts (bilinear) from the footprint's south-west post, white noise;
+    ``model.dem_post_m`` posts (bilinear) from the footprint's south-west post, correlated noise;
     and the albedo image through its PSF with its noise. Noise from ``stage_rng(seed,
     "orbital")``: the DTM's draws first, then the image's (both drawn whatever the sigmas)."""
     m = model if model is not None else OrbitalModel()
@@ -90,7 +90,8 @@ def procedural_orbital_map(hf: Heightfield, rocks: RockTable | None, seed: int,
     gx, gy = np.meshgrid(xs, ys)
     dem = sample_bilinear(z, hf.origin_xy_m, hf.cell_size_m, gx, gy)
     rng = stage_rng(seed, "orbital")
-    dem = dem + m.dem_noise_sigma_m * rng.standard_normal(dem.shape)
+    dem = dem + correlated_noise(dem.shape, m.dem_post_m, m.dem_noise_sigma_m,
+                                 m.dem_noise_correlation_m, rng=rng)
     img = img0 = None
     if image:
         img, img0 = _image(hf, seed, m)

@@ -10,10 +10,15 @@ PSF is the Gaussian with exactly that transfer, whose full width at half maximum
 ``FWHM = (2 ln 2 / pi) * lambda_half`` (1.32 m for 3 m): its transfer function is
 ``exp(-pi^2 FWHM^2 / (4 ln 2 lambda^2))``.
 
-The DTM's noise is white Gaussian per post with ``dem_noise_sigma_m`` = 0.25 m: Kirk et al.
-(2008) give an expected vertical precision of tens of centimetres for HiRISE stereo pairs at
-typical convergence (0.1-0.5 m; 0.2-0.3 m is common for 0.25-0.3 m/pixel pairs). Real DTM errors
-are also spatially correlated over the matching kernel; white noise is the simple, stated choice.
+The DTM's noise is Gaussian with ``dem_noise_sigma_m`` = 0.25 m per post: Kirk et al. (2008)
+give an expected vertical precision of tens of centimetres for HiRISE stereo pairs at typical
+convergence (0.1-0.5 m; 0.2-0.3 m is common for 0.25-0.3 m/pixel pairs). It is **spatially
+correlated**, as a stereo DTM's error is: each post is matched from a correlation patch of
+several image pixels shared with its neighbours, so neighbouring posts err together over about
+the patch, the same ~3 posts that set the effective resolution (Kirk et al. 2008). The model
+draws white noise, convolves it with a Gaussian of sigma ``dem_noise_correlation_m / 2`` and
+rescales it to ``dem_noise_sigma_m``: its autocorrelation is ``exp(-(r / L)^2)`` with
+``L = dem_noise_correlation_m`` = 3 m (the lag where it falls to 1/e); 0 gives white noise.
 
 The orthoimage (a procedural scene's, from its albedo field) is sampled at 0.5 m pixels (HiRISE
 RED bin-2 products; 0.25 m at bin 1) with the same half-amplitude rule at 3 pixels (McEwen et
@@ -38,7 +43,8 @@ from numpy.typing import NDArray
 from marsscene._validate import plain
 from marsscene.errors import ConfigError
 
-__all__ = ["FWHM_PER_SIGMA", "OrbitalModel", "apply_psf", "fwhm_of_half_wavelength", "psf_gain"]
+__all__ = ["FWHM_PER_SIGMA", "OrbitalModel", "apply_psf", "correlated_noise",
+           "fwhm_of_half_wavelength", "psf_gain"]
 
 #: A Gaussian's full width at half maximum per standard deviation, 2 sqrt(2 ln 2).
 FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
@@ -53,7 +59,9 @@ class OrbitalModel:
     dem_half_wavelength_m: float = 3.0
     """Wavelength the DTM's PSF halves in amplitude (in m): ~3 posts."""
     dem_noise_sigma_m: float = 0.25
-    """Std of the DTM's white vertical noise (in m)."""
+    """Std of the DTM's vertical noise per post (in m)."""
+    dem_noise_correlation_m: float = 3.0
+    """Lag at which the DTM noise's autocorrelation falls to 1/e (in m; 0 = white)."""
     image_pixel_m: float = 0.5
     """Pixel size of the orthoimage of a procedural scene (in m)."""
     image_half_wavelength_m: float = 1.5
@@ -125,3 +133,24 @@ def apply_psf(z: NDArray[np.floating[Any]], cell_m: float, fwhm_m: float
     transfer = np.exp(-2.0 * (math.pi * sigma_m) ** 2 * f2)
     out = np.fft.irfft2(np.fft.rfft2(padded) * transfer, s=padded.shape)
     return out[pad_r:pad_r + a.shape[0], pad_c:pad_c + a.shape[1]]
+
+
+def correlated_noise(shape: tuple[int, int], cell_m: float, sigma_m: float,
+                     correlation_m: float, *, rng: np.random.Generator) -> NDArray[np.float64]:
+    """Gaussian noise of std ``sigma_m`` per cell whose autocorrelation is
+    ``exp(-(r / correlation_m)^2)``: white noise convolved with a Gaussian of sigma
+    ``correlation_m / 2`` (wrapping at the edges, so every cell has the same statistics),
+    divided by the kernel's root sum of squares. ``correlation_m = 0`` gives white noise."""
+    white = rng.standard_normal(shape)
+    s_px = 0.5 * correlation_m / cell_m
+    if s_px <= 0:
+        return sigma_m * white
+    from scipy import ndimage
+
+    k = math.ceil(4.0 * s_px)
+    g = np.exp(-0.5 * (np.arange(-k, k + 1) / s_px) ** 2)
+    g /= g.sum()
+    gain = float((g * g).sum())  # the 2-D kernel g x g: its root sum of squares
+    smooth = ndimage.convolve1d(ndimage.convolve1d(white, g, axis=0, mode="wrap"), g, axis=1,
+                                mode="wrap")
+    return sigma_m * smooth / gain

@@ -54,8 +54,8 @@ def _flat(size: int = 161, cell: float = 0.25) -> Heightfield:
     return Heightfield(np.zeros((size, size), np.float32), cell, (-20.0, -20.0))
 
 
-def test_dem_noise_has_the_stated_sigma_and_zero_mean() -> None:
-    m = OrbitalModel()
+def test_white_dem_noise_has_the_stated_sigma_and_zero_mean() -> None:
+    m = OrbitalModel(dem_noise_correlation_m=0.0)  # the correlated default: test_correlated_noise
     hf = Heightfield(np.zeros((801, 801), np.float32), 0.25, (-100.0, -100.0))
     z = procedural_orbital_map(hf, None, 11, m, image=False).dem_m.astype(np.float64)
     n = z.size  # 201 x 201 posts of a flat terrain: the noise alone
