@@ -9,7 +9,11 @@ once per control step: it reads the command topics (``cmd_vel``, reset, teleport
 the rover when the command is older than the timeout, and paces the simulation against the wall
 clock.
 
-Topics it subscribes to (besides ``cmd_vel``), in the spirit of OmniLRS's robot topics:
+Before each control step the simulation-control services are served (:mod:`.sim_control`):
+paused, the step waits there until one is asked for.
+
+Topics it subscribes to (besides ``cmd_vel`` and ``/rover/cmd_vel``), in the spirit of OmniLRS's
+robot topics:
 
 * ``/marsscene/reset`` (``std_msgs/Empty``): the rover back to its start pose, at rest;
 * ``/marsscene/teleport`` (``geometry_msgs/Pose``, map frame): the rover to ``x, y`` facing the

@@ -3,7 +3,8 @@
 A served session is a drive (:func:`marsscene.drive`, the one place a drive is set up) whose
 controller is the :class:`~.bridge.Bridge`: made from the prepared simulator
 (:class:`~marsscene.sim.control.OnStart`), it opens a DDS participant (:mod:`.dds`), announces
-the node (:mod:`.discovery`), obeys ``/cmd_vel`` and, as a listener, publishes every sample.
+the node (:mod:`.discovery`), obeys ``/cmd_vel`` and ``/rover/cmd_vel``, serves the simulation
+control services (:mod:`.sim_control`) and, as a listener, publishes every sample.
 So a session writes the run folder, bag and dataset folders a drive writes, with the drive's
 JPEG cache, overwrite rule, progress and errors; Ctrl-C is its usual end
 (``DriveOptions.stop_on_interrupt``).
