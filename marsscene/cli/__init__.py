@@ -69,6 +69,7 @@ def _register() -> None:
     from marsscene.cli.drive import drive
     from marsscene.cli.eval import eval_cmd
     from marsscene.cli.export import export_cmd
+    from marsscene.cli.fly import fly
     from marsscene.cli.info import info
     from marsscene.cli.serve import serve
     from marsscene.cli.sun import sun
@@ -79,6 +80,7 @@ def _register() -> None:
     main.add_command(info)
     main.add_command(sun)
     main.add_command(drive)
+    main.add_command(fly)
     main.add_command(serve)
     main.add_command(eval_cmd)
     main.add_command(bag)
