@@ -101,3 +101,21 @@ def test_run_folder_has_poses_images_and_altimeter_and_repeats_byte_for_byte(
                 for p in sorted(folder.rglob("*")) if p.is_file()}
 
     assert digest(out) == digest(again.out_dir)
+
+
+def test_fly_cli_reports_user_mistakes_in_one_line(scene: Path, tmp_path: Path) -> None:
+    """A waypoint off the terrain is a one-line error (exit 1), a bad camera size a usage error
+    (exit 2); nothing is written."""
+    from click.testing import CliRunner
+
+    from marsscene.cli import main
+
+    wp = tmp_path / "wp.txt"
+    wp.write_text("100 0\n")
+    out = tmp_path / "run"
+    res = CliRunner().invoke(main, ["fly", str(scene), "--waypoints", str(wp), "--out", str(out)])
+    assert res.exit_code == 1 and "waypoints outside the terrain" in res.output
+    assert len(res.output.strip().splitlines()) == 1 and not out.exists()
+    res = CliRunner().invoke(main, ["fly", str(scene), "--waypoints", str(wp), "--out", str(out),
+                                    "--camera-size", "big"])
+    assert res.exit_code == 2 and "WIDTHxHEIGHT" in res.output
