@@ -5,7 +5,8 @@ Eclipse Cyclone DDS (``pip install "marsscene[ros2]"``): the bag's topics publis
 same message builders and ``rosbags`` CDR bytes), ``cmd_vel`` subscribed with a time-out, reset /
 teleport / goal topics, sim time on ``/clock``, real-time pacing, as fast as it goes or in
 lockstep, ``simulation_interfaces``' services for clients on ``rmw_cyclonedds``
-(:mod:`.sim_control`), and a localhost-only mode. Topics, QoS and how to connect ROS 2: :doc:`/ros2_live`.
+(:mod:`.sim_control`), and a localhost-only mode. Topics, QoS and how to connect ROS 2:
+:doc:`/ros2_live`.
 
 ``cyclonedds`` is imported only when a session starts (:mod:`.dds`).
 """

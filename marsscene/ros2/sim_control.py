@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from marsscene.ros2.services import Service
+from marsscene.ros2.sim_action import PAUSED, SimulateStepsAction, _Run
 from marsscene.ros2.sim_types import ACTION, SERVICES, register
 from marsscene.transforms import yaw_of_quat
 
@@ -30,22 +31,13 @@ __all__ = ["FEATURES", "SimControl"]
 _P = "simulation_interfaces"
 #: ``SimulatorFeatures`` codes offered (exactly what is served).
 FEATURES = (10, 11, 12, 8, 20, 22, 23, 24, 25, 26, 31, 32, 33)
-STOPPED, PLAYING, PAUSED, QUITTING = 0, 1, 2, 3
-UNSUPPORTED, OK, NOT_FOUND, INCORRECT_STATE, FAILED = 0, 1, 2, 3, 4
+STOPPED, PLAYING, QUITTING = 0, 1, 3
+UNSUPPORTED, OK, NOT_FOUND, FAILED = 0, 1, 2, 4
 ROVER, ROBOT = "rover", 1
 _ALREADY, _INCORRECT_TRANSITION = 101, 103
-_ACCEPTED, _EXECUTING, _SUCCEEDED, _CANCELED = 1, 2, 4, 5
 
 
-class _Run:
-    """Steps asked for by one call: the service's reply or the action's goal."""
-
-    def __init__(self, n: int, finish: Any, goal_id: Any = None) -> None:
-        self.n, self.started, self.completed = int(n), 0, 0
-        self.finish, self.goal_id = finish, goal_id
-
-
-class SimControl:
+class SimControl(SimulateStepsAction):
     """The services of a session's bridge, and its pause / step gate.
 
     Parameters
@@ -287,69 +279,6 @@ class SimControl:
     def _delete_entity(self, req: Any, _r: Any) -> Any:
         return self._reply("DeleteEntity", result=self._result(
             UNSUPPORTED, "a static world: nothing is deleted"))
-
-    # ---- the SimulateSteps action ------------------------------------------------------------
-    def _send_goal(self, req: Any, _r: Any) -> Any:
-        gid = bytes(req.goal_id.uuid)
-        ok = self.state == PAUSED and self.run is None and int(req.goal.steps) > 0
-        if ok:
-            self.run = _Run(int(req.goal.steps), self._goal_done, req.goal_id)
-            self._status(req.goal_id, _EXECUTING)
-        else:
-            msg = "pause the simulation first" if self.state != PAUSED else "steps are running"
-            self.results[gid] = (6, self._result(FAILED, msg))
-        return self.T[f"{self.atype}_SendGoal_Response"](accepted=ok, stamp=self._stamp().stamp)
-
-    def _goal_done(self, run: _Run) -> None:
-        done = run.completed >= run.n
-        status = _SUCCEEDED if done else _CANCELED
-        gid = bytes(run.goal_id.uuid)
-        self.results[gid] = (status, self._result(OK if done else FAILED,
-                                                  "" if done else "stopped before the end"))
-        self._status(run.goal_id, status)
-        for reply in self.waiting.pop(gid, []):
-            reply(self._result_reply(gid))
-
-    def _result_reply(self, gid: bytes) -> Any:
-        status, result = self.results[gid]
-        return self.T[f"{self.atype}_GetResult_Response"](
-            status=status, result=self.T[f"{self.atype}_Result"](result=result))
-
-    def _get_result(self, req: Any, reply: Any) -> Any:
-        gid = bytes(req.goal_id.uuid)
-        if gid in self.results:
-            return self._result_reply(gid)
-        run = self.run
-        if run is not None and run.goal_id is not None and bytes(run.goal_id.uuid) == gid:
-            self.waiting.setdefault(gid, []).append(reply)
-            return None
-        return self.T[f"{self.atype}_GetResult_Response"](  # an unknown goal
-            status=0, result=self.T[f"{self.atype}_Result"](result=self._result(NOT_FOUND)))
-
-    def _cancel_goal(self, req: Any, _r: Any) -> Any:
-        run = self.run
-        info = req.goal_info
-        mine = run is not None and run.goal_id is not None and (
-            bytes(info.goal_id.uuid) in (bytes(run.goal_id.uuid), bytes(16)))
-        goals = []
-        if mine and run is not None:
-            goals = [self.T["action_msgs/msg/GoalInfo"](goal_id=run.goal_id,
-                                                        stamp=self._stamp().stamp)]
-            self._abort_run()
-        return self.T["action_msgs/srv/CancelGoal_Response"](return_code=0 if mine else 2,
-                                                             goals_canceling=goals)
-
-    def _feedback(self, run: _Run) -> None:
-        fb = self.T[f"{self.atype}_Feedback"](completed_steps=run.completed,
-                                              remaining_steps=run.n - run.completed)
-        msg = self.T[f"{self.atype}_FeedbackMessage"](goal_id=run.goal_id, feedback=fb)
-        self.feedback.write(self.store.serialize_cdr(msg, msg.__msgtype__))
-
-    def _status(self, goal_id: Any, status: int) -> None:
-        info = self.T["action_msgs/msg/GoalInfo"](goal_id=goal_id, stamp=self._stamp().stamp)
-        arr = self.T["action_msgs/msg/GoalStatusArray"](
-            status_list=[self.T["action_msgs/msg/GoalStatus"](goal_info=info, status=status)])
-        self.status.write(self.store.serialize_cdr(arr, arr.__msgtype__))
 
 
 def _rotate(q_wxyz: Any, v: Any) -> Any:
