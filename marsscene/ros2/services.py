@@ -75,6 +75,7 @@ class Service:
         self.writer = part.writer(store, f"rr{name}Reply", self.rep_type, "default",
                                   ros_topic=False, user_data=ud)
         self._checked: set[int] = set()
+        self._checked_at = -1.0  # monotonic time of the last look at the matched clients
 
     def poll(self) -> int:
         """Answer the requests waiting; the number taken."""
@@ -103,8 +104,10 @@ class Service:
 
     def _check_clients(self) -> None:
         """Say once when a client's request writer is not an ``rmw_cyclonedds`` one."""
-        if _said_other[0]:
+        now = time.monotonic()
+        if _said_other[0] or now - self._checked_at < 0.25:  # a look four times a second
             return
+        self._checked_at = now
         dr = self.reader.reader
         for handle in dr.get_matched_publications():
             if handle in self._checked:
