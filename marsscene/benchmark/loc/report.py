@@ -47,7 +47,8 @@ def _cdf(plt: Any, spec: LocSpec, scene: str, rows: list[dict[str, Any]], out: P
         ax.axvline(r_m, color="0.6", lw=0.8, ls="--")
     ax.set(xscale="log", xlim=(0.01, 200), ylim=(0, 1), xlabel="position error (m)",
            ylabel="fraction of queries", title=f"{scene}: error CDF")
-    ax.legend(loc="lower right", fontsize=8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="lower right", fontsize=8)
     path = out / f"cdf_{scene}.png"
     fig.savefig(path, dpi=110)
     plt.close(fig)
