@@ -7,6 +7,8 @@ Usage::
         [--cast-orders beam,firing] [--camera-envs 1024,4096] [--sizes 64x64,640x480]
         [--device cuda:0]
     python perf/run.py batch_sensors --as-env 4096   # as an environment calls them
+    python perf/run.py batch_sensors --envs none --camera-envs none \
+        --rgbd-envs 1024,4096,8192 --rgbd-sizes 64x64,128x128,640x480   # RGB-D only
 
 The model is the batch environment's (:mod:`marsscene.env.batch.model`): W = 16 worlds as tiles
 of one heightfield, 60 m at 0.25 m posts, 2 m apart, with the rover attached; here the tiles
@@ -16,6 +18,12 @@ mujoco-warp and warp-lang). Rover i stands on tile i mod W at a seeded pose. Eac
 before and after: a LiDAR scan is ray generation + ``mujoco_warp.rays`` (render-context BVH) +
 the returns' kernel; a depth frame is ``refit_bvh`` + ``render``. Building the render context
 (its heightfield mesh is built in Python) is timed apart.
+
+An RGB-D frame is :class:`~marsscene.sensors.batch.BatchCamera`'s ``render`` (terrain, rock
+meshes, albedo, sun shadow ray, sky, fog, auto exposure, sRGB): the same tiles as its worlds
+(their domes as terrain) with ``ROCKS`` seeded rock meshes a world, default lighting; its
+depth-only cousin above (MuJoCo Warp's renderer) at the same sizes is the measured case for
+ray tracing the camera's world in Warp instead of post-processing that renderer's frames.
 """
 
 from __future__ import annotations
@@ -31,6 +39,8 @@ import numpy as np
 from perf.suite import Param, ints, names, optional
 
 WORLDS, TILE_M, POST_M, GAP_M = 16, 60.0, 0.25, 2.0
+#: Rock meshes per world in the RGB-D figures (a ``rocks`` world of 60 m has about 300 MJCF rocks).
+ROCKS = 300
 
 
 def frame_sizes(text: str) -> tuple[str, ...]:
@@ -50,6 +60,10 @@ PARAMS = (
     Param("camera_envs", ints, "rovers a depth batch renders", quick=(16,), full=(1024, 4096)),
     Param("sizes", frame_sizes, "depth image sizes (WIDTHxHEIGHT)", quick=("64x64",),
           full=("64x64", "640x480")),
+    Param("rgbd_envs", ints, "rovers an RGB-D batch renders", quick=(4,),
+          full=(1024, 4096, 8192)),
+    Param("rgbd_sizes", frame_sizes, "RGB-D image sizes (WIDTHxHEIGHT)", quick=("64x64",),
+          full=("64x64", "128x128", "640x480")),
     Param("repeat", int, "timed calls per figure (after one warm-up)", quick=2, full=10),
     Param("as_env", int, "instead: this many rovers' sensors as an environment calls them "
           "(0: no)", quick=0, full=0),
@@ -222,6 +236,63 @@ def bench_depth(t: Tiles, envs: tuple[int, ...], sizes: tuple[tuple[int, int], .
     return rows
 
 
+def world_batch(t: Tiles, seed: int = 0) -> Any:
+    """The tiles as a :class:`~marsscene.env.batch.worlds.WorldBatch` (world coordinates from
+    each tile's corner) with ``ROCKS`` seeded rocks a world."""
+    from marsscene.env.batch import WorldBatch
+
+    rng = np.random.default_rng(seed)
+    posts = round(TILE_M / POST_M) + 1
+    z = np.stack([t.z[round(oy / POST_M):round(oy / POST_M) + posts,
+                      round(ox / POST_M):round(ox / POST_M) + posts] for ox, oy in t.offsets])
+    n = WORLDS * ROCKS
+    return WorldBatch(
+        posts_z_m=z.astype(np.float32), cell_m=POST_M, origins_xy_m=np.zeros((WORLDS, 2)),
+        rock_xy_m=rng.uniform(1.0, TILE_M - 1.0, (n, 2)),
+        rock_radius_m=rng.uniform(0.3, 1.0, n), rock_height_m=rng.uniform(0.1, 0.5, n),
+        rock_world=np.repeat(np.arange(WORLDS), ROCKS), starts_xy_m=np.zeros((WORLDS, 1, 2)),
+        yaws_rad=np.zeros((WORLDS, 1)), goals_xy_m=np.zeros((WORLDS, 1, 2)))
+
+
+def bench_rgbd(t: Tiles, envs: tuple[int, ...], sizes: tuple[tuple[int, int], ...],
+               repeat: int) -> list[dict[str, Any]]:
+    import mujoco
+    import warp as wp
+
+    from marsscene.rover.config import CameraConfig
+    from marsscene.sensors.batch import BatchCamera
+
+    rows: list[dict[str, Any]] = []
+    if not envs or not sizes:
+        return rows
+    batch = world_batch(t)
+    cid = mujoco.mj_name2id(t.mj, mujoco.mjtObj.mjOBJ_CAMERA, "rover/navcam")
+    for n in envs:
+        data = batch_data(t, n)
+        world = wp.array((np.arange(n) % WORLDS).astype(np.int32), dtype=int)
+        for w_px, h_px in sizes:
+            t0 = time.perf_counter()
+            cam = BatchCamera(batch, n, config=CameraConfig(width_px=w_px, height_px=h_px),
+                              offsets_xy_m=t.offsets)
+            build_s = time.perf_counter() - t0
+            s = timed(lambda cam=cam, data=data, world=world:
+                      cam.render_data(data, world, cid), repeat)
+            seg = cam.segmentation.numpy()
+            rows.append({"sensor": f"rgbd {w_px}x{h_px}", "envs": n, "s_per_batch": s,
+                         "frames_per_s": n / s, "gpixels_per_s": n * w_px * h_px / s / 1e9,
+                         "seen": float((seg > 0).mean()), "rock_px": float((seg == 2).mean()),
+                         "build_s": build_s})
+            print(f"rgbd  {w_px}x{h_px:<4d} N={n:5d}  {n / s:9.0f} frames/s  "
+                  f"{n * w_px * h_px / s / 1e9:5.2f} G px/s  ({s * 1e3:7.1f} ms a batch; "
+                  f"{100 * (seg > 0).mean():4.1f} % ground or rock, {100 * (seg == 2).mean():4.1f}"
+                  f" % rock; built in {build_s:.1f} s)", flush=True)
+            del cam, seg
+            gc.collect()
+        del data
+        gc.collect()
+    return rows
+
+
 def tile_bounds(t: Tiles, n: int) -> Any:
     """Each rover's tile rectangle (x0, y0, x1, y1) in the model frame, (n, 4) on the device."""
     import warp as wp
@@ -290,7 +361,8 @@ def bench_as_env(t: Tiles, n: int, repeat: int) -> list[dict[str, Any]]:
 
 
 def main(envs: tuple[int, ...], lidars: tuple[str, ...], cast_orders: tuple[str, ...],
-         camera_envs: tuple[int, ...], sizes: tuple[str, ...], repeat: int, as_env: int,
+         camera_envs: tuple[int, ...], sizes: tuple[str, ...], rgbd_envs: tuple[int, ...],
+         rgbd_sizes: tuple[str, ...], repeat: int, as_env: int,
          device: str | None) -> list[dict[str, Any]]:
     import mujoco_warp as mjw
     import warp as wp
@@ -311,4 +383,7 @@ def main(envs: tuple[int, ...], lidars: tuple[str, ...], cast_orders: tuple[str,
         else:
             rows = bench_lidar(tiles, envs, lidars, cast_orders, repeat)
             rows += bench_depth(tiles, camera_envs, frames, repeat)
+            rows += bench_rgbd(tiles, rgbd_envs, tuple(
+                (int(w), int(h)) for w, _, h in (s.partition("x") for s in rgbd_sizes)),
+                repeat)
     return [{"device": name, **row} for row in rows]

@@ -262,8 +262,7 @@ def trace(
     sky = sky_rgb[i]
     colour = wp.vec3(0.0)
     if kind == wp.uint8(0):
-        up = wp.max(wp.normalize(d)[2], 0.0)
-        colour = sky * (1.2 - 0.4 * up)
+        colour = sky * (1.0 - 0.2 * wp.normalize(d)[2])  # MuJoCo's gradient skybox
     else:
         s = sun_dir[i]
         lit = wp.dot(n, s)

@@ -14,11 +14,12 @@ buried fraction is drawn from 0 to 0.5, :mod:`marsscene.rocks.population`), of t
 camera's MJCF rock albedo with its rock texture's speckle per face (the batch's rocks are the
 scene's MJCF rocks).
 
-Lighting (:func:`light_arrays`) is the CPU camera's (:mod:`marsscene.sensors.camera`): with
-``k = 0.95 / max(E_dn + E_dif, 1.2 E_dif / ALBEDO_SCALE)``, a surface of albedo ``a`` has the
-linear value ``a / ALBEDO_SCALE (k E_dif sky_rgb + k E_dn cos(i) v sun_rgb)`` (``v`` the sun's
-visibility), the sky ``k E_dif sky_rgb / ALBEDO_SCALE`` times 0.8 at the zenith to 1.2 at the
-horizon, fog toward ``1.2`` times the sky over the visibility ``3.912 H / tau``.
+Lighting (:func:`light_arrays`) is the CPU camera's (:mod:`marsscene.sensors.camera`): with ``k
+= 0.95 / max(E_dn + E_dif, 1.2 E_dif / ALBEDO_SCALE)``, a surface of albedo ``a`` has the linear
+value ``a / ALBEDO_SCALE (k E_dif sky_rgb + k E_dn cos(i) v sun_rgb)`` (``v`` the sun's
+visibility), the sky ``k E_dif sky_rgb / ALBEDO_SCALE`` times ``1 - 0.2 sin(elevation)`` (the
+CPU camera's gradient skybox: 0.8 at the zenith, 1.2 at the nadir; measured: its sky within 1
+sRGB code), fog toward ``1.2`` times the sky over the visibility ``3.912 H / tau``.
 """
 
 from __future__ import annotations
