@@ -3,19 +3,19 @@ Warp: the world the CPU camera (:class:`~marsscene.sensors.camera.MastCamera`) s
 
 **Why a ray tracer of its own**, not MuJoCo Warp's batch renderer with Warp kernels after it.
 The renderer draws the physics model: its rocks are the heightfield's relief (blocky domes of
-0.25 m posts), its terrain one grey material; it has no texture on a heightfield, no sky, no
-fog and one set of lights for all worlds. Post-processing its depth could add the ground's
-albedo (the hit point from the depth), the sky and the fog, but not the rocks' meshes (thousands
-of mesh geoms in the physics model slow every step; a second render model needs a second BVH
-and render pass) nor a sun per world (its shadows come from the model's lights): the shading
-pass would cast its own shadow rays anyway, so only the primary ray would be the renderer's.
-That primary ray is the cheap part: on one H200 a plain Warp kernel marching a heightfield
-traced 2.37 G rays/s where the renderer's depth pass gave 1.49 G pixels/s (issue 64; on this
-machine's Warp CPU device, 16 rovers at 64 x 64, the renderer's depth-only pass took 130 ms a
-batch and this camera's whole RGB-D frame 231 ms: ``perf/speed/bench_batch_sensors.py``). So one kernel (:mod:`._trace`) does it all: the terrain posts marched cell by cell, every
-rock of the batch in one static ``wp.Mesh`` BVH, the albedo looked up by world xy, a shadow ray
-to the sun, the sky for misses, fog; then exposure and sRGB (:mod:`._expose`). Each camera has
-its own lighting.
+0.25 m posts), its terrain one grey material; it has no texture on a heightfield, no sky, no fog
+and one set of lights for all worlds. Post-processing its depth could add the ground's albedo
+(the hit point from the depth), the sky and the fog, but not the rocks' meshes (thousands of
+mesh geoms in the physics model slow every step; a second render model needs a second BVH and
+render pass) nor a sun per world (its shadows come from the model's lights): the shading pass
+would cast its own shadow rays anyway, so only the primary ray would be the renderer's. That
+primary ray is the cheap part: on one H200 a plain Warp kernel marching a heightfield traced
+2.37 G rays/s where the renderer's depth pass gave 1.49 G pixels/s (issue 64; on this machine's
+Warp CPU device, 16 rovers at 64 x 64, the renderer's depth-only pass took 130 ms a batch and
+this camera's whole RGB-D frame 231 ms: ``perf/speed/bench_batch_sensors.py``). So one kernel
+(:mod:`._trace`) does it all: the terrain posts marched cell by cell, every rock of the batch in
+one static ``wp.Mesh`` BVH, the albedo looked up by world xy, a shadow ray to the sun, the sky
+for misses, fog; then exposure and sRGB (:mod:`._expose`). Each camera has its own lighting.
 
 What it draws (:mod:`.appearance`): the CPU camera's regolith detail tile (micro-relief shading
 baked in) times each world's large-scale albedo field, on the world's full-resolution posts
