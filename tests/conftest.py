@@ -66,6 +66,17 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object | 
 #: marks one the same way. Durations of both tiers: the changelog.
 SLOW_TESTS = {
     "tests/docs": "the built site: links, notebooks, browser",
+    "tests/env/test_batch_sensing.py::test_same_seed_same_bytes_and_bad_input":
+        "BatchCamera twice, 16 s",
+    "tests/sim/batch/test_batch_drive.py": "batch drives on Warp's CPU device",
+    "tests/benchmark/nav/test_nav_run.py::test_run_scores_and_writes": "navigation episodes",
+    "tests/benchmark/nav/test_nav_run.py::test_resume_skips_done_episodes": "navigation episodes",
+    "tests/benchmark/loc/test_run.py::test_a_tiny_cli_run_end_to_end_and_resume":
+        "loc queries and CLI",
+    "tests/scout/test_scout.py::"
+    "test_the_controller_reaches_each_waypoint_and_lands_on_the_terrain": "a scout flight",
+    "tests/scout/test_scout.py::"
+    "test_run_folder_has_poses_images_and_altimeter_and_repeats_byte_for_byte": "two scout flights",
     "tests/test_notebooks.py": "executes the gallery notebooks",
     "tests/ros2": "loopback DDS at wall-clock rates",
     "tests/usd_clients": "Newton loads and steps the stages",
