@@ -45,50 +45,90 @@ def _num(v: float) -> str:
     return "0" if s in ("-0", "0") else s
 
 
-class CsvLog:
+class _Appended:
+    """A text file written in order, open while written; :meth:`park` closes it until the next
+    write (a batch of thousands of drives holds no files open between its blocks)."""
+
+    def _start(self, path: Path, head: str) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._fh: Any = open(path, "w", encoding="utf-8", newline="\n")
+        self._fh.write(head)
+
+    def _file(self) -> Any:
+        if self._fh is None:
+            self._fh = open(self.path, "a", encoding="utf-8", newline="\n")
+        return self._fh
+
+    def park(self) -> None:
+        """Close the file (its rows handed to the operating system) until the next write."""
+        self.close()
+
+    def flush(self) -> None:
+        if self._fh is not None:
+            self._fh.flush()
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+
+
+class CsvLog(_Appended):
     """Append rows to a CSV with a header; numbers formatted with 9 significant digits."""
 
     def __init__(self, path: Path, columns: list[str]) -> None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.path = path
-        self._fh = open(path, "w", encoding="utf-8", newline="\n")
-        self._fh.write(",".join(columns) + "\n")
+        self._start(path, ",".join(columns) + "\n")
 
     def row(self, t_s: float, values: Any) -> None:
-        self._fh.write(
+        self._file().write(
             f"{t_s:.6f}," + ",".join(v if isinstance(v, str) else _num(v) for v in values) + "\n"
         )
 
-    def flush(self) -> None:
-        self._fh.flush()
+    def rows(self, t_s: Any, values: Any) -> None:
+        """Numeric rows at once: ``t_s`` (R,), ``values`` (R, C); the bytes of R :meth:`row`
+        calls (``-0`` written ``0``), one format a row instead of one a number."""
+        v = np.asarray(values, dtype=np.float64)
+        if not len(v):
+            return
+        fmt = "%.6f," + ",".join(["%.9g"] * v.shape[1])
+        table = np.column_stack([np.asarray(t_s, dtype=np.float64), v + 0.0])  # -0 + 0 = 0
+        self._file().write("\n".join(map(fmt.__mod__, map(tuple, table.tolist()))) + "\n")
 
-    def close(self) -> None:
-        self._fh.close()
+
+def _unit(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Rows of ``q`` (R, 4) scaled to unit length (a zero row kept); elementwise, so a row's
+    bits do not depend on R."""
+    norm = np.sqrt(q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3])
+    return q / np.where(norm == 0.0, 1.0, norm)[:, None]
 
 
-class TumLog:
+class TumLog(_Appended):
     """Append poses to a TUM file as they happen (the bytes of
     :func:`marsscene.runs.tum.write_tum`), so a long drive holds no trajectory in memory and
     an interrupted one leaves the poses up to the interruption."""
 
     def __init__(self, path: Path, header: str) -> None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.path = path
-        self._fh = open(path, "w", encoding="utf-8", newline="\n")
-        self._fh.write("".join(f"# {h}\n" for h in header.splitlines()))
+        self._start(path, "".join(f"# {h}\n" for h in header.splitlines()))
 
     def row(self, t_s: float, xyz_m: Any, quat_wxyz: Any) -> None:
-        q = np.asarray(quat_wxyz, dtype=np.float64)
-        q = q / (np.linalg.norm(q) or 1.0)
+        q = _unit(np.asarray(quat_wxyz, dtype=np.float64)[None, :])[0]
         x, y, z = (float(v) for v in xyz_m)
         line = f"{t_s:.6f} {x:.6f} {y:.6f} {z:.6f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f} {q[0]:.9f}"
-        self._fh.write(line.replace("-0.000000000 ", "0.000000000 ") + "\n")
+        self._file().write(line.replace("-0.000000000 ", "0.000000000 ") + "\n")
 
-    def flush(self) -> None:
-        self._fh.flush()
-
-    def close(self) -> None:
-        self._fh.close()
+    def rows(self, t_s: Any, xyz_m: Any, quat_wxyz: Any) -> None:
+        """Poses at once: ``t_s`` (R,), ``xyz_m`` (R, 3), ``quat_wxyz`` (R, 4); the bytes of
+        R :meth:`row` calls."""
+        q = np.asarray(quat_wxyz, dtype=np.float64)
+        if not len(q):
+            return
+        q = _unit(q)
+        table = np.column_stack([np.asarray(t_s, dtype=np.float64),
+                                 np.asarray(xyz_m, dtype=np.float64), q[:, 1:], q[:, :1]])
+        fmt = "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f"
+        text = "\n".join(map(fmt.__mod__, map(tuple, table.tolist())))
+        self._file().write(text.replace("-0.000000000 ", "0.000000000 ") + "\n")
 
 
 #: note in a run's ``lidar/`` when its scans went to listeners only (``lidar_files = false``)

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from marsscene.rover.config import NoiseConfig
 
-__all__ = ["ImuNoise", "allan_deviation", "imu_measure"]
+__all__ = ["ImuNoise", "allan_deviation", "bias_record", "imu_measure"]
 
 
 class ImuNoise:
@@ -91,6 +91,15 @@ class ImuNoise:
         path = bias + np.cumsum(step * self.rng.standard_normal(shape), axis=0)
         setattr(self, attr, path[-1].copy())
         return path
+
+
+def bias_record(gyro_start_rad_s: ArrayLike, gyro_end_rad_s: ArrayLike,
+                accel_start_m_s2: ArrayLike, accel_end_m_s2: ArrayLike) -> dict[str, list[float]]:
+    """A run's IMU biases as its summary holds them: turn-on (constant part) and at the end
+    (after the random walk)."""
+    return {k: [float(x) for x in np.asarray(v)] for k, v in (
+        ("gyro_start_rad_s", gyro_start_rad_s), ("gyro_end_rad_s", gyro_end_rad_s),
+        ("accel_start_m_s2", accel_start_m_s2), ("accel_end_m_s2", accel_end_m_s2))}
 
 
 def _draw(sigma: float, rng: np.random.Generator) -> NDArray[np.float64]:

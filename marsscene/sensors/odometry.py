@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from marsscene.rover.config import NoiseConfig, RoverConfig
 from marsscene.rover.geometry import body_twist_from_wheels
 
-__all__ = ["WheelOdometry", "measure_wheels"]
+__all__ = ["BatchWheelOdometry", "WheelOdometry", "measure_wheels"]
 
 
 def measure_wheels(
@@ -67,3 +67,33 @@ class WheelOdometry:
             np.array([self.x_m, self.y_m, self.z_m]),
             np.array([math.cos(h), 0.0, 0.0, math.sin(h)]),
         )
+
+
+class BatchWheelOdometry:
+    """:class:`WheelOdometry` of N rovers at once: arrays (N,) of the estimate, each row
+    integrated as :meth:`WheelOdometry.update` integrates one (the batched drives' odometry)."""
+
+    def __init__(self, rover: RoverConfig, xyz_m: NDArray[np.float64],
+                 yaw_rad: NDArray[np.float64]):
+        self.rover = rover
+        xyz = np.asarray(xyz_m, dtype=np.float64)
+        self.x_m, self.y_m, self.z_m = xyz[:, 0].copy(), xyz[:, 1].copy(), xyz[:, 2].copy()
+        self.yaw_rad = np.asarray(yaw_rad, dtype=np.float64).copy()
+
+    def update(self, rates_rad_s: NDArray[np.float64], steer_rad: NDArray[np.float64],
+               dt_s: float, moving: NDArray[np.bool_]) -> None:
+        """One control step of the rovers where ``moving`` (N,) bool; the others hold."""
+        from marsscene.rover.geometry import body_twists_from_wheels
+
+        vw = body_twists_from_wheels(rates_rad_s, steer_rad, self.rover)
+        v, w = np.where(moving, vw[:, 0], 0.0), np.where(moving, vw[:, 1], 0.0)
+        mid = self.yaw_rad + 0.5 * w * dt_s
+        self.x_m = self.x_m + v * dt_s * np.cos(mid)
+        self.y_m = self.y_m + v * dt_s * np.sin(mid)
+        self.yaw_rad = self.yaw_rad + w * dt_s
+
+    def pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Positions (N, 3) in m and quaternions (N, 4) (w, x, y, z) of the estimates."""
+        h, zero = 0.5 * self.yaw_rad, np.zeros_like(self.yaw_rad)
+        return (np.column_stack([self.x_m, self.y_m, self.z_m]),
+                np.column_stack([np.cos(h), zero, zero, np.sin(h)]))

@@ -25,7 +25,7 @@ from marsscene._validate import plain
 from marsscene.errors import RuntimeSimError
 from marsscene.runs.runlog import read_numeric_csv
 from marsscene.runs.tum import Trajectory, read_tum, write_tum
-from marsscene.sensors.imu import ImuNoise
+from marsscene.sensors.imu import ImuNoise, bias_record
 from marsscene.sim.control import Controller, OpenLoop
 from marsscene.sim.cross_track import cross_track_m
 from marsscene.sim.goal import goal_reached
@@ -207,9 +207,8 @@ def _time_limit_s(route: Route | None, seconds: float | None) -> float:
 
 def _imu_bias(imu: ImuNoise) -> dict[str, list[float]]:
     """The run's IMU biases: turn-on (constant part) and at the end (after the random walk)."""
-    return {k: [float(x) for x in v] for k, v in (
-        ("gyro_start_rad_s", imu.gyro_turn_on_rad_s), ("gyro_end_rad_s", imu.gyro_bias_rad_s),
-        ("accel_start_m_s2", imu.accel_turn_on_m_s2), ("accel_end_m_s2", imu.accel_bias_m_s2))}
+    return bias_record(imu.gyro_turn_on_rad_s, imu.gyro_bias_rad_s, imu.accel_turn_on_m_s2,
+                       imu.accel_bias_m_s2)
 
 
 def drive_sim(

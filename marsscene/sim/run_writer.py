@@ -162,6 +162,11 @@ class RunWriter:
         for pose in self.poses.values():
             pose.flush()
 
+    def park(self) -> None:
+        """Close the logs until their next rows (:meth:`marsscene.runs.logs.CsvLog.park`)."""
+        for log in (*self.logs.values(), *self.poses.values()):
+            log.park()
+
     def close(self) -> None:
         self.images.close()
         for log in self.logs.values():

@@ -35,10 +35,17 @@ PARAMS = (
     Param("physics_hz", float, "physics rate (Hz)", quick=100.0, full=500.0),
     Param("device", optional(str), "Warp device (none: cuda:0 where there is a GPU, else cpu)",
           quick=None, full=None),
+    Param("scene", optional(str), "a built scene folder to drive on, at least size_m square "
+          "(none: build the procedural one; a folder lets a machine without the build's "
+          "libraries run it)", quick=None, full=None),
 )
 
 
-def _scene(size_m: float, folder: Path) -> Path:
+def _scene(size_m: float, folder: Path, built: str | None = None) -> Path:
+    """The scene the drives run on: ``built`` where given, else a procedural one built into
+    ``folder``."""
+    if built is not None:
+        return Path(built)
     from marsscene.env import WorldSampler
 
     base = {"terrain": {"source": "procedural", "size_m": [size_m, size_m], "post_m": 0.25,
@@ -65,20 +72,20 @@ def _disk(paths: list[Path]) -> int:
 
 
 def main(drives: tuple[int, ...], sensors: tuple[str, ...], seconds: float, image: str,
-         lidar: str, size_m: float, physics_hz: float, device: str | None
-         ) -> list[dict[str, Any]]:
+         lidar: str, size_m: float, physics_hz: float, device: str | None,
+         scene: str | None) -> list[dict[str, Any]]:
     import marsscene as ms
     from marsscene.sim.batch import BatchDrive, drive_batch
 
     root = Path(tempfile.mkdtemp(prefix="bench_batch_drives_"))
     rows = []
     try:
-        scene = _scene(size_m, root / "scenes")
+        scene_dir = _scene(size_m, root / "scenes", scene)
         half = size_m / 2 - 3.0
         for kind in sensors:
             for n in drives:
                 out = root / f"{kind}-{n}"
-                batch = [BatchDrive(scene=scene, out_dir=out / f"{i:05d}", seed=i,
+                batch = [BatchDrive(scene=scene_dir, out_dir=out / f"{i:05d}", seed=i,
                                     seconds=seconds,
                                     waypoints=[[-half, (i % 7 - 3) * 1.0],
                                                [half, (i % 7 - 3) * 1.0]])

@@ -29,28 +29,30 @@ PARAMS = (
     Param("physics_hz", float, "physics rate (Hz)", quick=100.0, full=500.0),
     Param("device", optional(str), "Warp device (none: cuda:0 where there is a GPU, else cpu)",
           quick=None, full=None),
+    Param("scene", optional(str), "a built scene folder, at least size_m square (none: build "
+          "the procedural one)", quick=None, full=None),
 )
 
 
 def main(routes: int, seconds: float, size_m: float, physics_hz: float,
-         device: str | None) -> list[dict[str, Any]]:
+         device: str | None, scene: str | None) -> list[dict[str, Any]]:
     import marsscene as ms
     from marsscene.runs.tum import read_tum
     from marsscene.sim.batch import BatchDrive, drive_batch
 
     root = Path(tempfile.mkdtemp(prefix="bench_batch_vs_cpu_"))
     try:
-        scene = _scene(size_m, root / "scenes")
+        scene_dir = _scene(size_m, root / "scenes", scene)
         half = size_m / 2 - 3.0
         wps = [[[-half, i - routes / 2], [half, i - routes / 2]] for i in range(routes)]
         cfg = ms.RunConfig(physics_hz=physics_hz)
         opts = ms.DriveOptions(settle_s=1.0)
-        batch = drive_batch([BatchDrive(scene=scene, waypoints=w, out_dir=root / f"gpu{i}",
+        batch = drive_batch([BatchDrive(scene=scene_dir, waypoints=w, out_dir=root / f"gpu{i}",
                                         seconds=seconds) for i, w in enumerate(wps)],
                             config=cfg, options=opts, device=device)
         rows = []
         for i, w in enumerate(wps):
-            cpu = ms.drive(scene, waypoints=w, seconds=seconds, config=cfg, options=opts,
+            cpu = ms.drive(scene_dir, waypoints=w, seconds=seconds, config=cfg, options=opts,
                            out_dir=root / f"cpu{i}")
             g, c = batch.summaries[i], cpu.summary
             end = np.linalg.norm(read_tum(root / f"gpu{i}" / "gt.tum").xyz_m[-1, :2]

@@ -120,7 +120,11 @@ def tiled_model(terrains: list[Any], bare: list[Any], *, rover: RoverConfig,
     size; ``bare`` the same without rocks), sampled at ``post_m``, with the solver limits of
     ``physics``."""
     physics = physics if physics is not None else WarpPhysics()
-    tiles = [_tile(t, b, post_m) for t, b in zip(terrains, bare, strict=True)]
+    made: dict[tuple[int, int], NDArray[np.float64]] = {}  # worlds shared by many tiles
+    for t, b in zip(terrains, bare, strict=True):
+        if (id(t), id(b)) not in made:
+            made[id(t), id(b)] = _tile(t, b, post_m)
+    tiles = [made[id(t), id(b)] for t, b in zip(terrains, bare, strict=True)]
     rows, cols = tiles[0].shape
     per_row = math.ceil(math.sqrt(len(tiles)))
     gap = math.ceil(gap_m / post_m)

@@ -110,8 +110,9 @@ def drive_batch(drives: Sequence[BatchDrive | dict[str, Any]], *,
     from marsscene.env.batch.model import WarpPhysics
     from marsscene.runtime._steps import write_route
     from marsscene.sim.batch.loop import BatchLoop
+    from marsscene.sim.batch.noise import BatchNoise
     from marsscene.sim.batch.setup import DriveSim, batch_model, prepare_drives
-    from marsscene.sim.batch.sink import DriveSink, SinkPool, meta_of
+    from marsscene.sim.batch.sink import BatchSink, DriveSink, SinkPool, meta_of
 
     _, dev = _warp(device)
     config = config if config is not None else RunConfig()
@@ -133,24 +134,27 @@ def drive_batch(drives: Sequence[BatchDrive | dict[str, Any]], *,
                        scene_dir=Path(p.drive.scene))
         out = Path(os.fspath(p.drive.out_dir))  # type: ignore[arg-type]
         write_route(out, sim, p.route, options)
-        sinks.append(DriveSink(i, sim=sim, out=out, seed=int(p.drive.seed), ids=loop.ids,
-                               offset_xy_m=tiled.offsets_xy_m[i], qpos0=loop.qpos0[i],
+        sinks.append(DriveSink(i, sim=sim, out=out,
                                meta=meta_of(options.pursuit, dev, i, len(prepared),
                                             BATCH_ROVER),
                                lidar=lidar, camera=config.camera is not None, route=p.route))
     pool = SinkPool(sinks, workers if workers is not None else min(16, os.cpu_count() or 1))
+    noise = BatchNoise(config.noise, config.imu_hz, [int(p.drive.seed) for p in prepared])
+    host = BatchSink(pool, noise, ids=loop.ids, offsets_xy_m=tiled.offsets_xy_m,
+                     qpos0=loop.qpos0, rover=BATCH_ROVER,
+                     dt_control_s=loop.dt_s * loop.periods["control"])
     t0 = time.perf_counter()
 
     def put(tick: Any) -> None:
-        pool.put(tick)
+        host.put(tick)
         if progress is not None and tick.flush:
             progress(tick.t_s)
 
     try:
         loop.drive(put)
     finally:
-        pool.close()
+        host.close()
     wall = time.perf_counter() - t0
-    summaries = [s.finish() for s in sinks]
+    summaries = [s.finish(noise.bias_summary(i)) for i, s in enumerate(sinks)]
     return BatchRun([Path(os.fspath(p.drive.out_dir)) for p in prepared],  # type: ignore[arg-type]
                     summaries, wall, dev)

@@ -79,6 +79,19 @@ def _route(drive: BatchDrive, world: Any, options: DriveOptions) -> Route:
     return route
 
 
+def _route_once(d: BatchDrive, world: Any, options: DriveOptions, routes: dict[Any, Route],
+                scene: Path) -> Route:
+    """``_route``, authored once per scene and waypoints (a batch of many drives often repeats
+    them)."""
+    if d.route is not None:
+        return _route(d, world, options)
+    way = np.asarray(d.waypoints, dtype=np.float64)
+    key = (scene, way.shape, way.tobytes())
+    if key not in routes:
+        routes[key] = _route(d, world, options)
+    return routes[key]
+
+
 def prepare_drives(drives: list[BatchDrive], options: DriveOptions) -> list[PreparedDrive]:
     """Every drive's world, route and start (each scene loaded once)."""
     from marsscene.env.observe import rock_terrain
@@ -87,6 +100,7 @@ def prepare_drives(drives: list[BatchDrive], options: DriveOptions) -> list[Prep
     if not drives:
         raise ConfigError("a batch needs at least one drive")
     worlds: dict[Path, tuple[Any, Any]] = {}
+    routes: dict[Any, Route] = {}
     out: list[PreparedDrive] = []
     for i, d in enumerate(drives):
         if d.out_dir is None:
@@ -96,7 +110,7 @@ def prepare_drives(drives: list[BatchDrive], options: DriveOptions) -> list[Prep
             world = load_world(key)
             worlds[key] = (world, rock_terrain(world.heightfield, world.obstacles))
         world, terrain = worlds[key]
-        route = _route(d, world, options)
+        route = _route_once(d, world, options, routes, key)
         a, b = route.xy_m[0], route.xy_m[min(5, len(route.xy_m) - 1)]
         out.append(PreparedDrive(d, world.heightfield, terrain, route,
                                  (float(a[0]), float(a[1])),

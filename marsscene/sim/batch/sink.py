@@ -1,12 +1,16 @@
-"""The host side of a batch of drives: each drive's sensor noise, wheel odometry and run folder,
-fed from host copies of the batch's state by worker threads.
+"""The host side of a batch of drives: the sensor noise, wheel odometry and logs of every drive
+computed at once per tick (:class:`BatchSink`), each drive's run folder written by worker
+threads (:class:`DriveSink`, :class:`SinkPool`).
 
 A drive's folder is the CPU drive's (:class:`~marsscene.sim.run_writer.RunWriter`, layout in
-:mod:`marsscene.runs.logs`): the same noise streams drawn in the same order (the IMU's turn-on
-biases, then per control step the wheel encoders and per IMU sample the IMU,
-:mod:`marsscene.sim.session`), the same odometry, the same files. Worker ``j`` of ``K`` owns the
-drives ``i % K == j`` and takes every tick in order from a bounded queue: the simulation waits
-for the slowest worker rather than piling ticks up, so memory stays flat over a long drive.
+:mod:`marsscene.runs.logs`): the same noise streams drawn in the same order
+(:class:`~.noise.BatchNoise`), the same odometry, the same files. Per tick :class:`BatchSink`
+turns the host copies of the batch's state into every drive's log rows in a few array
+operations and keeps them; once a simulated second it hands the second's rows to the workers
+as one :class:`Block` (each drive's rows formatted and written at once, then flushed), as it
+hands them each LiDAR scan and depth frame. Worker ``j`` of ``K`` owns the drives ``i % K == j``
+and takes every item in order from a bounded queue: the simulation waits for the slowest worker
+rather than piling items up, so memory stays flat over a long drive.
 """
 
 from __future__ import annotations
@@ -20,14 +24,12 @@ from typing import Any
 import numpy as np
 
 from marsscene.runs.logs import depth_mm
-from marsscene.seeding import stage_rng
-from marsscene.sensors.imu import ImuNoise
-from marsscene.sensors.odometry import WheelOdometry, measure_wheels
+from marsscene.sensors.odometry import BatchWheelOdometry
 from marsscene.sim.cross_track import cross_track_m
-from marsscene.sim.driver import _goal_reached, _imu_bias, _read_back
+from marsscene.sim.driver import _goal_reached, _read_back
 from marsscene.sim.run_writer import RunWriter
 
-__all__ = ["DriveSink", "SinkPool", "Tick"]
+__all__ = ["BatchSink", "Block", "DriveSink", "SinkPool", "Tick"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,68 +54,132 @@ class Tick:
     depth: Any = None
 
 
-class DriveSink:
-    """Drive ``slot``'s noise, odometry and run folder."""
+@dataclass(frozen=True, eq=False)
+class Block:
+    """A simulated second of every drive's log rows: per log, ``(t_s (R,), rows (R, N) bool,
+    values (R, N, C))``, the rows a drive logged where ``rows`` is true."""
 
-    def __init__(self, slot: int, *, sim: Any, out: Path, seed: int, ids: dict[str, Any],
-                 offset_xy_m: Any, qpos0: Any, meta: dict[str, Any], lidar: Any, camera: bool,
-                 route: Any) -> None:
-        run = sim.run
-        self.slot, self.sim, self.ids, self.route = slot, sim, ids, route
-        self.offset = np.asarray(offset_xy_m, dtype=np.float64)
-        self.rng = stage_rng(seed, "sensors")
-        self.imu_noise = ImuNoise(run.noise, run.imu_hz, rng=self.rng)  # draws the turn-on biases
-        pos0, yaw0 = self._pose_yaw(qpos0)
-        self.odo = WheelOdometry(sim.rover, pos0[0], pos0[1], pos0[2], yaw0)
+    logs: dict[str, tuple[Any, Any, Any]]
+
+
+class BatchSink:
+    """Every drive's noise, odometry and log rows, tick by tick, for ``pool``'s sinks.
+
+    Parameters
+    ----------
+    pool : SinkPool
+    noise : BatchNoise
+    ids : dict
+        The rover's indices in the batch model (:func:`~marsscene.sim.rover_sim.rover_indices`).
+    offsets_xy_m : ndarray (N, 2)
+    qpos0 : ndarray (N, nq)
+        The settled start state (the odometry's start poses).
+    rover : RoverConfig
+    dt_control_s : float
+    """
+
+    LOGS = ("gt", "odom", "cmd", "wheels", "imu", "imu_true", "imu_bias")
+
+    def __init__(self, pool: SinkPool, noise: Any, *, ids: dict[str, Any], offsets_xy_m: Any,
+                 qpos0: Any, rover: Any, dt_control_s: float) -> None:
+        self.pool, self.noise, self.ids, self.dt_control_s = pool, noise, ids, dt_control_s
+        self.r = int(ids["qpos_root"])
+        self.offset = np.column_stack([np.asarray(offsets_xy_m, dtype=np.float64),
+                                       np.zeros(len(offsets_xy_m))])
+        pos0, yaw0 = self._pose_yaw(np.asarray(qpos0))
+        self.odo = BatchWheelOdometry(rover, pos0, yaw0)
+        self._rows: dict[str, list[tuple[float, Any, Any]]] = {k: [] for k in self.LOGS}
+
+    def _pose_yaw(self, qpos: Any) -> tuple[np.ndarray, np.ndarray]:
+        q = np.asarray(qpos[:, self.r: self.r + 7], dtype=np.float64)
+        w, x, y, z = q[:, 3], q[:, 4], q[:, 5], q[:, 6]
+        return q[:, :3] - self.offset, np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+    def put(self, tick: Tick) -> None:
+        """Log ``tick`` (the CPU session's order: control, IMU, LiDAR, camera, flush)."""
+        if tick.control is not None and tick.control.any():
+            self._control(tick)
+        sense = tick.sense is not None and bool(tick.sense.any())
+        if sense and tick.imu:
+            self._imu(tick)
+        if sense and (tick.lidar is not None or tick.depth is not None):
+            self.pool.put(tick)
+        if tick.flush:
+            self._hand(flush=True)
+
+    def _control(self, tick: Tick) -> None:
+        ids, mask = self.ids, tick.control
+        rates, steer = self.noise.wheels(tick.qvel[:, ids["drive_dof"]],
+                                         tick.qpos[:, ids["steer_qpos"]])
+        if tick.k > 0:
+            self.odo.update(rates, steer, self.dt_control_s, mask)
+        pos, _ = self._pose_yaw(tick.qpos)
+        quat = np.asarray(tick.qpos[:, self.r + 3: self.r + 7], dtype=np.float64)
+        opos, oquat = self.odo.pose()
+        t = tick.t_s
+        for name, values in (("gt", np.hstack([pos, quat])), ("odom", np.hstack([opos, oquat])),
+                             ("cmd", np.asarray(tick.cmd, dtype=np.float64)),
+                             ("wheels", np.hstack([rates, steer]))):
+            self._rows[name].append((t, mask, values))
+
+    def _imu(self, tick: Tick) -> None:
+        s, a, g = tick.sensordata, self.ids["_acc_adr"], self.ids["_gyr_adr"]
+        acc_true = np.asarray(s[:, a: a + 3], dtype=np.float64)
+        gyr_true = np.asarray(s[:, g: g + 3], dtype=np.float64)
+        acc, gyr, bias = self.noise.imu(acc_true, gyr_true, tick.sense)
+        for name, values in (("imu", np.hstack([acc, gyr])),
+                             ("imu_true", np.hstack([acc_true, gyr_true])), ("imu_bias", bias)):
+            self._rows[name].append((tick.t_s, tick.sense, values))
+
+    def _hand(self, flush: bool) -> None:
+        logs = {k: (np.array([r[0] for r in rows]), np.stack([r[1] for r in rows]),
+                    np.stack([r[2] for r in rows])) for k, rows in self._rows.items() if rows}
+        self._rows = {k: [] for k in self.LOGS}
+        if logs or flush:
+            self.pool.put(Block(logs))
+
+    def close(self) -> None:
+        """Hand the last rows over and wait for every item to be written."""
+        self._hand(flush=False)
+        self.pool.close()
+
+
+class DriveSink:
+    """Drive ``slot``'s run folder: its share of each :class:`Block`, its scans and frames."""
+
+    def __init__(self, slot: int, *, sim: Any, out: Path, meta: dict[str, Any], lidar: Any,
+                 camera: bool, route: Any) -> None:
+        self.slot, self.sim, self.route = slot, sim, route
         self.lidar = lidar  # (ring, t_s) of the rays, or None
         self.writer = RunWriter(out, sim, lidar=lidar is not None, camera=camera, stereo=False,
                                 meta=meta)
-        self.dt_control_s = sim.dt_physics_s * round(1.0 / (run.control_hz * sim.dt_physics_s))
-        self.n_control = self.n_lidar = self.n_cam = 0
+        self.writer.park()  # thousands of drives: no files held open between blocks
+        self.n_lidar = self.n_cam = 0
 
-    def _pose_yaw(self, qpos: Any) -> tuple[np.ndarray, float]:
-        r = int(self.ids["qpos_root"])
-        q = np.asarray(qpos[r: r + 7], dtype=np.float64)
-        pos = q[:3] - np.array([*self.offset, 0.0])
-        w, x, y, z = q[3:7]
-        return pos, float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-
-    def take(self, tick: Tick) -> None:
-        """Log what this drive samples at ``tick`` (the CPU session's order)."""
-        i = self.slot
-        if tick.control is not None and tick.control[i]:
-            self._control(tick)
-        if tick.sense is None or not tick.sense[i]:
+    def take(self, item: Tick | Block) -> None:
+        """Write this drive's part of ``item``."""
+        if isinstance(item, Block):
+            self._block(item)
             return
-        if tick.imu:
-            self._imu(tick)
-        if tick.lidar is not None:
-            self._scan(tick)
-        if tick.depth is not None:
-            self._depth(tick)
-        if tick.flush:
-            self.writer.flush()
+        if not item.sense[self.slot]:
+            return
+        if item.lidar is not None:
+            self._scan(item)
+        if item.depth is not None:
+            self._depth(item)
 
-    def _control(self, tick: Tick) -> None:
-        i, ids = self.slot, self.ids
-        rates, steer = measure_wheels(tick.qvel[i, ids["drive_dof"]].astype(np.float64),
-                                      tick.qpos[i, ids["steer_qpos"]].astype(np.float64),
-                                      self.sim.run.noise, rng=self.rng)
-        if tick.k > 0:
-            self.odo.update(rates, steer, self.dt_control_s)
-        pos, _ = self._pose_yaw(tick.qpos[i])
-        r = int(ids["qpos_root"])
-        quat = tick.qpos[i, r + 3: r + 7].astype(np.float64)
-        v, w = (float(x) for x in tick.cmd[i])
-        self.writer.control(tick.t_s, v, w, rates, steer, (pos, quat), self.odo.pose())
-        self.n_control += 1
-
-    def _imu(self, tick: Tick) -> None:
-        s, a, g = tick.sensordata[self.slot], self.ids["_acc_adr"], self.ids["_gyr_adr"]
-        acc_true, gyr_true = s[a: a + 3].astype(np.float64), s[g: g + 3].astype(np.float64)
-        acc, gyr = self.imu_noise.measure(acc_true, gyr_true)
-        bias = (*self.imu_noise.gyro_bias_rad_s, *self.imu_noise.accel_bias_m_s2)
-        self.writer.imu(tick.t_s, acc, gyr, acc_true, gyr_true, bias)
+    def _block(self, block: Block) -> None:
+        i, w = self.slot, self.writer
+        for name, (t, rows, values) in block.logs.items():
+            mine = rows[:, i]
+            if not mine.any():
+                continue
+            v = values[mine, i]
+            if name in ("gt", "odom"):
+                w.poses[name].rows(t[mine], v[:, :3], v[:, 3:])
+            else:
+                w.logs[name].rows(t[mine], v)
+        w.park()
 
     def _scan(self, tick: Tick) -> None:
         """The scan as :meth:`marsscene.sensors.lidar.Lidar.scan` returns it (returns only, in
@@ -135,7 +201,7 @@ class DriveSink:
         w.logs["camera"].row(tick.t_s, ("", "depth/" + name))
         self.n_cam += 1
 
-    def finish(self, status: str = "complete") -> dict[str, Any]:
+    def finish(self, imu_bias: dict[str, Any], status: str = "complete") -> dict[str, Any]:
         """Close the folder and write its summary (the CPU drive's keys); the summary."""
         w = self.writer
         w.close()
@@ -149,7 +215,7 @@ class DriveSink:
             "lidar_scans": self.n_lidar,
             "camera_frames": self.n_cam,
             "goal_reached": _goal_reached(gt, None, self.route),
-            "imu_bias": _imu_bias(self.imu_noise),
+            "imu_bias": imu_bias,
         }
         ct = cross_track_m(self.route, gt.xyz_m[:, :2])
         summary["cross_track_rms_m"] = round(float(np.sqrt(np.mean(ct**2))), 6)
@@ -161,11 +227,11 @@ class DriveSink:
 class SinkPool:
     """``workers`` threads, each feeding its share of the sinks every tick in order.
 
-    ``put`` blocks while a worker is ``depth`` ticks behind; the first error of a worker is
+    ``put`` blocks while a worker is ``depth`` items behind; the first error of a worker is
     raised by the next ``put`` or by :meth:`close`.
     """
 
-    def __init__(self, sinks: list[DriveSink], workers: int, depth: int = 4) -> None:
+    def __init__(self, sinks: list[DriveSink], workers: int, depth: int = 8) -> None:
         self.sinks = sinks
         k = max(1, min(int(workers), len(sinks)))
         self._queues: list[queue.Queue[Tick | None]] = [queue.Queue(depth) for _ in range(k)]
@@ -178,12 +244,12 @@ class SinkPool:
     def _work(self, j: int) -> None:
         mine = self.sinks[j:: len(self._queues)]
         q = self._queues[j]
-        while (tick := q.get()) is not None:
+        while (item := q.get()) is not None:
             if self._errors:
                 continue  # drain: the caller raises
             try:
                 for sink in mine:
-                    sink.take(tick)
+                    sink.take(item)
             except BaseException as err:  # handed to the caller
                 self._errors.append(err)
 
@@ -191,10 +257,10 @@ class SinkPool:
         if self._errors:
             raise self._errors[0]
 
-    def put(self, tick: Tick) -> None:
+    def put(self, item: Tick | Block) -> None:
         self._raise()
         for q in self._queues:
-            q.put(tick)
+            q.put(item)
 
     def close(self) -> None:
         """Wait for every tick to be written."""
