@@ -16,8 +16,8 @@ Topics it subscribes to (besides ``cmd_vel`` and ``/rover/cmd_vel``), in the spi
 robot topics:
 
 * ``/marsscene/reset`` (``std_msgs/Empty``): the rover back to its start pose, at rest;
-* ``/marsscene/teleport`` (``geometry_msgs/Pose``, map frame): the rover to ``x, y`` facing the
-  pose's yaw, set on the terrain at rest (z, roll and pitch from the ground);
+* ``/marsscene/teleport`` (``geometry_msgs/Pose``, map frame): ``base_link`` to ``x, y`` facing
+  the pose's yaw, set on the terrain at rest (z, roll and pitch from the ground);
 * ``/marsscene/goal`` (``geometry_msgs/PoseStamped``, map frame): the goal whose reaching (ground
   truth within ``goal_tolerance_m``) is announced on ``/marsscene/goal_reached``
   (``std_msgs/Bool``, latched) and, with ``stop_at_goal``, ends the session.
@@ -38,6 +38,7 @@ from marsscene.errors import RuntimeSimError
 from marsscene.ros2.dds import Participant, RawWriter
 from marsscene.ros2.options import Ros2Options
 from marsscene.ros2.stats import SessionStats
+from marsscene.ros2.teleport import spawn_point_for
 from marsscene.runs.export.sample_messages import SampleMessages
 from marsscene.sim.goal import goal_reached
 from marsscene.transforms import yaw_of_quat
@@ -282,8 +283,10 @@ class Bridge:
             log.info("goal set at (%.2f, %.2f) m", *self.goal_xy)
 
     def _place(self, xy: Any, yaw: float) -> bool:
-        try:
-            self.sim.place(xy_m=(float(xy[0]), float(xy[1])), yaw_rad=float(yaw))
+        try:  # base_link at x, y facing yaw (:mod:`.teleport`)
+            spot, heading = spawn_point_for(self.sim.heightfield, self.sim.rover,
+                                            (float(xy[0]), float(xy[1])), float(yaw))
+            self.sim.place(xy_m=spot, yaw_rad=heading)
         except RuntimeSimError as err:  # a pose off the terrain: say so, keep serving
             log.warning("teleport refused: %s", err)
             return False

@@ -8,8 +8,10 @@ physics sub-steps within it): ``StepSimulation(n)`` and ``SimulateSteps`` take e
 them, with the command in force (the newest ``cmd_vel`` and its time-out), publish every
 sample they make and answer once the last one is out. A reset puts the rover back at its start
 at rest; sim time runs on (``SIMULATION_RESET_TIME`` is not offered: the clock never jumps).
-``SetEntityState`` teleports as ``/marsscene/teleport`` does: x, y and yaw from the request,
-z, roll and pitch from the ground, at rest.
+``SetEntityState`` teleports as ``/marsscene/teleport`` does: ``base_link`` at the request's
+x, y and heading (:mod:`.teleport`), z, roll and pitch from the ground, at rest. The
+``SimulateSteps`` action is :mod:`.sim_action`'s; :class:`SimControl` is its host (the state
+and the one run of steps :meth:`SimControl.gate` takes, for the service or the action).
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from marsscene.ros2.services import Service
-from marsscene.ros2.sim_action import PAUSED, SimulateStepsAction, _Run
-from marsscene.ros2.sim_types import ACTION, SERVICES, register
+from marsscene.ros2.sim_action import PAUSED, SimulateStepsAction, StepRun
+from marsscene.ros2.sim_types import SERVICES, register
 from marsscene.transforms import yaw_of_quat
 
 __all__ = ["FEATURES", "SimControl"]
@@ -37,8 +39,9 @@ ROVER, ROBOT = "rover", 1
 _ALREADY, _INCORRECT_TRANSITION = 101, 103
 
 
-class SimControl(SimulateStepsAction):
-    """The services of a session's bridge, and its pause / step gate.
+class SimControl:
+    """The services of a session's bridge, and its pause / step gate (the host of the
+    ``SimulateSteps`` action, :class:`~.sim_action.ActionHost`).
 
     Parameters
     ----------
@@ -51,28 +54,14 @@ class SimControl(SimulateStepsAction):
         self.b, self.store, self.T = bridge, bridge.store, bridge.store.types
         register(self.store)
         ns = namespace.rstrip("/")
-        part = bridge.part
-        self.services = [Service(part, self.store, f"{ns}/{name}", f"{_P}/srv/{srv}",
-                                 getattr(self, "_" + name)) for name, srv in SERVICES.items()]
-        act = f"{ns}/{ACTION[0]}/_action"
-        atype = f"{_P}/action/{ACTION[1]}"
-        self.services += [
-            Service(part, self.store, f"{act}/send_goal", f"{atype}_SendGoal", self._send_goal),
-            Service(part, self.store, f"{act}/get_result", f"{atype}_GetResult",
-                    self._get_result),
-            Service(part, self.store, f"{act}/cancel_goal", "action_msgs/srv/CancelGoal",
-                    self._cancel_goal)]
-        self.feedback = part.writer(self.store, f"{act}/feedback", f"{atype}_FeedbackMessage",
-                                    "default")
-        self.status = part.writer(self.store, f"{act}/status", "action_msgs/msg/GoalStatusArray",
-                                  "latched")
-        self.atype = atype
         self.state = PLAYING
-        self.run: _Run | None = None
-        self.results: dict[bytes, tuple[int, Any]] = {}  # goal id -> (status, result)
-        self.waiting: dict[bytes, list[Any]] = {}  # get_result replies held until the end
+        self.run: StepRun | None = None
         self.obs: Any = None
         self.steps = 0  # steps taken while not playing (by the services and the action)
+        self.services = [Service(bridge.part, self.store, f"{ns}/{name}", f"{_P}/srv/{srv}",
+                                 getattr(self, "_" + name)) for name, srv in SERVICES.items()]
+        self.action = SimulateStepsAction(self, bridge.part, self.store, ns)
+        self.services += self.action.services
 
     # ---- the gate: called at the start of every control step -------------------------------
     @property
@@ -90,8 +79,8 @@ class SimControl(SimulateStepsAction):
         run = self.run
         if run is not None and run.started > run.completed:
             run.completed += 1
-            if run.goal_id is not None:
-                self._feedback(run)
+            if run.progress is not None:
+                run.progress(run)
         self.poll()
         if self.playing or self.b.done:
             return False
@@ -119,13 +108,13 @@ class SimControl(SimulateStepsAction):
         return False
 
     # ---- helpers ------------------------------------------------------------------------------
-    def _result(self, code: int = OK, text: str = "") -> Any:
+    def result(self, code: int = OK, text: str = "") -> Any:
         return self.T[f"{_P}/msg/Result"](result=code, error_message=text)
 
     def _reply(self, srv: str, **fields: Any) -> Any:
         return self.T[f"{_P}/srv/{srv}_Response"](**fields)
 
-    def _stamp(self) -> Any:
+    def stamp(self) -> Any:
         return self.b.msgs.b.header(self.obs.t_s if self.obs is not None else 0.0, "map")
 
     # ---- simulation state --------------------------------------------------------------------
@@ -137,49 +126,56 @@ class SimControl(SimulateStepsAction):
         return self._reply("GetSimulatorFeatures", features=feats)
 
     def _get_simulation_state(self, req: Any, _r: Any) -> Any:
-        return self._reply("GetSimulationState", result=self._result(),
+        return self._reply("GetSimulationState", result=self.result(),
                            state=self.T[f"{_P}/msg/SimulationState"](state=self.state))
 
     def _set_simulation_state(self, req: Any, _r: Any) -> Any:
         want, now = int(req.state.state), self.state
         if want == now:
-            res = self._result(_ALREADY, "already in that state")
+            res = self.result(_ALREADY, "already in that state")
         elif want == STOPPED:
-            self._abort_run()
+            self.abort_run()
             self.b._place(*self.b.start_pose)
-            self.state, res = STOPPED, self._result()
+            self.state, res = STOPPED, self.result()
         elif want in (PLAYING, PAUSED):
             if want == PLAYING:
-                self._abort_run()
-            self.state, res = want, self._result()
+                self.abort_run()
+            self.state, res = want, self.result()
         elif want == QUITTING:
-            self.b.done, res = True, self._result()
+            self.abort_run()
+            self.b.done, res = True, self.result()
         else:
-            res = self._result(UNSUPPORTED, "no world loading: one static scene a session")
+            res = self.result(UNSUPPORTED, "no world loading: one static scene a session")
         return self._reply("SetSimulationState", result=res)
 
     def _reset_simulation(self, req: Any, _r: Any) -> Any:
         scope = int(req.scope)
         if scope not in (0, 255) and not scope & 6:  # SCOPE_TIME alone
-            return self._reply("ResetSimulation", result=self._result(
+            return self._reply("ResetSimulation", result=self.result(
                 UNSUPPORTED, "sim time is not reset (SIMULATION_RESET_TIME)"))
         ok = self.b._place(*self.b.start_pose)
         if ok:
             self.b.stats.resets += 1
-        return self._reply("ResetSimulation", result=self._result(
+        return self._reply("ResetSimulation", result=self.result(
             OK if ok else FAILED, "" if scope & 2 and not scope & 1 else
             "the rover is back at its start; sim time keeps running"))
 
     def _step_simulation(self, req: Any, reply: Any) -> Any:
         if self.state != PAUSED or self.run is not None:
-            return self._reply("StepSimulation", result=self._result(
+            return self._reply("StepSimulation", result=self.result(
                 FAILED, "pause the simulation first" if self.state != PAUSED
                 else "steps are being taken"))
-        self.run = _Run(max(int(req.steps), 1), lambda run: reply(
-            self._reply("StepSimulation", result=self._result())))
+
+        def done(run: StepRun) -> None:
+            res = self.result() if run.completed >= run.n else self.result(
+                FAILED, f"the simulation left the paused state after {run.completed} of "
+                        f"{run.n} steps")
+            reply(self._reply("StepSimulation", result=res))
+
+        self.run = StepRun(max(int(req.steps), 1), done)
         return None
 
-    def _abort_run(self) -> None:
+    def abort_run(self) -> None:
         run, self.run = self.run, None
         if run is not None:
             run.finish(run)
@@ -188,19 +184,19 @@ class SimControl(SimulateStepsAction):
     def _get_entities(self, req: Any, _r: Any) -> Any:
         f = req.filters
         if len(f.tags.tags) or int(f.bounds.type) != 0:
-            return self._reply("GetEntities", result=self._result(
+            return self._reply("GetEntities", result=self.result(
                 UNSUPPORTED, "no entity tags or bounds"), entities=[])
         try:
             named = not f.filter or re.search(f.filter, ROVER) is not None
         except re.error as err:
-            return self._reply("GetEntities", result=self._result(FAILED, str(err)),
+            return self._reply("GetEntities", result=self.result(FAILED, str(err)),
                                entities=[])
         cats = {int(c.category) for c in f.categories}
         found = [ROVER] if named and (not cats or ROBOT in cats) else []
-        return self._reply("GetEntities", result=self._result(), entities=found)
+        return self._reply("GetEntities", result=self.result(), entities=found)
 
     def _missing(self, srv: str, name: str, **extra: Any) -> Any:
-        return self._reply(srv, result=self._result(
+        return self._reply(srv, result=self.result(
             NOT_FOUND, f"no entity {name!r}; the one entity is {ROVER!r}"), **extra)
 
     def _get_entity_info(self, req: Any, _r: Any) -> Any:
@@ -209,7 +205,7 @@ class SimControl(SimulateStepsAction):
             description="the served rover (base_link; its topics under /rover)", tags=[])
         if req.entity.strip("/") != ROVER:
             return self._missing("GetEntityInfo", req.entity, info=info)
-        return self._reply("GetEntityInfo", result=self._result(), info=info)
+        return self._reply("GetEntityInfo", result=self.result(), info=info)
 
     def _entity_state(self) -> Any:
         b, sim = self.b.msgs.b, self.b.sim
@@ -230,13 +226,13 @@ class SimControl(SimulateStepsAction):
                                                    angular=V3(x=ang[0], y=ang[1], z=ang[2]))
         zero = V3(x=0.0, y=0.0, z=0.0)
         return self.T[f"{_P}/msg/EntityState"](
-            header=self._stamp(), pose=pose, twist=twist,
+            header=self.stamp(), pose=pose, twist=twist,
             acceleration=self.T["geometry_msgs/msg/Accel"](linear=zero, angular=zero))
 
     def _get_entity_state(self, req: Any, _r: Any) -> Any:
         if req.entity.strip("/") != ROVER:
             return self._missing("GetEntityState", req.entity, state=self._entity_state())
-        return self._reply("GetEntityState", result=self._result(), state=self._entity_state())
+        return self._reply("GetEntityState", result=self.result(), state=self._entity_state())
 
     def _set_entity_state(self, req: Any, _r: Any) -> Any:
         if req.entity.strip("/") != ROVER:
@@ -246,38 +242,38 @@ class SimControl(SimulateStepsAction):
         if req.set_twist and any(abs(v) > 0 for v in (
                 tw.linear.x, tw.linear.y, tw.linear.z, tw.angular.x, tw.angular.y,
                 tw.angular.z)):
-            return self._reply("SetEntityState", result=self._result(
+            return self._reply("SetEntityState", result=self.result(
                 FAILED, "the rover is placed at rest: a twist other than zero is not set"))
         if st.header.frame_id not in ("", "world", "map"):
-            return self._reply("SetEntityState", result=self._result(
+            return self._reply("SetEntityState", result=self.result(
                 FAILED, f"frame {st.header.frame_id!r}: poses are in the map (world) frame"))
         if req.set_pose:
             q = st.pose.orientation
             if not all(math.isfinite(v) for v in (q.w, q.x, q.y, q.z, st.pose.position.x,
                                                      st.pose.position.y)) \
                     or abs(q.w**2 + q.x**2 + q.y**2 + q.z**2 - 1.0) > 1e-3:
-                return self._reply("SetEntityState", result=self._result(
+                return self._reply("SetEntityState", result=self.result(
                     101, "a pose with a unit quaternion and finite x, y"))
             yaw = float(yaw_of_quat((q.w, q.x, q.y, q.z)))
             if not self.b._place((st.pose.position.x, st.pose.position.y), yaw):
-                return self._reply("SetEntityState", result=self._result(
+                return self._reply("SetEntityState", result=self.result(
                     101, "off the terrain"))
             self.b.stats.teleports += 1
         elif req.set_twist:
             self.b._place(self.b.sim.pose()[0][:2], self.b.sim.yaw_rad())
-        return self._reply("SetEntityState", result=self._result(
+        return self._reply("SetEntityState", result=self.result(
             OK, "z, roll and pitch from the ground" if req.set_pose else ""))
 
     def _get_spawnables(self, req: Any, _r: Any) -> Any:
-        return self._reply("GetSpawnables", result=self._result(
+        return self._reply("GetSpawnables", result=self.result(
             UNSUPPORTED, "a static world: nothing to spawn"), spawnables=[])
 
     def _spawn_entity(self, req: Any, _r: Any) -> Any:
-        return self._reply("SpawnEntity", result=self._result(
+        return self._reply("SpawnEntity", result=self.result(
             UNSUPPORTED, "a static world: nothing is spawned"), entity_name="")
 
     def _delete_entity(self, req: Any, _r: Any) -> Any:
-        return self._reply("DeleteEntity", result=self._result(
+        return self._reply("DeleteEntity", result=self.result(
             UNSUPPORTED, "a static world: nothing is deleted"))
 
 

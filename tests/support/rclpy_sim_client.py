@@ -1,5 +1,6 @@
 """A stock ROS 2 Jazzy client of ``simulation_interfaces`` on ``rmw_fastrtps_cpp`` (the
-``ros-jazzy-*`` wheels; add ``ros-jazzy-simulation-interfaces``): it calls
+``ros-jazzy-*`` wheels; PyPI has no ``simulation_interfaces`` wheel, so the package comes from
+``tools/ros_interfaces.py``, on ``PYTHONPATH`` and ``LD_LIBRARY_PATH``): it calls
 ``/get_simulation_state`` with a time-out, as a Fast DDS user would, and says what came back.
 Imports nothing from marsscene. JSON on stdout: ``{"available": bool, "answered": bool}``."""
 

@@ -4,9 +4,11 @@ Written from ``rmw_cyclonedds_cpp``'s wire form, not from marsscene's server: to
 ``rq/<service>Request`` / ``rr/<service>Reply``, types ``<pkg>::srv::dds_::<Srv>_Request_`` /
 ``_Response_``, each sample the CDR encapsulation, a ``uint64`` client handle and an ``int64``
 sequence number, then the plain CDR payload; ``clientid=`` in the endpoints' USER_DATA; an
-action as its ``_action/send_goal`` / ``get_result`` services and ``feedback`` topic. The types
-come from the interface's own definitions (the ``.msg`` / ``.srv`` / ``.action`` files),
-parsed here with ``rosbags``. Imports nothing from marsscene; loopback only.
+action as its ``_action/send_goal`` / ``get_result`` / ``cancel_goal`` services and its
+``feedback`` and ``status`` topics. The types come from the interface's own definitions (the
+``.msg`` / ``.srv`` / ``.action`` files), parsed here with ``rosbags``; ``action_msgs``'s
+``CancelGoal`` is written out below from ``rcl_interfaces``. Imports nothing from marsscene;
+loopback only.
 
 ``python sim_client.py DOMAIN [--namespace /]``: the calls of the service tests, then
 ``SetSimulationState(QUITTING)`` (the session ends); JSON on stdout.
@@ -25,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import numpy as np
 from cyclonedds._clayer import ddspy_write
 from cyclonedds.idl import annotations as ann
 from cyclonedds.idl import make_idl_struct
@@ -39,6 +42,12 @@ DEFS = Path(__file__).resolve().parents[2] / "marsscene" / "ros2" / "interfaces"
     "simulation_interfaces"
 P = "simulation_interfaces"
 _ = MASK
+LONG_GOAL = 100_000  # steps of the goal that is cancelled
+#: action_msgs/srv/CancelGoal (ros2/rcl_interfaces), request and response.
+CANCEL_GOAL = ("action_msgs/GoalInfo goal_info\n",
+               "int8 ERROR_NONE=0\nint8 ERROR_REJECTED=1\nint8 ERROR_UNKNOWN_GOAL_ID=2\n"
+               "int8 ERROR_GOAL_TERMINATED=3\nint8 return_code\n"
+               "action_msgs/GoalInfo[] goals_canceling\n")
 
 
 def _load() -> None:
@@ -59,6 +68,8 @@ def _load() -> None:
                   f"{a}_GetResult_Response": "int8 status\nSimulateSteps_Result result\n",
                   f"{a}_FeedbackMessage": "unique_identifier_msgs/UUID goal_id\n"
                                           "SimulateSteps_Feedback feedback\n"})
+    texts["action_msgs/srv/CancelGoal_Request"], texts["action_msgs/srv/CancelGoal_Response"] = \
+        CANCEL_GOAL
     fake = {f"{n.split('/')[0]}/msg/{n.split('/')[2]}": n for n in texts}
     types: dict[str, Any] = {}
 
@@ -103,6 +114,10 @@ class Client:
         self.handle = id(self) & 0xffffffffffff  # any 64-bit id unique to this client
 
     def call(self, timeout_s: float = 30.0, **fields: Any) -> Any:
+        return self.wait(self.send(timeout_s, **fields), timeout_s)
+
+    def send(self, timeout_s: float = 30.0, **fields: Any) -> int:
+        """Write a request (once the service is there); its sequence number."""
         t0 = time.monotonic()
         while self.w.get_publication_matched_status().current_count == 0 or \
                 self.r.get_subscription_matched_status().current_count == 0:
@@ -113,13 +128,77 @@ class Client:
         cdr = bytes(STORE.serialize_cdr(STORE.types[self.req_t](**fields), self.req_t))
         wire = cdr[:4] + struct.pack("<Qq", self.handle, Client.seq) + cdr[4:]
         ddspy_write(self.w._ref, wire + b"\0" * (-len(wire) % 4))
+        return Client.seq
+
+    def wait(self, seq: int, timeout_s: float = 30.0) -> Any:
+        """The reply to request ``seq``."""
+        t0 = time.monotonic()
         while time.monotonic() - t0 < timeout_s:
             for raw in take(self.r):
                 h, s = struct.unpack("<Qq", raw[4:20])
-                if (h, s) == (self.handle, Client.seq):
+                if (h, s) == (self.handle, seq):
                     return STORE.deserialize_cdr(raw[:4] + raw[20:], self.rep_t)
             time.sleep(0.0005)
         raise SystemExit(f"no reply from {self.req_t}")
+
+
+def _yaw(q: Any) -> float:
+    """Heading of a quaternion's x axis seen from above (ZYX yaw)."""
+    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y**2 + q.z**2))
+
+
+def _cancel(peer: Peer, act: str, goal: Client, result: Client, feedback: Any, status: Any,
+            drain: Any, now: list[float]) -> dict[str, Any]:
+    """A long ``SimulateSteps`` goal, cancelled after a few feedback messages; cancel requests
+    for it again, for a goal never sent and for every goal when none runs."""
+    ty, a = STORE.types, f"{P}/action/SimulateSteps"
+    cancel = Client(peer, f"{act}/cancel_goal", "action_msgs/srv/CancelGoal")
+    uuid = ty["unique_identifier_msgs/msg/UUID"]
+    gid = uuid(uuid=np.arange(100, 116, dtype=np.uint8))
+    zero = ty["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+
+    def info(goal_id: Any) -> Any:
+        return ty["action_msgs/msg/GoalInfo"](goal_id=goal_id, stamp=zero)
+
+    out: dict[str, Any] = {}
+    t0 = now[0]
+    acc = goal.call(goal_id=gid, goal=ty[f"{a}_Goal"](steps=LONG_GOAL))
+    held = result.send(goal_id=gid)  # answered when the goal ends
+    seen: list[Any] = []
+    deadline = time.monotonic() + 30.0
+    while len(seen) < 5 and time.monotonic() < deadline:
+        seen += [STORE.deserialize_cdr(r, f"{a}_FeedbackMessage").feedback for r in take(feedback)]
+        time.sleep(0.0005)
+    w0 = time.perf_counter()
+    rep = cancel.call(goal_info=info(gid))
+    out["cancel_wall_s"] = time.perf_counter() - w0
+    fin = result.wait(held)
+    again = result.call(goal_id=gid)
+    time.sleep(0.3)
+    drain()
+    seen += [STORE.deserialize_cdr(r, f"{a}_FeedbackMessage").feedback for r in take(feedback)]
+    out["cancel_accepted"] = bool(acc.accepted)
+    out["cancel"] = [int(rep.return_code), [bytes(g.goal_id.uuid).hex() for g in
+                                            rep.goals_canceling]]
+    out["cancel_gid"] = bytes(gid.uuid).hex()
+    out["canceled"] = [int(fin.status), int(fin.result.result.result),
+                       str(fin.result.result.error_message)]
+    out["canceled_again"] = [int(again.status), int(again.result.result.result)]
+    out["cancel_feedback"] = [[int(f.completed_steps), int(f.remaining_steps)] for f in seen]
+    out["cancel_clock_s"] = now[0] - t0
+    statuses: list[int] = []  # this goal's, as the status topic said them, in order
+    for raw in take(status):
+        for st in STORE.deserialize_cdr(raw, "action_msgs/msg/GoalStatusArray").status_list:
+            if bytes(st.goal_info.goal_id.uuid) == bytes(gid.uuid) and \
+                    (not statuses or statuses[-1] != int(st.status)):
+                statuses.append(int(st.status))
+    out["cancel_statuses"] = statuses
+    out["cancel_terminated"] = int(cancel.call(goal_info=info(gid)).return_code)
+    out["cancel_unknown"] = int(cancel.call(
+        goal_info=info(uuid(uuid=np.full(16, 0xAB, dtype=np.uint8)))).return_code)
+    idle = cancel.call(goal_info=info(uuid(uuid=np.zeros(16, dtype=np.uint8))))
+    out["cancel_all_idle"] = [int(idle.return_code), len(idle.goals_canceling)]
+    return out
 
 
 def main() -> None:
@@ -134,6 +213,8 @@ def main() -> None:
     scans = peer.reader("/rover/lidar/points", "sensor_msgs/msg/PointCloud2", reliable=True,
                         depth=50)
     cmd = peer.writer("/cmd_vel", "geometry_msgs/msg/Twist")
+    status = peer.reader(f"{ns}/simulate_steps/_action/status", "action_msgs/msg/GoalStatusArray",
+                         reliable=True, transient_local=True, depth=100)
     sha = {"odom": hashlib.sha256(), "lidar": hashlib.sha256()}
     n = {"odom": 0, "lidar": 0}
     now = [-math.inf]
@@ -204,12 +285,15 @@ def main() -> None:
     out["set"] = int(srv("set_entity_state", "SetEntityState").call(
         entity="rover", state=es, set_pose=True, set_twist=False,
         set_acceleration=False).result.result)
+    out["asked_xy_yaw"] = [pose.position.x, pose.position.y, 0.8]
     got = get.call(entity="rover").state.pose
-    q = got.orientation
-    out["got_xy_yaw"] = [got.position.x, got.position.y,
-                         math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y**2 + q.z**2))]
+    out["got_xy_yaw"] = [got.position.x, got.position.y, _yaw(got.orientation)]
     again = get.call(entity="rover").state.pose.position
     out["got_again_xy"] = [again.x, again.y]
+    out["settle"] = int(step.call(steps=50).result.result)  # 1 s at rest, wheels braked
+    settled = get.call(entity="rover").state.pose
+    out["settled_xy_yaw"] = [settled.position.x, settled.position.y,
+                             _yaw(settled.orientation)]
     out["missing"] = int(get.call(entity="nobody").result.result)
     out["reset"] = int(srv("reset_simulation", "ResetSimulation").call(scope=0).result.result)
     back = get.call(entity="rover").state.pose.position
@@ -233,8 +317,6 @@ def main() -> None:
     goal = Client(peer, f"{act}/send_goal", f"{a}_SendGoal")
     result = Client(peer, f"{act}/get_result", f"{a}_GetResult")
     feedback = peer.reader(f"{act}/feedback", f"{a}_FeedbackMessage", reliable=True, depth=100)
-    import numpy as np
-
     gid = ty["unique_identifier_msgs/msg/UUID"](uuid=np.arange(16, dtype=np.uint8))
     drain()
     t0 = now[0]
@@ -250,7 +332,14 @@ def main() -> None:
                            .completed_steps) for r in take(feedback)]
     out["play_step"] = int(step.call(steps=1).result.result)  # still paused: OK
     out["sha256"] = {k: h.hexdigest() for k, h in sha.items()}
-    out["counts"] = dict(n)
+    out["counts"] = dict(n)  # (what follows depends on when a cancel lands: not hashed)
+    time.sleep(0.3)
+    drain()
+    odom0 = n["odom"]
+    out.update(_cancel(peer, act, goal, result, feedback, status, drain, now))
+    out["cancel_odom"] = n["odom"] - odom0
+    out["state_after_cancel"] = int(srv("get_simulation_state", "GetSimulationState").call(
+        structure_needs_at_least_one_member=0).state.state)
     setstate.call(state=state(3))
     sys.stdout.write(json.dumps(out) + "\n")
 
