@@ -43,6 +43,9 @@ if TYPE_CHECKING:
     from marsscene.runs.export.options import ExportOptions as ExportOptions
     from marsscene.runtime.api import DriveRun as DriveRun
     from marsscene.runtime.api import drive as drive
+    from marsscene.runtime.team import Robot as Robot
+    from marsscene.runtime.team import TeamRun as TeamRun
+    from marsscene.runtime.team import drive_team as drive_team
     from marsscene.sim.control import Observation as Observation
     from marsscene.sim.mission import DriveOptions as DriveOptions
 
@@ -58,13 +61,16 @@ __all__ = [
     "MarsSceneError",
     "NoiseConfig",
     "Observation",
+    "Robot",
     "RunConfig",
     "Scene",
     "SceneConfig",
+    "TeamRun",
     "__version__",
     "build_scene",
     "drive",
     "drive_batch",
+    "drive_team",
     "read_dem",
     "show_versions",
     "write_scene",
@@ -80,6 +86,7 @@ _LAZY = {
     "Observation": "marsscene.sim.control",
     "DriveOptions": "marsscene.sim.mission",
     "drive_batch": "marsscene.sim.batch.api",
+    **dict.fromkeys(("Robot", "TeamRun", "drive_team"), "marsscene.runtime.team"),
 }
 
 __getattr__ = lazy_attributes(__name__, _LAZY)

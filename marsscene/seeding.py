@@ -8,12 +8,14 @@ generation" guide (SeedSequence spawning).
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from marsscene._validate import plain
 from marsscene.errors import ConfigError
 
-__all__ = ["STAGE_IDS", "as_generator", "stage_key", "stage_rng", "tile_rng"]
+__all__ = ["STAGE_IDS", "as_generator", "robot_rng", "stage_key", "stage_rng", "tile_rng"]
 
 #: Stage name -> spawn key. Append new stages; never renumber existing ones.
 STAGE_IDS: dict[str, int] = {
@@ -71,6 +73,15 @@ def tile_rng(seed: int, stage: str, row: int, col: int) -> np.random.Generator:
     """The generator of one tile of a stage: ``SeedSequence(seed, spawn_key=(stage_id, row,
     col))``, independent of every other tile's and of the stage's own stream."""
     key = (STAGE_IDS[stage], int(row), int(col))
+    return np.random.default_rng(np.random.SeedSequence(_check_seed(seed), spawn_key=key))
+
+
+def robot_rng(seed: int, stage: str, name: str) -> np.random.Generator:
+    """The generator of one named robot of a team in a stage: ``SeedSequence(seed,
+    spawn_key=(stage_id, k))`` with ``k`` the first 8 bytes of the name's SHA-256, so each
+    robot's stream depends on its name alone (adding a robot moves no other robot's noise)."""
+    k = int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:8], "big")
+    key = (STAGE_IDS[stage], k)
     return np.random.default_rng(np.random.SeedSequence(_check_seed(seed), spawn_key=key))
 
 

@@ -55,6 +55,8 @@ Examples:
   marsscene drive scenes/demo --waypoints wp.txt --lidar --controller my_nav:Planner
   marsscene drive scenes/demo --waypoints wp.txt --lidar --device cuda --out runs/g1
   marsscene drive --batch drives.toml --lidar --camera --device cuda
+  marsscene drive scenes/demo --waypoints wp.txt --rover mer
+  marsscene drive scenes/demo --team team.toml --lidar --out runs/team
 """
 
 
@@ -68,6 +70,12 @@ Examples:
 @click.option("--batch", "batch_path", type=_PATH, default=None,
               help="A TOML file of [[drive]] tables (scene, waypoints or route, out, seed): "
               "all driven at once on --device (default: the GPU), instead of SCENE_DIR.")
+@click.option("--team", "team_path", type=_PATH, default=None,
+              help="A TOML file of [[robots]] tables (name, rover, waypoints or route, run): "
+              "every robot in one world, a run folder each under --out (docs/team.md).")
+@click.option("--rover", "rover_type", default=None, metavar="TYPE",
+              help="The rover type: perseverance (default), mer, or a rover TOML file "
+              "(docs/rovers.md).")
 @click.option("--route", "route_path", type=_PATH, help="Route as a TUM file (x, y are used).")
 @click.option(
     "--waypoints",
@@ -144,11 +152,11 @@ Examples:
               "default the scans are kept once, in the bag).")
 @bag_options
 def drive(scene_dir: Path | None, device: str | None, batch_path: Path | None,
-          route_path: Path | None, waypoints_path: Path | None,
-          seconds: float | None, out_dir: Path, seed: int, lookahead: float, max_slope: float,
-          corridor: float, write_rover_xml: bool, controller_ref: str | None, write_bag: bool,
-          datasets: tuple[str, ...], overwrite: bool, dataset_images: str,
-          keep_lidar_files: bool, **opts: Any) -> None:
+          team_path: Path | None, rover_type: str | None, route_path: Path | None,
+          waypoints_path: Path | None, seconds: float | None, out_dir: Path, seed: int,
+          lookahead: float, max_slope: float, corridor: float, write_rover_xml: bool,
+          controller_ref: str | None, write_bag: bool, datasets: tuple[str, ...],
+          overwrite: bool, dataset_images: str, keep_lidar_files: bool, **opts: Any) -> None:
     """``marsscene drive`` (its help text: :data:`_HELP`); ``opts`` holds the run and bag
     options."""
     import marsscene as ms
@@ -159,9 +167,10 @@ def drive(scene_dir: Path | None, device: str | None, batch_path: Path | None,
         raise click.UsageError("give --route or --waypoints, not both")
     bag_values = {k: opts.pop(k) for k in list(opts) if k in BAG_OPTION_NAMES}
     if batch_path is not None or device is not None:
-        if controller_ref or write_bag or datasets:
+        if controller_ref or write_bag or datasets or rover_type or team_path:
             raise click.UsageError("--device/--batch drive with pure pursuit and write run "
-                                   "folders only (no --controller, --bag or --dataset yet)")
+                                   "folders only (no --controller, --rover, --team, --bag or "
+                                   "--dataset yet)")
         with user_errors():
             run = run_config(opts)
             options = DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
@@ -171,6 +180,17 @@ def drive(scene_dir: Path | None, device: str | None, batch_path: Path | None,
         return
     if scene_dir is None:
         raise click.UsageError("give SCENE_DIR (or --batch FILE)")
+    if team_path is not None:
+        if route_path or waypoints_path or controller_ref or write_bag or datasets or rover_type:
+            raise click.UsageError("--team lists each robot's rover and route: no --route, "
+                                   "--waypoints, --controller, --rover, --bag or --dataset")
+        from marsscene.cli.drive_team import drive_team_cli
+
+        with user_errors(), sigterm_interrupts():
+            drive_team_cli(scene_dir, team_path, seconds, out_dir, seed, run_config(opts),
+                           DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
+                                        pursuit=PursuitConfig(lookahead_m=lookahead)))
+        return
     if route_path is None and waypoints_path is None and controller_ref is None:
         raise click.UsageError("give --route or --waypoints (or a --controller)")
     with user_errors():
@@ -192,7 +212,7 @@ def drive(scene_dir: Path | None, device: str | None, batch_path: Path | None,
                 res = ms.drive(scene_dir, route=route_path, waypoints=waypoints,
                                controller=controller, seconds=seconds, config=run,
                                options=options, export=export, out_dir=out_dir, seed=seed,
-                               progress=meter)
+                               progress=meter, rover=rover_type)
         except DriveInterrupted as stop:
             meter.close()
             s = stop.result.summary

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from numpy.typing import ArrayLike
 
-from marsscene.rover.config import RunConfig
+from marsscene.rover.config import RoverConfig, RunConfig
 from marsscene.runs.export.options import ExportOptions
 from marsscene.runs.tum import Trajectory, read_tum
 from marsscene.runtime._steps import (
@@ -145,6 +145,7 @@ def drive(
     progress: Callable[[DriveProgress | ExportProgress], None] | None = None,
     keep_sensors: bool = False,
     listeners: Sequence[Any] = (),
+    rover: RoverConfig | str | None = None,
 ) -> DriveRun:
     """Drive the rover on a scene with its sensors, then export the run.
 
@@ -188,6 +189,10 @@ def drive(
         Keep LiDAR scans, images and IMU samples in memory in ``result``.
     listeners : sequence, optional
         Objects receiving every sample as it is made (:mod:`marsscene.sim.session`).
+    rover : RoverConfig or str, optional
+        The rover type: a :class:`~marsscene.rover.config.RoverConfig` or a name for
+        :meth:`RoverConfig.load <marsscene.rover.config.RoverConfig.load>` (``"mer"``); default
+        the Perseverance-class rover.
 
     Returns
     -------
@@ -236,9 +241,10 @@ def drive(
     export = export if export is not None else ExportOptions()
     out = Path(out_dir) if out_dir is not None else None
     check_exports(export, config, out)
+    rover_cfg = RoverConfig.load(rover) if isinstance(rover, str) else rover
     with scene_dir(scene, out) as scene_path:
         sim, path = prepare_drive(scene_path, config, route=_route(route),
-                                  waypoints_xy_m=waypoints, options=options)
+                                  waypoints_xy_m=waypoints, options=options, rover=rover_cfg)
         write_route(out, sim, path, options)
         ctrl, heard = started(controller, sim, path)
         with jpeg_cache(out, export, config) as cache:

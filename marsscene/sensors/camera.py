@@ -97,7 +97,7 @@ class MastCamera:
         self.data = mujoco.MjData(self.model)
         self.world.update(self.model, tuple(sim.pose()[0][:2]), _forward_xy(sim), force=True)
         name = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, n)  # noqa: E731
-        self.camera_id = name("rover/navcam")
+        self.camera_id = name(sim.prefix + "navcam")
         self.stereo_ids = (name("cam_left"), name("cam_right")) if cam.stereo else None
         self.sun_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_LIGHT, "sun")
         m = self.model
@@ -198,7 +198,7 @@ class MastCamera:
         vis.map.fogend = float(min(vis_m, 1e9) / extent)
         vis.rgba.fog = [*np.clip(1.2 * sky, 0, 1).tolist(), 1.0]
         if cam.stereo:
-            body = spec.body("rover/base_link")
+            body = spec.body(sim.prefix + "base_link")
             pos = np.asarray(sim.model.cam_pos[sim.camera_id], dtype=np.float64)
             quat = np.asarray(sim.model.cam_quat[sim.camera_id], dtype=np.float64)
             fovy = float(sim.model.cam_fovy[sim.camera_id])

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 
 from marsscene._validate import check_range, dataclass_from_mapping
 from marsscene.errors import ConfigError, RuntimeSimError
-from marsscene.rover.config import RunConfig
+from marsscene.rover.config import RoverConfig, RunConfig
 from marsscene.rover.spawn import SETTLE_S
 from marsscene.sim.corridor import CORRIDOR_M
 from marsscene.sim.pursuit import PursuitConfig
@@ -103,6 +103,7 @@ def prepare_drive(
     route: Route | None = None,
     waypoints_xy_m: ArrayLike | None = None,
     options: DriveOptions | None = None,
+    rover: RoverConfig | None = None,
 ) -> tuple[Any, Route | None]:
     """Load a scene for a drive and place the rover at its start.
 
@@ -117,6 +118,8 @@ def prepare_drive(
         avoiding slopes above ``options.max_slope_deg`` and rocks is authored. With neither,
         the rover starts at ``options.start_xy_m``.
     options : DriveOptions, optional
+    rover : RoverConfig, optional
+        The rover type (default: the Perseverance-class :class:`RoverConfig`).
 
     Returns
     -------
@@ -135,7 +138,7 @@ def prepare_drive(
         world = load_world(scene_dir)
         route = author_route(np.asarray(waypoints_xy_m, dtype=np.float64), world.heightfield,
                              max_slope_deg=opt.max_slope_deg, obstacles=world.obstacles)
-    sim = RoverSim(scene_dir, run=run, settle_s=0.0,  # only the corridor's rocks with a route
+    sim = RoverSim(scene_dir, rover=rover, run=run, settle_s=0.0,  # the corridor's rocks only
                    contact_corridor_xy_m=None if route is None else route.xy_m,
                    contact_corridor_m=_corridor_m(opt, run))
     sim.settle_s = opt.settle_s

@@ -211,28 +211,40 @@ class DriveSession:
         (nothing more is due), True at the next control tick (call :meth:`observe`).
 
         ``progress(t_s)`` is called at each whole simulated second (the logs are flushed)."""
-        sim, periods = self.sim, self.periods
         while True:
-            k, t = self.k, self.k * sim.dt_physics_s
-            if k % periods["imu"] == 0:
-                self._sample_imu(t)
-            if "lidar" in periods and k % periods["lidar"] == 0:
-                self._start_scan(t)
-            if self.renderer is not None and not self.at_observe and self._camera_due(k):
-                self._frame_at(t)
-            if t >= self._next_report:
-                self.writer.flush()
-                if progress is not None:
-                    progress(t)
-                self._next_report += 1.0
-            self.t_s = t
-            sim.advance(self.tick)
-            self.k += self.tick
-            if self.k > steps_limit:
+            self.sample_due(progress)
+            self.sim.advance(self.tick)
+            if not self.stepped(self.tick, steps_limit):
                 return False
-            if self.k % periods["control"] == 0:
+            if self.control_due():
                 return True
 
+    def sample_due(self, progress: Callable[[float], None] | None = None) -> None:
+        """Sample the sensors due at this physics step (one tick of :meth:`advance`, for a
+        loop that steps the physics itself: a team's)."""
+        periods, k = self.periods, self.k
+        t = k * self.sim.dt_physics_s
+        if k % periods["imu"] == 0:
+            self._sample_imu(t)
+        if "lidar" in periods and k % periods["lidar"] == 0:
+            self._start_scan(t)
+        if self.renderer is not None and not self.at_observe and self._camera_due(k):
+            self._frame_at(t)
+        if t >= self._next_report:
+            self.writer.flush()
+            if progress is not None:
+                progress(t)
+            self._next_report += 1.0
+        self.t_s = t
+
+    def stepped(self, nstep: int, steps_limit: float = math.inf) -> bool:
+        """The physics went ``nstep`` steps on; False once past ``steps_limit``."""
+        self.k += nstep
+        return self.k <= steps_limit
+
+    def control_due(self) -> bool:
+        """This physics step is a control tick (:meth:`observe` and :meth:`act` are due)."""
+        return self.k % self.periods["control"] == 0
 
     # ---- sensors ---------------------------------------------------------------------------
     def _sample_imu(self, t: float) -> None:

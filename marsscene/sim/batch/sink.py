@@ -234,7 +234,8 @@ class SinkPool:
     def __init__(self, sinks: list[DriveSink], workers: int, depth: int = 8) -> None:
         self.sinks = sinks
         k = max(1, min(int(workers), len(sinks)))
-        self._queues: list[queue.Queue[Tick | Block | None]] = [queue.Queue(depth) for _ in range(k)]
+        self._queues: list[queue.Queue[Tick | Block | None]] = [
+            queue.Queue(depth) for _ in range(k)]
         self._errors: list[BaseException] = []
         self._threads = [threading.Thread(target=self._work, args=(j,), daemon=True,
                                           name=f"marsscene-batch-writer-{j}") for j in range(k)]
