@@ -15,13 +15,14 @@ Intensity is ``|cos(incidence)| * exp(-2 alpha r)``: dust attenuates intensity, 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.rover.lidar import LidarConfig, LidarSpec
+from marsscene.sensors.lidar_boxes import Boxes, ray_boxes
 from marsscene.sensors.raycast import TerrainCaster, embree_available
 from marsscene.sensors.rock_mesh import static_geom_mesh
 from marsscene.terrain.heightfield import Heightfield
@@ -169,11 +170,15 @@ class Lidar:
         return self.prepare(model, data, site_id, terrain, twist=twist)()
 
     def prepare(self, model: Any, data: Any, site_id: int, terrain: Heightfield | None = None,
-                *, twist: NDArray[np.float64] | None = None
+                *, twist: NDArray[np.float64] | None = None,
+                boxes: Sequence[Boxes] | None = None
                 ) -> Callable[[], dict[str, NDArray[Any]]]:
         """:meth:`scan` in two steps: read the state now, cast when the returned function is
         called. With Embree the call touches no MuJoCo data, so it may run on another thread
-        while the simulation advances (call the functions in order: the noise draws are)."""
+        while the simulation advances (call the functions in order: the noise draws are).
+
+        ``boxes`` are moving obstacles cast besides the scene: sets of boxes (the other
+        robots of a team, :func:`~marsscene.sensors.lidar_boxes.robot_boxes` each, read now)."""
         rot = np.asarray(data.site_xmat[site_id], dtype=np.float64).reshape(3, 3).copy()
         origin = np.asarray(data.site_xpos[site_id], dtype=np.float64).copy()
         twist = None if twist is None else np.asarray(twist, dtype=np.float64).copy()
@@ -182,16 +187,38 @@ class Lidar:
 
             def cast() -> dict[str, NDArray[Any]]:
                 dirs = self._world_dirs32(rot, twist)
-                idx, dist, normals = caster.cast_hits(self._origins32(origin, twist), dirs,
-                                                      self.spec.range_m)
+                origins = self._origins32(origin, twist)
+                idx, dist, normals = caster.cast_hits(origins, dirs, self.spec.range_m)
+                if boxes is not None:
+                    full, nrm = np.full(len(dirs), np.inf), np.zeros((len(dirs), 3))
+                    full[idx], nrm[idx] = dist, normals
+                    full, nrm = self._nearer_boxes(full, nrm, origins, dirs, boxes)
+                    idx = self._in_range(full)
+                    dist, normals = full[idx], nrm[idx]
                 return self._returns(idx, dist, normals, dirs[idx])
 
             return cast
         origins, dirs = self._world_rays(rot, origin, twist)
         dist, normals = self._mujoco_rays(model, data, origin, origins, dirs, terrain)
-        rmin, rmax = self.spec.range_m
-        idx = np.flatnonzero(np.isfinite(dist) & (dist >= rmin) & (dist <= rmax))
+        if boxes is not None:
+            dist, normals = self._nearer_boxes(dist, normals, origin if origins is None
+                                               else origins, dirs, boxes)
+        idx = self._in_range(dist)
         return lambda: self._returns(idx, dist[idx], normals[idx], dirs[idx])
+
+    def _in_range(self, dist: NDArray[np.float64]) -> NDArray[np.intp]:
+        rmin, rmax = self.spec.range_m
+        return np.flatnonzero(np.isfinite(dist) & (dist >= rmin) & (dist <= rmax))
+
+    def _nearer_boxes(self, dist: NDArray[np.float64], normals: NDArray[np.float64],
+                      origins: Any, dirs: Any, boxes: Sequence[Boxes]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``dist`` and ``normals`` of every ray, where a box is nearer: the box's."""
+        b_dist, b_normal = ray_boxes(origins, dirs, boxes, self.spec.range_m[1])
+        closer = b_dist < dist
+        dist = np.where(closer, b_dist, dist)
+        normals = np.where(closer[:, None], b_normal, normals)
+        return dist, normals
 
     def _origins32(self, origin: NDArray[np.float64], twist: NDArray[np.float64] | None
                    ) -> NDArray[np.float32]:

@@ -262,8 +262,10 @@ class DriveSession:
         (the previous scan is collected first, so scans are written in order)."""
         assert self.lidar is not None
         sim = self.sim
+        others = getattr(sim, "other_robots", None)  # a team's: the LiDAR sees them
         cast = self.lidar.prepare(sim.model, sim.data, sim.lidar_site, sim.heightfield,
-                                  twist=sim.site_twist(sim.lidar_site))
+                                  twist=sim.site_twist(sim.lidar_site),
+                                  boxes=None if others is None else others())
         self.collect_scan()
         if self._lidar_pool is None:
             self._lidar_pool = ThreadPoolExecutor(1, thread_name_prefix="marsscene-lidar")

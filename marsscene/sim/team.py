@@ -10,7 +10,8 @@ a team member as they drive a lone rover.
 Rovers of a team touch each other: each robot's collision geoms carry a contact bit of their
 own (``contype`` bit ``2 + i``) that every other robot's geoms accept (``conaffinity``), so
 robot i meets robot j but never itself; the terrain and rocks collide with all as with one
-rover. The mast cameras render the whole model, other robots included.
+rover. The mast cameras render the whole model, other robots included, and each robot's LiDAR
+casts against the other robots' collision geoms too (:mod:`marsscene.sensors.lidar_boxes`).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import numpy as np
 from marsscene.errors import ConfigError, RuntimeSimError
 from marsscene.rover.config import CameraConfig, RoverConfig, RunConfig
 from marsscene.rover.spawn import SETTLE_S, spawn_pose
+from marsscene.sensors.lidar_boxes import robot_boxes
 from marsscene.sim.corridor import CORRIDOR_M
 from marsscene.sim.rover_model import rover_mjcf
 from marsscene.sim.rover_sim import load_scene_spec
@@ -201,6 +203,19 @@ class TeamMember(RoverView):
         self.substeps = round(1.0 / (self.run.control_hz * self.dt_physics_s))
         self._ids()
         self.wheel_soil = None if self.soil_map is None else WheelSoil.of(self, self.soil_map)
+        m = self.model
+        names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in m.geom_bodyid]
+        self._others = [  # each other robot's collision geoms
+            np.flatnonzero([(m.geom_contype[g] != 0 and names[g].startswith(f"{p.name}/"))
+                            for g in range(m.ngeom)])
+            for p in team.placements if p.name != placement.name]
+
+    def other_robots(self) -> Any:
+        """The collision geoms of every other robot, as boxes at the current state (what this
+        robot's LiDAR casts against besides the scene; None alone)."""
+        if not self._others:
+            return None
+        return [robot_boxes(self.model, self.data, geoms) for geoms in self._others]
 
     def reset_soil(self) -> None:
         if self.wheel_soil is not None:

@@ -140,3 +140,25 @@ def test_robot_names_and_counts_are_checked():
         ms.Robot(name="rover/1")
     with pytest.raises(ConfigError, match="at least one robot"):
         ms.drive_team("nowhere", [])
+
+
+def test_a_lidar_sees_the_other_rover(flat_scene: Path):
+    from marsscene.sensors.lidar import Lidar
+    from marsscene.sim.team import Placement, TeamSim
+
+    run = ms.RunConfig(lidar=ms.LidarConfig(model="vlp16"))
+    alone = TeamSim(flat_scene, [Placement("a", RoverConfig(), run, (-4.0, 0.0))])
+    pair = TeamSim(flat_scene, [Placement("a", RoverConfig(), run, (-4.0, 0.0)),
+                                Placement("b", RoverConfig(), run, (2.0, 0.0))])
+    above = []
+    for team in (alone, pair):
+        a = team.members[0]
+        scan = Lidar(run.lidar, rng=np.random.default_rng(0)).prepare(a.model, a.data, a.lidar_site, a.heightfield,
+                                        boxes=a.other_robots())()
+        rot = a.data.site_xmat[a.lidar_site].reshape(3, 3)
+        world = scan["xyz_m"] @ rot.T + a.data.site_xpos[a.lidar_site]
+        above.append(world[world[:, 2] > 0.3])  # the flat ground is z = 0
+    assert alone.members[0].other_robots() is None and len(above[0]) == 0
+    near_x = above[1][:, 0].min()  # rover b's rear, about 1.5 m behind its centre at x = 2
+    assert len(above[1]) > 50 and 0.0 < near_x < 1.2
+    assert np.abs(above[1][:, 1]).max() < 1.6  # within b's width
