@@ -153,8 +153,9 @@ def test_a_lidar_sees_the_other_rover(flat_scene: Path):
     above = []
     for team in (alone, pair):
         a = team.members[0]
-        scan = Lidar(run.lidar, rng=np.random.default_rng(0)).prepare(a.model, a.data, a.lidar_site, a.heightfield,
-                                        boxes=a.other_robots())()
+        lidar = Lidar(run.lidar, rng=np.random.default_rng(0))
+        scan = lidar.prepare(a.model, a.data, a.lidar_site, a.heightfield,
+                             boxes=a.other_robots())()
         rot = a.data.site_xmat[a.lidar_site].reshape(3, 3)
         world = scan["xyz_m"] @ rot.T + a.data.site_xpos[a.lidar_site]
         above.append(world[world[:, 2] > 0.3])  # the flat ground is z = 0
