@@ -1,10 +1,11 @@
-"""Regenerate docs/img/batch_camera_cpu_gpu.png: one frame from the CPU camera (MastCamera,
-MuJoCo's OpenGL renderer) and the batch camera (BatchCamera, Warp), same world and pose; RGB
-above, depth below (0-20 m, black: sky).
+"""Regenerate a figure of one frame from the CPU camera (MastCamera, MuJoCo's OpenGL renderer)
+and the batch camera (BatchCamera, Warp: the scene's terrain, MJCF rocks, catalogue rocks and
+placed assets), same world and pose; RGB above, depth below (0-20 m, black: sky).
 
-Usage: ``MUJOCO_GL=egl python docs/batch_camera_figure.py SCENE_DIR`` (a scene with MJCF rocks,
-e.g. a ``WorldSampler(base="rocks")`` world). Runs on Warp's CPU device; prints the frame's
-statistics (depth median difference, mean sRGB of terrain and sky).
+Usage: ``MUJOCO_GL=egl python docs/batch_camera_figure.py SCENE_DIR [X Y [NAME]]`` (the rover's
+start, default -5 1; NAME default ``batch_camera_cpu_gpu``: ``docs/img/NAME.png``), e.g. a
+``WorldSampler(base="rocks")`` world. Runs on Warp's CPU device; prints the frame's statistics
+(depth median difference, mean sRGB of terrain and sky).
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ import numpy as np
 import warp as wp
 from PIL import Image, ImageDraw
 
-from marsscene.env.batch import WorldBatch
 from marsscene.rover.config import CameraConfig, RunConfig
 from marsscene.sensors.batch import BatchCamera
 from marsscene.sensors.batch.rgbd import scene_lights
@@ -30,15 +30,19 @@ from marsscene.sim.rover_sim import RoverSim
 CAM = CameraConfig(width_px=320, height_px=240, texture_px=1024)
 
 
-def main(scene: str, start_xy_m: tuple[float, float] = (-5.0, 1.0)) -> None:
+def main(scene: str, start_xy_m: tuple[float, float] = (-5.0, 1.0),
+         name: str = "batch_camera_cpu_gpu") -> None:
+    from marsscene.sim.batch.setup import scene_camera_world
+
     folder = Path(scene)
     sim = RoverSim(folder, run=RunConfig(camera=CAM), start_xy_m=start_xy_m, settle_s=0.3)
     renderer = sim.make_renderer()
     rgb, depth = sim.render(renderer)
     renderer.close()
     cid = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_CAMERA, "rover/navcam")
-    cam = BatchCamera(WorldBatch.build(folder, pool=1), 1, config=CAM,
-                      lighting=scene_lights(CAM, folder), seeds=[scene_seed(folder)],
+    batch, catalogue, assets = scene_camera_world(folder)
+    cam = BatchCamera(batch, 1, config=CAM, lighting=scene_lights(CAM, folder),
+                      seeds=[scene_seed(folder)], catalogue=catalogue, assets=assets,
                       device="cpu")
     pos = wp.array(sim.data.cam_xpos[cid][None, None].astype(np.float32), dtype=wp.vec3,
                    device="cpu")
@@ -62,10 +66,12 @@ def main(scene: str, start_xy_m: tuple[float, float] = (-5.0, 1.0)) -> None:
     draw = ImageDraw.Draw(img)
     for x, label in ((8, "CPU camera (MuJoCo OpenGL)"), (328, "BatchCamera (Warp)")):
         draw.text((x, 8), label, fill=(255, 255, 255))
-    out = Path(__file__).parent / "img" / "batch_camera_cpu_gpu.png"
+    out = Path(__file__).parent / "img" / f"{name}.png"
     img.save(out, optimize=True)
     sys.stdout.write(f"{out}\n")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    args = sys.argv[1:]
+    main(args[0], (float(args[1]), float(args[2])) if len(args) >= 3 else (-5.0, 1.0),
+         *(args[3:4]))

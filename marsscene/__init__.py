@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     from marsscene.runtime.api import DriveRun as DriveRun
     from marsscene.runtime.api import drive as drive
     from marsscene.runtime.team import Robot as Robot
+    from marsscene.runtime.team import Scout as Scout
     from marsscene.runtime.team import TeamRun as TeamRun
     from marsscene.runtime.team import drive_team as drive_team
     from marsscene.sim.control import Observation as Observation
@@ -53,6 +54,7 @@ logging.getLogger("marsscene").addHandler(logging.NullHandler())
 
 __all__ = [
     "BagOptions",
+    "BatchDrive",
     "CameraConfig",
     "DriveOptions",
     "DriveRun",
@@ -65,6 +67,7 @@ __all__ = [
     "RunConfig",
     "Scene",
     "SceneConfig",
+    "Scout",
     "TeamRun",
     "__version__",
     "build_scene",
@@ -86,7 +89,8 @@ _LAZY = {
     "Observation": "marsscene.sim.control",
     "DriveOptions": "marsscene.sim.mission",
     "drive_batch": "marsscene.sim.batch.api",
-    **dict.fromkeys(("Robot", "TeamRun", "drive_team"), "marsscene.runtime.team"),
+    "BatchDrive": "marsscene.sim.batch.spec",
+    **dict.fromkeys(("Robot", "Scout", "TeamRun", "drive_team"), "marsscene.runtime.team"),
 }
 
 __getattr__ = lazy_attributes(__name__, _LAZY)

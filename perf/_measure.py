@@ -4,7 +4,9 @@ process (clean peak RSS), and a paper-spec scene built once into a temporary fol
 from __future__ import annotations
 
 import multiprocessing as mp
+import os
 import resource
+import subprocess
 import tempfile
 import time
 from collections.abc import Callable
@@ -39,6 +41,22 @@ def measure(fn: Callable[[], Any]) -> tuple[float, float, Any]:
     if result[0] == "error":
         raise RuntimeError(f"{getattr(fn, '__name__', fn)} failed in its process: {result[1]}")
     return result
+
+
+def marsscene_build(args: list[str], out: Path) -> tuple[float, float, int]:
+    """``marsscene build ARGS --seed 7 --out OUT`` niced in a fresh process: wall s, peak MB
+    (``os.wait4``), exit status (its last stderr line printed when it fails)."""
+    cmd = ["nice", "-n", "10", "marsscene", "build", *args, "--seed", "7", "--out", str(out)]
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    wall = time.perf_counter() - t0
+    if proc.returncode:
+        print("   " + err.strip().splitlines()[-1] if err.strip() else "   (no message)")
+    return wall, usage.ru_maxrss / 1024.0, proc.returncode
 
 
 def paper_scene(name: str, seed: int = 1) -> tuple[Path, bool]:

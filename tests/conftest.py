@@ -111,6 +111,7 @@ SLOW_TESTS = {
     "tests/assets/test_assets.py::test_rover_route_goes_around_the_habitat": "a drive",
     "tests/sensors/test_camera_rock_shadow.py": "renders against an exact shadow",
     "tests/sensors/test_camera_low_sun.py": "low-sun renders",
+    "tests/sensors/test_offscreen_geoms.py": "renders",
     "tests/sensors/test_camera_rover_shadow.py": "renders of the rover's shadow",
     "tests/sensors/test_camera.py::test_image_statistics_tracking_and_rgbd_vo":
         "a camera drive and visual odometry",

@@ -35,9 +35,13 @@ def benchmark() -> None:
               help="A quick check: every automatic route shortened to this length (m).")
 @click.option("--scene", "scenes", multiple=True,
               help="Only this scene of the spec (repeat for several).")
+@click.option("--device", default=None, metavar="DEVICE",
+              help="Drive every cell at once on MuJoCo Warp on this Warp device (cuda, "
+              "cuda:0, cpu; needs marsscene[gpu]), then run the methods on the CPU cores "
+              "(docs/gpu_drives.md).")
 def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | None,
          serial: bool, resume: bool, method_workers: int, method_processes: int,
-         length_m: float | None, scenes: tuple[str, ...]) -> None:
+         length_m: float | None, scenes: tuple[str, ...], device: str | None) -> None:
     """Run the SLAM benchmark SPEC_TOML into OUT.
 
     Every cell (scene x tau x seed) is built, driven along its route with the camera (and, in
@@ -52,6 +56,7 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
       marsscene benchmark slam paper.toml --out /shared/bench --scheduler tcp://head:8786
       marsscene benchmark slam paper.toml --out bench/paper --resume
       marsscene benchmark slam paper.toml --out bench/p40 --length-m 40 --scene mars-base
+      marsscene benchmark slam paper.toml --out bench/gpu --device cuda
     """
     from marsscene.benchmark.slam.run import run_slam_benchmark, slam_cells
     from marsscene.benchmark.slam.spec import SlamSpec
@@ -73,10 +78,16 @@ def slam(spec_toml: Path, out_dir: Path, workers: int | None, scheduler: str | N
             spec = spec.shortened(length_m=length_m, scenes=scenes or None)
         n = len(slam_cells(spec))
         click.echo(f"benchmark slam: {n} cells x {len(spec.methods)} methods {where}", err=True)
+        if device is not None:  # before any folder is made: a spec the batch cannot drive
+            from marsscene.sim.batch.api import check_batch_config
+
+            check_batch_config(spec.run_config(lidar=True, camera=True))
+            click.echo(f"benchmark slam: every cell's drive at once on {device} (MuJoCo Warp) "
+                       "first, then the methods", err=True)
         res = run_slam_benchmark(spec, out_dir, workers=workers, scheduler=scheduler,
                                  serial=serial, resume=resume, progress=show,
                                  method_workers=method_workers,
-                                 method_processes=method_processes)
+                                 method_processes=method_processes, device=device)
     click.echo(f"methods: {res.count('ok')} ok, {res.count('lost')} lost, "
                f"{res.count('failed')} failed, {res.count('missing')} missing")
     for f in res.files:

@@ -33,8 +33,11 @@ __all__ = ["vpr", "vpr_eval"]
 @click.option("--workers", type=click.IntRange(1, 2), default=None,
               help="Drive the two traversals in this many processes at once (default: 2 on a "
               "machine with 2 or more cores; the same bytes either way).")
+@click.option("--device", default=None, metavar="DEVICE",
+              help="Drive both traversals at once on MuJoCo Warp on this Warp device (cuda, "
+              "cuda:1, cpu): the batch's physics and camera, a dataset keyed apart.")
 def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, resume: bool,
-        no_eval: bool, baseline: str, workers: int | None) -> None:
+        no_eval: bool, baseline: str, workers: int | None, device: str | None) -> None:
     """Generate the VPR dataset of PROTOCOL (`dust`, `day-low-sun`, `day-dim` or a spec TOML)
     into OUT, then score a classical baseline (vpr-eval): VLAD over RootSIFT, or
     patch-normalised thumbnails.
@@ -43,6 +46,7 @@ def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, r
     Examples:
       marsscene benchmark vpr dust --out vpr/dust
       marsscene benchmark vpr day-dim --out vpr/dim --length-m 60
+      marsscene benchmark vpr day-dim --out vpr/dim-gpu --device cuda
     Then any method: marsscene benchmark vpr-eval vpr/dust --descriptors my_descs/
     """
     from marsscene.benchmark.vpr.dataset import generate_vpr
@@ -66,11 +70,14 @@ def vpr(protocol: str, out_dir: Path, length_m: float | None, overwrite: bool, r
 
         if workers is None:
             workers = 2 if (os.cpu_count() or 1) >= 2 else 1
-        if workers > 1:
+        if device is not None:
+            click.echo(f"     vpr: driving the database and the queries traversals at once on "
+                       f"{device} (MuJoCo Warp)", err=True)
+        elif workers > 1:
             click.echo("     vpr: driving the database and the queries traversals in two "
                        "processes", err=True)
         doc = generate_vpr(spec, out_dir, overwrite=overwrite, resume=resume, workers=workers,
-                           progress=progress)
+                           device=device, progress=progress)
         for m in meters.values():
             m.close()
     t = doc["traversals"]

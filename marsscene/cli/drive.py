@@ -180,16 +180,20 @@ def drive(scene_dir: Path | None, device: str | None, batch_path: Path | None,
         return
     if scene_dir is None:
         raise click.UsageError("give SCENE_DIR (or --batch FILE)")
+    export_of = lambda: ExportOptions(  # noqa: E731
+        bag=bag_options_of(bag_values) if write_bag else None, datasets=datasets,
+        overwrite=overwrite, dataset_images=dataset_images, keep_lidar_files=keep_lidar_files)
     if team_path is not None:
-        if route_path or waypoints_path or controller_ref or write_bag or datasets or rover_type:
+        if route_path or waypoints_path or controller_ref or rover_type:
             raise click.UsageError("--team lists each robot's rover and route: no --route, "
-                                   "--waypoints, --controller, --rover, --bag or --dataset")
+                                   "--waypoints, --controller or --rover")
         from marsscene.cli.drive_team import drive_team_cli
 
         with user_errors(), sigterm_interrupts():
             drive_team_cli(scene_dir, team_path, seconds, out_dir, seed, run_config(opts),
                            DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
-                                        pursuit=PursuitConfig(lookahead_m=lookahead)))
+                                        pursuit=PursuitConfig(lookahead_m=lookahead)),
+                           export_of())
         return
     if route_path is None and waypoints_path is None and controller_ref is None:
         raise click.UsageError("give --route or --waypoints (or a --controller)")
@@ -197,10 +201,7 @@ def drive(scene_dir: Path | None, device: str | None, batch_path: Path | None,
         run = run_config(opts)
         options = DriveOptions(max_slope_deg=max_slope, corridor_m=corridor,
                                pursuit=PursuitConfig(lookahead_m=lookahead))
-        export = ExportOptions(bag=bag_options_of(bag_values) if write_bag else None,
-                               datasets=datasets, overwrite=overwrite,
-                               dataset_images=dataset_images,
-                               keep_lidar_files=keep_lidar_files)
+        export = export_of()
         waypoints = _read_waypoints(waypoints_path) if waypoints_path else None
         controller = _load_controller(controller_ref) if controller_ref else None
         if write_rover_xml:

@@ -94,15 +94,19 @@ _ros_options = compose(
               "--out).")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Seed of the sensor noise.")
+@click.option("--team", "team_path", type=click.Path(exists=True, dir_okay=False,
+              path_type=Path), default=None, help="Serve a team (TOML [[robots]] tables: "
+              "name, rover, start_xy_m, run), each robot under /NAME (docs/team.md).")
 def serve(scene_dir: Path, start: tuple[float, float] | None, yaw_deg: float,
           seconds: float | None, out_dir: Path | None, record: bool, seed: int,
-          **opts: Any) -> None:
+          team_path: Path | None, **opts: Any) -> None:
     """Run the rover live: sensors published, /cmd_vel obeyed, sim time on /clock.
 
     \b
     Examples:
       marsscene serve scenes/demo --lidar --camera --localhost
       marsscene serve scenes/demo --pace max --seconds 60 --out runs/live --record
+      marsscene serve scenes/demo --team examples/team_serve.toml --localhost
     Then, on a machine with ROS 2: ros2 topic list; rviz2 (docs/ros2_live.md).
     """
     import marsscene as ms
@@ -124,6 +128,12 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw_deg: float,
             stop_at_goal=opts["stop_at_goal"], distro=opts["ros_distro"], map_tf=opts["map_tf"])
         options = ms.DriveOptions(start_xy_m=start, start_yaw_rad=yaw)
         where = "127.0.0.1 only" if ros.localhost_only else "the network"
+        if team_path is not None:
+            if start is not None or yaw_deg:
+                raise click.UsageError("--team gives each robot's start: no --start-xy or "
+                                       "--yaw-deg")
+            _serve_team(scene_dir, team_path, ros, run, seconds, out_dir, record, seed, where)
+            return
         meter = _Meter()
         with sigterm_interrupts(), _interrupted_before_start():
             res = serve_live(scene_dir, ros=ros, config=run, options=options, seconds=seconds,
@@ -141,6 +151,41 @@ def serve(scene_dir: Path, start: tuple[float, float] | None, yaw_deg: float,
         click.echo(f"     bag: {res.bag.path}")
     if out_dir is not None:
         click.echo(f"    logs: {out_dir}")
+
+
+def _serve_team(scene_dir: Path, team_path: Path, ros: Ros2Options, run: Any,
+                seconds: float | None, out_dir: Path | None, record: bool, seed: int,
+                where: str) -> None:
+    """``serve --team``: every robot of the file under its own namespace."""
+    import marsscene as ms
+    from marsscene.ros2.live_team import serve_team
+    from marsscene.runtime.robot import read_team_file
+
+    if record and out_dir is None:
+        raise click.UsageError("--record needs --out (each robot's bag is OUT/NAME/bag)")
+    robots, settings = read_team_file(team_path)
+    if settings.get("scouts"):
+        raise click.UsageError(f"{team_path}: serve drives rovers only; fly the [[scouts]] "
+                               "with `marsscene drive --team` or `marsscene fly`")
+    seconds = seconds if seconds is not None else settings.get("seconds")
+    export = ms.ExportOptions(bag=ms.BagOptions()) if record else None
+
+    def ready(bridges: dict[str, Any]) -> None:
+        click.echo(f"marsscene: serving {len(bridges)} robots ("
+                   f"{', '.join('/' + n for n in bridges)}) on DDS domain {ros.domain} "
+                   f"({where}); Ctrl-C ends", err=True)
+
+    with sigterm_interrupts(), _interrupted_before_start():
+        res = serve_team(scene_dir, robots, ros=ros, config=run, seconds=seconds,
+                         out_dir=out_dir, export=export, seed=seed or settings.get("seed", 0),
+                         ready=ready)
+    for name, r in res.robots.items():
+        st = r.stats
+        click.echo(f"  {name}: {r.sim_s:.1f} sim s, {r.summary['path_length_m']:.2f} m, "
+                   f"{st['commands']} commands, {sum(st['messages'].values())} messages"
+                   + (f" -> {r.out_dir}" if r.out_dir is not None else ""))
+    click.echo(f"  served: {len(res.robots)} robots in {res.wall_s:.1f} s "
+               f"({res.realtime_factor:.2f}x real time)")
 
 
 @contextmanager

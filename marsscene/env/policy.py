@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from marsscene.errors import ConfigError
 
-__all__ = ["MLPPolicy", "policy_input"]
+__all__ = ["MLPPolicy", "elu", "mlp_forward", "policy_input"]
 
 
 def policy_input(obs: dict[str, Any]) -> Any:
@@ -43,6 +43,22 @@ def policy_input(obs: dict[str, Any]) -> Any:
     scan = obs["height_scan"]
     flat = xp.reshape(scan, (*scan.shape[:-2], scan.shape[-2] * scan.shape[-1]))
     return xp.concat([vec, xp.astype(flat, vec.dtype)], axis=-1)
+
+
+def elu(x: NDArray[np.float32]) -> NDArray[np.float32]:
+    """PyTorch's ``ELU`` (alpha 1): ``x`` where positive, ``exp(x) - 1`` elsewhere."""
+    return np.where(x > 0, x, np.expm1(np.minimum(x, 0))).astype(np.float32)
+
+
+def mlp_forward(x: NDArray[np.float32], weights: list[NDArray[np.float32]],
+                biases: list[NDArray[np.float32]]) -> NDArray[np.float32]:
+    """rsl-rl's ``MLP``: ``x`` (..., in) through linear layers with ELU between them and a
+    linear last layer; (..., out) float32."""
+    for i, (w, b) in enumerate(zip(weights, biases, strict=True)):
+        x = x @ w.T + b
+        if i < len(weights) - 1:
+            x = elu(x)
+    return np.asarray(x, dtype=np.float32)
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,11 +76,7 @@ class MLPPolicy:
     def __call__(self, obs: dict[str, Any]) -> NDArray[np.float32]:
         """The action(s) of observations (one rover's dict, or a batch's)."""
         x = (np.asarray(policy_input(obs), np.float32) - self.mean) / (self.std + self.eps)
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            x = x @ w.T + b
-            if i < len(self.weights) - 1:
-                x = np.where(x > 0, x, np.expm1(np.minimum(x, 0)))
-        return np.asarray(x, dtype=np.float32)
+        return mlp_forward(x, self.weights, self.biases)
 
     def observations(self) -> Any:
         """The :class:`~marsscene.env.observe.ObsConfig` it was trained on (noise-free, the
@@ -76,25 +88,16 @@ class MLPPolicy:
                          noise_profile="none")
 
     def save(self, path: str | Path) -> Path:
-        arrays: dict[str, Any] = {"mean": self.mean, "std": self.std, "eps": self.eps,
-                                  "scan": np.array([self.scan_size_m, self.scan_resolution_m])}
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            arrays[f"w{i}"], arrays[f"b{i}"] = w, b
-        with open(path, "wb") as f:
-            np.savez(f, **arrays)
-        return Path(path)
+        return save_policy_npz(path, self, {
+            "scan": np.array([self.scan_size_m, self.scan_resolution_m])})
 
     @classmethod
     def load(cls, path: str | Path) -> MLPPolicy:
-        try:
-            with np.load(Path(path)) as z:
-                n = sum(1 for k in z.files if k.startswith("w"))
-                return cls(weights=[z[f"w{i}"] for i in range(n)],
-                           biases=[z[f"b{i}"] for i in range(n)], mean=z["mean"], std=z["std"],
-                           eps=float(z["eps"]), scan_size_m=float(z["scan"][0]),
-                           scan_resolution_m=float(z["scan"][1]))
-        except (OSError, KeyError, ValueError) as err:
-            raise ConfigError(f"{path}: not a policy written by MLPPolicy.save ({err})") from None
+        def build(z: dict[str, Any], weights: list[Any], biases: list[Any]) -> MLPPolicy:
+            return cls(weights=weights, biases=biases, mean=z["mean"], std=z["std"],
+                       eps=float(z["eps"]), scan_size_m=float(z["scan"][0]),
+                       scan_resolution_m=float(z["scan"][1]))
+        return load_policy_npz(path, "MLPPolicy", build)
 
     @classmethod
     def from_rsl_rl(cls, actor: Any, scan: Any) -> MLPPolicy:
@@ -109,3 +112,26 @@ class MLPPolicy:
                    mean=state["obs_normalizer._mean"][0], std=state["obs_normalizer._std"][0],
                    eps=float(norm.eps), scan_size_m=scan.size_m,
                    scan_resolution_m=scan.resolution_m)
+
+
+def save_policy_npz(path: str | Path, policy: Any, extra: dict[str, Any]) -> Path:
+    """A policy's ``.npz``: its normaliser (``mean``, ``std``, ``eps``), its MLP's layers
+    (``w0``, ``b0``, ...) and ``extra`` arrays."""
+    arrays: dict[str, Any] = {"mean": policy.mean, "std": policy.std, "eps": policy.eps, **extra}
+    for i, (w, b) in enumerate(zip(policy.weights, policy.biases, strict=True)):
+        arrays[f"w{i}"], arrays[f"b{i}"] = w, b
+    with open(path, "wb") as f:
+        np.savez(f, **arrays)
+    return Path(path)
+
+
+def load_policy_npz(path: str | Path, owner: str, build: Any) -> Any:
+    """``build(arrays, weights, biases)`` from a policy ``.npz`` (:func:`save_policy_npz`),
+    or a one-line :class:`ConfigError` naming ``owner``'s ``save``."""
+    try:
+        with np.load(Path(path)) as f:
+            z = {k: f[k] for k in f.files}
+        n = sum(1 for k in z if k.startswith("w"))
+        return build(z, [z[f"w{i}"] for i in range(n)], [z[f"b{i}"] for i in range(n)])
+    except (OSError, KeyError, ValueError) as err:
+        raise ConfigError(f"{path}: not a policy written by {owner}.save ({err})") from None

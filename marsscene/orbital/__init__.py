@@ -4,7 +4,9 @@ through :mod:`marsscene.dem`).
 * :func:`orbital_map`: a scene's orbital DTM (and orthoimage): a DEM scene's input rasters over
   its footprint, or a procedural terrain through the HiRISE-like model of
   :mod:`marsscene.orbital.model` (1 m posts, a Gaussian PSF halving 3 m relief, 0.25 m noise,
-  rocks from 1 m); :func:`write_orbital_map` / :func:`read_orbital_map`: ``SCENE_DIR/orbital/``.
+  rocks from 1 m; the image's albedo shaded under the orbiter's 15:00 sun by
+  :mod:`marsscene.orbital.shading`); :func:`write_orbital_map` / :func:`read_orbital_map`:
+  ``SCENE_DIR/orbital/``.
 * :func:`match_dem` (``dem-correlation``): a rover's local elevation map
   (:func:`local_elevation_map` from LiDAR points, :func:`points_in_frame`) matched against the
   orbital DTM over position and heading.

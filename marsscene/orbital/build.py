@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from marsscene.errors import ConfigError
 from marsscene.orbital.grid import OrbitalMap, sample_bilinear
 from marsscene.orbital.model import OrbitalModel, apply_psf, correlated_noise
+from marsscene.orbital.shading import lambert_mu0
 from marsscene.rocks.table import RockTable
 from marsscene.scene import Scene
 from marsscene.seeding import stage_rng
@@ -54,10 +55,12 @@ def _posts(lo: float, hi: float, step: float) -> NDArray[np.float64]:
     return np.asarray(lo + step * np.arange(n), dtype=np.float64)
 
 
-def _image(hf: Heightfield, seed: int, model: OrbitalModel
+def _image(hf: Heightfield, surface_m: NDArray[np.float64], seed: int, model: OrbitalModel
            ) -> tuple[NDArray[np.float64], tuple[float, float]]:
     """The scene's albedo (HiRISE RED ~ the soil's red albedo times the seeded albedo field,
-    the camera's own: ``stage_rng(seed, "albedo")``) at pixel centres over the footprint."""
+    the camera's own: ``stage_rng(seed, "albedo")``) at pixel centres over the footprint, times
+    the shading of ``surface_m`` (the terrain on ``hf``'s posts, resolved rocks raised) under
+    the orbiter's sun (:mod:`marsscene.orbital.shading`), through the image's PSF."""
     from marsscene.terrain.albedo_field import albedo_field
     from marsscene.terrain.appearance import AppearanceModel
 
@@ -69,6 +72,10 @@ def _image(hf: Heightfield, seed: int, model: OrbitalModel
     field = albedo_field(rng=stage_rng(seed, "albedo"))
     red = AppearanceModel.default().soil_rgb[0]
     img = red * np.exp(field.log_gain(gx, gy).astype(np.float64))
+    if model.image_shading == "lambert" and min(img.shape) >= 2:
+        z_px = sample_bilinear(surface_m, hf.origin_xy_m, hf.cell_size_m, gx, gy)
+        del gx, gy
+        img *= lambert_mu0(z_px, px, model.image_sun_incidence_deg, model.image_sun_azimuth_deg)
     return apply_psf(img, px, model.image_psf_fwhm_m), (float(xs[0]), float(ys[0]))
 
 
@@ -77,11 +84,12 @@ def procedural_orbital_map(hf: Heightfield, rocks: RockTable | None, seed: int,
                            ) -> OrbitalMap:
     """A terrain seen from orbit: resolved rocks raised in, the DTM's PSF, resampled to
     ``model.dem_post_m`` posts (bilinear) from the footprint's south-west post, correlated noise;
-    and the albedo image through its PSF with its noise. Noise from ``stage_rng(seed,
+    and the albedo image, shaded by the same surface under the orbiter's sun
+    (``model.image_shading``), through its PSF with its noise. Noise from ``stage_rng(seed,
     "orbital")``: the DTM's draws first, then the image's (both drawn whatever the sigmas)."""
     m = model if model is not None else OrbitalModel()
-    z = apply_psf(raise_resolved_rocks(hf, rocks, m.rock_resolved_d_m), hf.cell_size_m,
-                  m.dem_psf_fwhm_m)
+    surface = raise_resolved_rocks(hf, rocks, m.rock_resolved_d_m)
+    z = apply_psf(surface, hf.cell_size_m, m.dem_psf_fwhm_m)
     x0, y0, x1, y1 = hf.bounds_xy_m
     xs, ys = _posts(x0, x1, m.dem_post_m), _posts(y0, y1, m.dem_post_m)
     if min(len(xs), len(ys)) < 2:
@@ -94,7 +102,7 @@ def procedural_orbital_map(hf: Heightfield, rocks: RockTable | None, seed: int,
                                  m.dem_noise_correlation_m, rng=rng)
     img = img0 = None
     if image:
-        img, img0 = _image(hf, seed, m)
+        img, img0 = _image(hf, surface, seed, m)
         img = img * (1.0 + m.image_noise_fraction * rng.standard_normal(img.shape))
     return OrbitalMap(dem.astype(np.float32), m.dem_post_m, (float(xs[0]), float(ys[0])),
                       "procedural", m, int(seed),

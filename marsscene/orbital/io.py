@@ -74,8 +74,10 @@ def read_orbital_map(scene_dir: str | os.PathLike[str]) -> OrbitalMap:
     if "ortho" in doc:
         image = read_dem(folder / _ORTHO).elevation_m[::-1]
         px, origin = float(doc["ortho"]["pixel_m"]), tuple(doc["ortho"]["origin_xy_m"])
-    model = OrbitalModel(**{k: v for k, v in (doc["model"] or {}).items()
-                            if k in OrbitalModel.__dataclass_fields__})
+    kw = {k: v for k, v in (doc["model"] or {}).items() if k in OrbitalModel.__dataclass_fields__}
+    if doc["model"] and "image_shading" not in kw:
+        kw["image_shading"] = "none"  # written before the image was shaded
+    model = OrbitalModel(**kw)
     proj = doc["origin_projected_xy_m"]
     return OrbitalMap(np.ascontiguousarray(dem, dtype=np.float32), float(doc["dem"]["cell_m"]),
                       tuple(doc["dem"]["origin_xy_m"]), doc["source"], model, int(doc["seed"]),

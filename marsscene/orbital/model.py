@@ -25,6 +25,11 @@ RED bin-2 products; 0.25 m at bin 1) with the same half-amplitude rule at 3 pixe
 al. 2007, JGR 112, E05S02: objects of ~3 pixels are resolved) and 1 % noise (signal-to-noise
 ratio of about 100 for typical HiRISE RED images, McEwen et al. 2007).
 
+The image is shaded by the terrain under the orbiter's sun before the PSF
+(:mod:`marsscene.orbital.shading`: Lambert's law, ``image_shading`` = "lambert", the sun at
+``image_sun_incidence_deg`` = 48 deg and ``image_sun_azimuth_deg`` = 252 deg, Jezero's at 15:00
+local solar time at the equinox; "none" leaves the albedo alone).
+
 Rocks: the orbiter sees only boulders of ``rock_resolved_d_m`` = 1 m and more (HiRISE counts
 start at ~1-1.5 m diameter, Golombek et al. 2008, JGR 113, E00A09); smaller rocks are absent
 from the orbital map. Rocks at or above the cut-off are raised into the terrain as half-
@@ -42,6 +47,7 @@ from numpy.typing import NDArray
 
 from marsscene._validate import plain
 from marsscene.errors import ConfigError
+from marsscene.orbital.shading import SHADING_LAWS
 
 __all__ = ["FWHM_PER_SIGMA", "OrbitalModel", "apply_psf", "correlated_noise",
            "fwhm_of_half_wavelength", "psf_gain"]
@@ -70,9 +76,26 @@ class OrbitalModel:
     """Std of the image's noise as a fraction of its mean (SNR ~100)."""
     rock_resolved_d_m: float = 1.0
     """Rocks of this diameter and larger appear in the orbital DTM (in m)."""
+    image_shading: str = "lambert"
+    """The image's shading law: ``"lambert"`` or ``"none"`` (the albedo alone)."""
+    image_sun_incidence_deg: float = 48.0
+    """The orbiter's sun: angle from the zenith (in deg, [0, 90))."""
+    image_sun_azimuth_deg: float = 252.0
+    """The orbiter's sun: azimuth clockwise from north (in deg, [0, 360))."""
 
     def __post_init__(self) -> None:
+        if self.image_shading not in SHADING_LAWS:
+            raise ConfigError(f"orbital image_shading = {plain(self.image_shading)!r}; use one "
+                              f"of {', '.join(SHADING_LAWS)}")
+        for name, hi in (("image_sun_incidence_deg", 90.0), ("image_sun_azimuth_deg", 360.0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (isinstance(value, int | float | np.number)
+                                               and 0.0 <= value < hi):
+                raise ConfigError(f"orbital {name} must be in [0, {hi:g}); got "
+                                  f"{plain(value)!r}")
         for name, value in asdict(self).items():
+            if name.startswith(("image_shading", "image_sun_")):
+                continue
             positive = name.endswith(("post_m", "pixel_m", "wavelength_m"))
             ok = np.isfinite(value) and (value > 0 if positive else value >= 0)
             if isinstance(value, bool) or not ok:

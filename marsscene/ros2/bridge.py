@@ -13,7 +13,8 @@ Before each control step the simulation-control services are served (:mod:`.sim_
 paused, the step waits there until one is asked for.
 
 Topics it subscribes to (besides ``cmd_vel`` and ``/rover/cmd_vel``), in the spirit of OmniLRS's
-robot topics:
+robot topics (a team robot's under ``/marsscene/NAME/``, its commands on ``/NAME/cmd_vel``:
+:class:`~marsscene.runs.export.topic_table.RosNames`):
 
 * ``/marsscene/reset`` (``std_msgs/Empty``): the rover back to its start pose, at rest;
 * ``/marsscene/teleport`` (``geometry_msgs/Pose``, map frame): ``base_link`` to ``x, y`` facing
@@ -69,9 +70,8 @@ class RateLimitedWarning:
 #: ``/clock`` again (a best-effort topic) meanwhile (wall seconds).
 _POLL_S, _POLL_IDLE_S, _IDLE_AFTER_S = 0.0005, 0.005, 0.1
 _CLOCK_AGAIN_S = 0.1
-_CONTROL_TOPICS = {"/marsscene/reset": "std_msgs/msg/Empty",
-                   "/marsscene/teleport": "geometry_msgs/msg/Pose",
-                   "/marsscene/goal": "geometry_msgs/msg/PoseStamped"}
+_CONTROL_TOPICS = {"reset": "std_msgs/msg/Empty", "teleport": "geometry_msgs/msg/Pose",
+                   "goal": "geometry_msgs/msg/PoseStamped"}
 
 
 class Bridge:
@@ -84,13 +84,19 @@ class Bridge:
     messages : SampleMessages
     opts : Ros2Options
     part : Participant
+    cmd_topics : tuple of str, optional
+        The command topics obeyed (default ``opts.cmd_vel_topics``; a team robot its own).
+    clock : bool
+        Publish ``/clock`` (one robot of a team does).
     """
 
     done = False
 
     def __init__(self, sim: Any, messages: SampleMessages, opts: Ros2Options,
-                 part: Participant) -> None:
+                 part: Participant, *, cmd_topics: tuple[str, ...] | None = None,
+                 clock: bool = True) -> None:
         self.sim, self.msgs, self.opts, self.part = sim, messages, opts, part
+        names = messages.names
         self.store = messages.b.store
         self.stats = SessionStats()
         self.bad_input = RateLimitedWarning()
@@ -100,16 +106,17 @@ class Bridge:
         self.writers: dict[str, RawWriter] = {  # the command is read here, not published
             t.name: part.writer(self.store, t.name, t.msgtype,
                                 sensor if t.qos == "sensor" else t.qos)
-            for t in messages.topics() if t.name != "/rover/cmd_vel"}
+            for t in messages.topics()
+            if t.name != names.topic("cmd_vel") and (clock or t.name != "/clock")}
         messages.wanted = self.wanted
         cmd_type = ("geometry_msgs/msg/TwistStamped" if opts.cmd_vel_stamped
                     else "geometry_msgs/msg/Twist")
         self.cmd_type = cmd_type
         self.cmd_readers = [part.reader(self.store, t, cmd_type, "default")
-                            for t in opts.cmd_vel_topics]
-        self.control_readers = {t: part.reader(self.store, t, mt, "default")
+                            for t in (cmd_topics or opts.cmd_vel_topics)]
+        self.control_readers = {t: part.reader(self.store, f"{names.control}/{t}", mt, "default")
                                 for t, mt in _CONTROL_TOPICS.items()}
-        self.goal_writer = part.writer(self.store, "/marsscene/goal_reached",
+        self.goal_writer = part.writer(self.store, f"{names.control}/goal_reached",
                                        "std_msgs/msg/Bool", "latched")
         self.start_pose = (sim.pose()[0][:2].copy(), sim.yaw_rad())
         self.cmd: tuple[float, float] = (0.0, 0.0)
@@ -267,15 +274,15 @@ class Bridge:
 
     def _read_control(self) -> None:
         readers = self.control_readers
-        if readers["/marsscene/reset"].take() and self._place(*self.start_pose):
+        if readers["reset"].take() and self._place(*self.start_pose):
             self.stats.resets += 1
-        for raw in readers["/marsscene/teleport"].take()[-1:]:
+        for raw in readers["teleport"].take()[-1:]:
             pose: Any = self.store.deserialize_cdr(raw, "geometry_msgs/msg/Pose")
             q = pose.orientation
             yaw = float(yaw_of_quat((q.w, q.x, q.y, q.z)))
             if self._place((pose.position.x, pose.position.y), yaw):
                 self.stats.teleports += 1
-        for raw in readers["/marsscene/goal"].take()[-1:]:
+        for raw in readers["goal"].take()[-1:]:
             goal: Any = self.store.deserialize_cdr(raw, "geometry_msgs/msg/PoseStamped")
             self.goal_xy = (float(goal.pose.position.x), float(goal.pose.position.y))
             self.stats.goal_reached_t_s = None

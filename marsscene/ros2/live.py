@@ -27,6 +27,7 @@ from marsscene.rover.config import RunConfig
 from marsscene.runs.export.bag_topics import ImageOptions
 from marsscene.runs.export.options import BagOptions, ExportOptions
 from marsscene.runs.export.sample_messages import SampleMessages
+from marsscene.runs.export.topic_table import ROVER, RosNames
 from marsscene.runtime.api import DriveRun, drive
 from marsscene.sim.control import OnStart
 from marsscene.sim.driver import DriveProgress
@@ -35,7 +36,7 @@ from marsscene.sim.mission import DriveOptions
 if TYPE_CHECKING:
     from marsscene.scene import Scene
 
-__all__ = ["serve"]
+__all__ = ["FOREVER_S", "sample_messages", "serve"]
 
 #: Sim-time limit of a session without ``seconds`` (it ends with Ctrl-C or at the goal).
 FOREVER_S = 1e9
@@ -148,9 +149,11 @@ def serve(
     return dataclasses.replace(run, stats=bridge.stats.as_dict(), wall_s=wall)
 
 
-def _bridge(sim: Any, config: RunConfig, ros: Ros2Options) -> Bridge:
+def sample_messages(sim: Any, config: RunConfig, ros: Ros2Options,
+                    names: RosNames = ROVER) -> SampleMessages:
+    """The live messages of the rover ``sim`` with ``config``'s sensors, under ``names``."""
     cam = config.camera
-    msgs = SampleMessages(
+    return SampleMessages(
         sim.rover, config.noise, imu_hz=config.imu_hz,
         lidar=config.lidar.spec.to_dict() if config.lidar is not None else None,
         camera=sim.camera_intrinsics() if cam is not None else None,
@@ -158,7 +161,11 @@ def _bridge(sim: Any, config: RunConfig, ros: Ros2Options) -> Bridge:
                 if cam is not None and cam.stereo else None),
         camera_depth=cam is not None and cam.depth,
         images=ImageOptions(images=ros.images), distro=ros.distro, map_tf=ros.map_tf,
-        soil=getattr(sim, "wheel_soil", None))
+        soil=getattr(sim, "wheel_soil", None), names=names)
+
+
+def _bridge(sim: Any, config: RunConfig, ros: Ros2Options) -> Bridge:
+    msgs = sample_messages(sim, config, ros)
     part = Participant(ros.domain, ros.localhost_only)
     try:
         return Bridge(sim, msgs, ros, part)

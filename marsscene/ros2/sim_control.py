@@ -1,17 +1,19 @@
 """Simulation control as ``simulation_interfaces`` has it: the services and the action of a
-served session (one rover, entity ``rover``, on a static world).
+served session (one rover, entity ``rover``, or a team, an entity per robot by its name, on a
+static world).
 
 States: playing (the session's ``pace``), paused (sim time stands still: no step is taken,
-``/clock`` says the same time again) and stopped (paused, the rover back at its start).
-A *step* is one pass of the simulation loop, one control step (``1 / control_hz`` s, the
-physics sub-steps within it): ``StepSimulation(n)`` and ``SimulateSteps`` take exactly n of
-them, with the command in force (the newest ``cmd_vel`` and its time-out), publish every
-sample they make and answer once the last one is out. A reset puts the rover back at its start
-at rest; sim time runs on (``SIMULATION_RESET_TIME`` is not offered: the clock never jumps).
-``SetEntityState`` teleports as ``/marsscene/teleport`` does: ``base_link`` at the request's
-x, y and heading (:mod:`.teleport`), z, roll and pitch from the ground, at rest. The
-``SimulateSteps`` action is :mod:`.sim_action`'s; :class:`SimControl` is its host (the state
-and the one run of steps :meth:`SimControl.gate` takes, for the service or the action).
+``/clock`` says the same time again) and stopped (paused, the rover back at its start). A
+*step* is one pass of the simulation loop (every robot of a team), one control step (``1 /
+control_hz`` s, the physics sub-steps within it): ``StepSimulation(n)`` and ``SimulateSteps``
+take exactly n of them, with the command in force (the newest ``cmd_vel`` and its time-out),
+publish every sample they make and answer once the last one is out. A reset puts the rover
+(every robot) back at its start at rest; sim time runs on (``SIMULATION_RESET_TIME`` is not
+offered: the clock never jumps). ``SetEntityState`` teleports as ``/marsscene/teleport`` does:
+``base_link`` at the request's x, y and heading (:mod:`.teleport`), z, roll and pitch from the
+ground, at rest. The ``SimulateSteps`` action is :mod:`.sim_action`'s; :class:`SimControl` is
+its host (the state and the one run of steps :meth:`SimControl.gate` takes, for the service or
+the action).
 """
 
 from __future__ import annotations
@@ -48,10 +50,14 @@ class SimControl:
     bridge : Bridge
     namespace : str
         In front of every service and the action (``/`` or e.g. ``/gzserver``).
+
+    ``entities`` maps each entity's name to the bridge of its robot (``{"rover": bridge}``; a
+    served team sets one per robot).
     """
 
     def __init__(self, bridge: Any, namespace: str = "/") -> None:
         self.b, self.store, self.T = bridge, bridge.store, bridge.store.types
+        self.entities: dict[str, Any] = {ROVER: bridge}
         register(self.store)
         ns = namespace.rstrip("/")
         self.state = PLAYING
@@ -121,8 +127,8 @@ class SimControl:
     def _get_simulator_features(self, req: Any, _r: Any) -> Any:
         feats = self.T[f"{_P}/msg/SimulatorFeatures"](
             features=np.array(FEATURES, dtype=np.uint16), spawn_formats=[],
-            custom_info="marsscene: one rover (entity 'rover') on a static world; a step is "
-                        "one control step; reset keeps sim time running")
+            custom_info=f"marsscene: {self._who()} on a static world; a step is one control "
+                        "step; reset keeps sim time running")
         return self._reply("GetSimulatorFeatures", features=feats)
 
     def _get_simulation_state(self, req: Any, _r: Any) -> Any:
@@ -135,7 +141,7 @@ class SimControl:
             res = self.result(_ALREADY, "already in that state")
         elif want == STOPPED:
             self.abort_run()
-            self.b._place(*self.b.start_pose)
+            self._all_to_start()
             self.state, res = STOPPED, self.result()
         elif want in (PLAYING, PAUSED):
             if want == PLAYING:
@@ -143,7 +149,9 @@ class SimControl:
             self.state, res = want, self.result()
         elif want == QUITTING:
             self.abort_run()
-            self.b.done, res = True, self.result()
+            for b in self.entities.values():
+                b.done = True
+            res = self.result()
         else:
             res = self.result(UNSUPPORTED, "no world loading: one static scene a session")
         return self._reply("SetSimulationState", result=res)
@@ -153,12 +161,25 @@ class SimControl:
         if scope not in (0, 255) and not scope & 6:  # SCOPE_TIME alone
             return self._reply("ResetSimulation", result=self.result(
                 UNSUPPORTED, "sim time is not reset (SIMULATION_RESET_TIME)"))
-        ok = self.b._place(*self.b.start_pose)
-        if ok:
-            self.b.stats.resets += 1
+        ok = self._all_to_start()
         return self._reply("ResetSimulation", result=self.result(
             OK if ok else FAILED, "" if scope & 2 and not scope & 1 else
-            "the rover is back at its start; sim time keeps running"))
+            f"{'the rover is' if len(self.entities) == 1 else 'every robot is'} back at its "
+            "start; sim time keeps running"))
+
+    def _all_to_start(self) -> bool:
+        """Every robot back at its start, at rest."""
+        ok = True
+        for b in self.entities.values():
+            placed = b._place(*b.start_pose)
+            b.stats.resets += int(placed)
+            ok = ok and placed
+        return ok
+
+    def _who(self) -> str:
+        names = list(self.entities)
+        return ("one rover (entity 'rover')" if names == [ROVER] else
+                f"a team of {len(names)} robots (entities {', '.join(map(repr, names))})")
 
     def _step_simulation(self, req: Any, reply: Any) -> Any:
         if self.state != PAUSED or self.run is not None:
@@ -187,28 +208,40 @@ class SimControl:
             return self._reply("GetEntities", result=self.result(
                 UNSUPPORTED, "no entity tags or bounds"), entities=[])
         try:
-            named = not f.filter or re.search(f.filter, ROVER) is not None
+            named = [n for n in self.entities if not f.filter or re.search(f.filter, n)]
         except re.error as err:
             return self._reply("GetEntities", result=self.result(FAILED, str(err)),
                                entities=[])
         cats = {int(c.category) for c in f.categories}
-        found = [ROVER] if named and (not cats or ROBOT in cats) else []
+        found = named if not cats or ROBOT in cats else []
         return self._reply("GetEntities", result=self.result(), entities=found)
 
     def _missing(self, srv: str, name: str, **extra: Any) -> Any:
-        return self._reply(srv, result=self.result(
-            NOT_FOUND, f"no entity {name!r}; the one entity is {ROVER!r}"), **extra)
+        names = list(self.entities)
+        known = (f"the one entity is {names[0]!r}" if len(names) == 1 else
+                 f"entities: {', '.join(map(repr, names))}")
+        return self._reply(srv, result=self.result(NOT_FOUND, f"no entity {name!r}; {known}"),
+                           **extra)
+
+    def _bridge(self, entity: str) -> Any:
+        """The bridge of the robot an entity name names (a leading ``/`` allowed), or None."""
+        return self.entities.get(entity.strip("/"))
 
     def _get_entity_info(self, req: Any, _r: Any) -> Any:
+        bridge = self._bridge(req.entity)
+        names = (bridge if bridge is not None else self.b).msgs.names
+        what = ("the served rover" if names.namespace == ROVER and not names.frame_prefix
+                else f"robot {names.namespace!r}")
         info = self.T[f"{_P}/msg/EntityInfo"](
             category=self.T[f"{_P}/msg/EntityCategory"](category=ROBOT),
-            description="the served rover (base_link; its topics under /rover)", tags=[])
-        if req.entity.strip("/") != ROVER:
+            description=f"{what} ({names.frame('base_link')}; its topics under "
+                        f"/{names.namespace})", tags=[])
+        if bridge is None:
             return self._missing("GetEntityInfo", req.entity, info=info)
         return self._reply("GetEntityInfo", result=self.result(), info=info)
 
-    def _entity_state(self) -> Any:
-        b, sim = self.b.msgs.b, self.b.sim
+    def _entity_state(self, bridge: Any) -> Any:
+        b, sim = self.b.msgs.b, bridge.sim
         xyz, q = sim.pose()
         ang: tuple[float, ...] = (0.0, 0.0, 0.0)
         lin: tuple[float, ...] = ang
@@ -230,12 +263,15 @@ class SimControl:
             acceleration=self.T["geometry_msgs/msg/Accel"](linear=zero, angular=zero))
 
     def _get_entity_state(self, req: Any, _r: Any) -> Any:
-        if req.entity.strip("/") != ROVER:
-            return self._missing("GetEntityState", req.entity, state=self._entity_state())
-        return self._reply("GetEntityState", result=self.result(), state=self._entity_state())
+        bridge = self._bridge(req.entity)
+        if bridge is None:
+            return self._missing("GetEntityState", req.entity, state=self._entity_state(self.b))
+        return self._reply("GetEntityState", result=self.result(),
+                           state=self._entity_state(bridge))
 
     def _set_entity_state(self, req: Any, _r: Any) -> Any:
-        if req.entity.strip("/") != ROVER:
+        bridge = self._bridge(req.entity)
+        if bridge is None:
             return self._missing("SetEntityState", req.entity)
         st = req.state
         tw = st.twist
@@ -255,12 +291,12 @@ class SimControl:
                 return self._reply("SetEntityState", result=self.result(
                     101, "a pose with a unit quaternion and finite x, y"))
             yaw = float(yaw_of_quat((q.w, q.x, q.y, q.z)))
-            if not self.b._place((st.pose.position.x, st.pose.position.y), yaw):
+            if not bridge._place((st.pose.position.x, st.pose.position.y), yaw):
                 return self._reply("SetEntityState", result=self.result(
                     101, "off the terrain"))
-            self.b.stats.teleports += 1
+            bridge.stats.teleports += 1
         elif req.set_twist:
-            self.b._place(self.b.sim.pose()[0][:2], self.b.sim.yaw_rad())
+            bridge._place(bridge.sim.pose()[0][:2], bridge.sim.yaw_rad())
         return self._reply("SetEntityState", result=self.result(
             OK, "z, roll and pitch from the ground" if req.set_pose else ""))
 

@@ -38,7 +38,7 @@ from marsscene.sim.route import Obstacles, Route, author_route
 
 if TYPE_CHECKING:
     from marsscene.runtime.api import DriveRun, ExportProgress, drive
-    from marsscene.runtime.team import Robot, TeamRun, drive_team
+    from marsscene.runtime.team import Robot, Scout, TeamRun, drive_team
     from marsscene.sim.driver import DriveInterrupted, DriveProgress, DriveResult, drive_sim
     from marsscene.sim.rover_sim import RoverSim
     from marsscene.sim.session import DriveSession, SessionOptions
@@ -70,6 +70,7 @@ __all__ = [
     "RoverSim",
     "RunConfig",
     "SceneWorld",
+    "Scout",
     "SessionOptions",
     "TeamRun",
     "Trajectory",
@@ -89,7 +90,7 @@ _LAZY = {
     "drive": "marsscene.runtime.api",
     "DriveRun": "marsscene.runtime.api",
     "ExportProgress": "marsscene.runtime.api",
-    **dict.fromkeys(("Robot", "TeamRun", "drive_team"), "marsscene.runtime.team"),
+    **dict.fromkeys(("Robot", "Scout", "TeamRun", "drive_team"), "marsscene.runtime.team"),
     "drive_sim": "marsscene.sim.driver",
     "DriveInterrupted": "marsscene.sim.driver",
     "DriveProgress": "marsscene.sim.driver",

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -20,17 +19,19 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
-from marsscene._validate import check_range, plain
 from marsscene.errors import ConfigError
-from marsscene.rover.config import RoverConfig, RunConfig
+from marsscene.rover.config import RunConfig
+from marsscene.runs.export.options import ExportOptions
+from marsscene.runs.export.topic_table import RosNames
 from marsscene.runs.logs import write_json
-from marsscene.runtime._steps import scene_dir, write_route
+from marsscene.runtime._steps import check_exports, export_run, scene_dir, started, write_route
 from marsscene.runtime.api import DriveRun, _route
+from marsscene.runtime.robot import Robot, Scout, read_team_file
 from marsscene.seeding import robot_rng
+from marsscene.sim.driver import DriveInterrupted, DriveResult
 from marsscene.sim.mission import DriveOptions, _check_inside, _corridor_m
-from marsscene.sim.route import Route, author_route, check_waypoints
+from marsscene.sim.route import Route, author_route
 from marsscene.sim.session import SessionOptions
 from marsscene.sim.team import Placement, TeamSim
 from marsscene.sim.team_drive import MemberDrive, TeamProgress, drive_team_sim
@@ -38,95 +39,7 @@ from marsscene.sim.team_drive import MemberDrive, TeamProgress, drive_team_sim
 if TYPE_CHECKING:
     from marsscene.scene import Scene
 
-__all__ = ["Robot", "TeamRun", "drive_team", "read_team_file"]
-
-_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,62}")  # a ROS 2 namespace token
-
-
-@dataclass(frozen=True, kw_only=True)
-class Robot:
-    """One robot of a team.
-
-    Parameters
-    ----------
-    name : str
-        Its name: the prefix of its bodies, its run folder, its ROS 2 namespace (letters,
-        digits, ``_``; a letter first).
-    rover : str or RoverConfig
-        Its rover type (:meth:`RoverConfig.load`: ``"perseverance"``, ``"mer"``, a file).
-    config : RunConfig, optional
-        Its sensors and noise (default: the team's ``config``).
-    waypoints, route, command, controller
-        What it does, as :func:`marsscene.drive` takes them (at most one of ``waypoints`` and
-        ``route``; ``command`` or ``controller`` instead of the route follower).
-    start_xy_m, start_yaw_rad
-        Start of a robot without a route (a route starts at its first point, facing along it).
-    seconds : float, optional
-        Its time limit (default: the team's ``seconds``, else until its goal).
-    """
-
-    name: str
-    rover: str | RoverConfig = "perseverance"
-    config: RunConfig | None = None
-    waypoints: ArrayLike | None = None
-    route: Route | str | os.PathLike[str] | None = None
-    command: tuple[float, float] | Callable[[float], tuple[float, float]] | None = None
-    controller: Callable[[Any], tuple[float, float]] | None = None
-    start_xy_m: tuple[float, float] | None = None
-    start_yaw_rad: float = 0.0
-    seconds: float | None = None
-    rover_type: str = field(init=False, default="perseverance")
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not _NAME.fullmatch(self.name):
-            raise ConfigError(f"robot name {plain(self.name)!r}: letters, digits and _, a "
-                              "letter first (it names the robot's folder and ROS namespace)")
-        if not isinstance(self.rover, RoverConfig):
-            object.__setattr__(self, "rover_type", str(self.rover))
-            object.__setattr__(self, "rover", RoverConfig.load(str(self.rover)))
-        elif self.rover != RoverConfig():
-            object.__setattr__(self, "rover_type", "custom")
-        if self.waypoints is not None and self.route is not None:
-            raise ConfigError(f"robot {self.name!r}: give waypoints or a route, not both")
-        if self.waypoints is not None:
-            object.__setattr__(self, "waypoints",
-                               check_waypoints(self.waypoints, f"robot {self.name!r} waypoints"))
-        check_range(f"robot {self.name!r} start_yaw_rad", self.start_yaw_rad)
-
-    @property
-    def rover_config(self) -> RoverConfig:
-        """Its rover type's configuration."""
-        assert isinstance(self.rover, RoverConfig)
-        return self.rover
-
-    @classmethod
-    def from_dict(cls, mapping: Mapping[str, Any], *, base: Path | None = None) -> Robot:
-        """From a ``[[robots]]`` table: ``name``, ``rover``, ``waypoints`` (``[[x, y], ...]``)
-        or ``route`` (a TUM file, relative to ``base``), ``command`` (``[v, omega]``),
-        ``start_xy_m``, ``start_yaw_rad``, ``seconds``, and ``run`` (a run config's tables:
-        ``[robots.run.lidar]``...)."""
-        doc = dict(mapping)
-        known = {"name", "rover", "waypoints", "route", "command", "start_xy_m",
-                 "start_yaw_rad", "seconds", "run"}
-        extra = sorted(set(doc) - known)
-        if extra:
-            raise ConfigError(f"[[robots]] {doc.get('name', '?')!r}: unknown keys {extra}; "
-                              f"known: {sorted(known)}")
-        if "name" not in doc:
-            raise ConfigError("[[robots]]: every robot needs a name")
-        run = doc.pop("run", None)
-        if run is not None:
-            doc["config"] = RunConfig.from_dict(run, source=f"robot {doc['name']!r} run")
-        if "route" in doc and base is not None:
-            doc["route"] = base / str(doc["route"])
-        if "command" in doc:
-            v = doc["command"]
-            if not (isinstance(v, list) and len(v) == 2):
-                raise ConfigError(f"robot {doc['name']!r}: command = {v!r} must be [v, omega]")
-            doc["command"] = (float(v[0]), float(v[1]))
-        if "start_xy_m" in doc:
-            doc["start_xy_m"] = tuple(doc["start_xy_m"])
-        return cls(**doc)
+__all__ = ["Robot", "Scout", "TeamRun", "drive_team", "read_team_file"]
 
 
 @dataclass(frozen=True)
@@ -134,12 +47,16 @@ class TeamRun:
     """A finished team drive: each robot's :class:`~marsscene.runtime.api.DriveRun` by name.
 
     ``wall_s`` is the whole team's drive; :attr:`realtime_factor` is the longest robot's sim
-    seconds per wall second.
+    seconds per wall second; ``scouts`` the scouts' flights (:class:`marsscene.scout.Flight`)
+    and ``crossview`` the number of scout images paired with a rover frame
+    (:mod:`~marsscene.runtime.crossview`).
     """
 
     out_dir: Path | None
     robots: dict[str, DriveRun] = field(default_factory=dict)
     wall_s: float = float("nan")
+    scouts: dict[str, Any] = field(default_factory=dict)
+    crossview: int = 0
 
     @property
     def realtime_factor(self) -> float:
@@ -186,6 +103,8 @@ def drive_team(
     seed: int = 0,
     progress: Callable[[TeamProgress], None] | None = None,
     keep_sensors: bool = False,
+    export: ExportOptions | None = None,
+    scouts: Sequence[Scout] = (),
 ) -> TeamRun:
     """Drive a team of robots in one world, each with its own sensors, noise and run folder.
 
@@ -210,6 +129,14 @@ def drive_team(
         simulated second.
     keep_sensors : bool
         Keep LiDAR scans, images and IMU samples in memory.
+    export : ExportOptions, optional
+        Each robot's bag and dataset folders, written from its run folder at the end; its
+        bag's topics under ``/<name>/`` and its frames prefixed ``<name>/`` (``map`` shared),
+        as its ``run.json`` (``"ros"``) says.
+    scouts : sequence of Scout
+        Helicopter scouts flying over the same terrain after the rovers' drive, each with its
+        own run folder (``OUT/<name>/``) and noise stream; with ``out_dir`` and a rover with a
+        camera, ``OUT/crossview.csv`` pairs their images with the rovers' frames.
 
     Examples
     --------
@@ -224,72 +151,102 @@ def drive_team(
     """
     config = config if config is not None else RunConfig()
     options = options if options is not None else DriveOptions()
+    export = export if export is not None else ExportOptions()
     out = Path(out_dir) if out_dir is not None else None
     robots = list(robots)
     if not robots:
         raise ConfigError("a team needs at least one robot")
+    names = [r.name for r in robots] + [s.name for s in scouts]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"team: robot and scout names must differ: {names}")
+    runs = [r.config if r.config is not None else config for r in robots]
+    for r, run in zip(robots, runs, strict=True):
+        check_exports(export, run, out / r.name if out is not None else None)
     with scene_dir(scene, out) as scene_path:
         routes = _routes(Path(scene_path), robots, options)
-        runs = [r.config if r.config is not None else config for r in robots]
-        starts = [_start(r, rt, len(robots)) for r, rt in zip(robots, routes, strict=True)]
-        placements = [Placement(r.name, r.rover_config, run, xy, yaw)
-                      for r, run, (xy, yaw) in zip(robots, runs, starts, strict=True)]
-        corridor = (None if any(rt is None for rt in routes)
-                    else np.concatenate([rt.xy_m for rt in routes if rt is not None]))
-        team = TeamSim(scene_path, placements, contact_corridor_xy_m=corridor,
-                       contact_corridor_m=max(_corridor_m(options, run) for run in runs),
-                       settle_s=options.settle_s)
-        plans = []
-        for r, rt in zip(robots, routes, strict=True):
-            if rt is not None:
-                _check_inside(rt, team.heightfield)
-            folder = out / r.name if out is not None else None
-            write_route(folder, team.member(r.name), rt, options)
-            plans.append(MemberDrive(r.name, robot_rng(seed, "sensors", r.name), rt,
-                                     r.controller, r.command, r.seconds or seconds, folder,
-                                     options.pursuit))
+        team = _team(Path(scene_path), robots, runs, routes, options)
+        plans = [_plan(team, r, rt, options, out, seed, seconds)
+                 for r, rt in zip(robots, routes, strict=True)]
         t0 = time.perf_counter()
-        results = drive_team_sim(team, plans, session=SessionOptions(keep_sensors=keep_sensors),
-                                 progress=progress)
+        session = SessionOptions(keep_sensors=keep_sensors, lidar_files=export.lidar_files)
+        try:
+            results = drive_team_sim(team, plans, session=session, progress=progress)
+        except DriveInterrupted as stop:  # Ctrl-C: each folder is whole up to there
+            if not options.stop_on_interrupt:
+                raise
+            results = stop.team
         wall_s = time.perf_counter() - t0
-    drives = {r.name: DriveRun(out / r.name if out is not None else None, results[r.name], rt,
-                               wall_s=wall_s, rocks_kept=team.rocks_kept)
+        flights = {s.name: _fly(Path(scene_path), s, out, seed) for s in scouts}
+    drives = {r.name: _exported(out, r.name, results[r.name], rt, export, wall_s, team)
               for r, rt in zip(robots, routes, strict=True)}
+    pairs = 0
     if out is not None:
-        write_json(out / "team.json", _team_json(robots, drives, seed, wall_s))
-    return TeamRun(out, drives, wall_s)
+        write_json(out / "team.json", _team_json(robots, drives, seed, wall_s, flights))
+        if flights:
+            from marsscene.runtime.crossview import write_crossview
+
+            pairs = write_crossview(out, list(flights), [r.name for r in robots])
+    return TeamRun(out, drives, wall_s, flights, pairs)
+
+
+def _fly(scene_path: Path, scout: Scout, out: Path | None, seed: int) -> Any:
+    """One scout's flight over the team's terrain, its noise keyed by its name."""
+    from marsscene.scout import FlightPlan, fly
+
+    plan = FlightPlan(altitude_m=scout.altitude_m, speed_m_s=scout.speed_m_s,
+                      camera_hz=scout.camera_hz)
+    return fly(scene_path, scout.waypoints, plan=plan, start_xy_m=scout.start_xy_m,
+               out_dir=out / scout.name if out is not None else None,
+               rng=robot_rng(seed, "sensors", scout.name))
+
+
+def _team(scene_path: Path, robots: Sequence[Robot], runs: Sequence[RunConfig],
+          routes: Sequence[Route | None], options: DriveOptions) -> TeamSim:
+    """The team's one model, each robot at its start."""
+    starts = [_start(r, rt, len(robots)) for r, rt in zip(robots, routes, strict=True)]
+    placements = [Placement(r.name, r.rover_config, run, xy, yaw)
+                  for r, run, (xy, yaw) in zip(robots, runs, starts, strict=True)]
+    corridor = (None if any(rt is None for rt in routes)
+                else np.concatenate([rt.xy_m for rt in routes if rt is not None]))
+    return TeamSim(scene_path, placements, contact_corridor_xy_m=corridor,
+                   contact_corridor_m=max(_corridor_m(options, run) for run in runs),
+                   settle_s=options.settle_s)
+
+
+def _plan(team: TeamSim, robot: Robot, route: Route | None, options: DriveOptions,
+          out: Path | None, seed: int, seconds: float | None) -> MemberDrive:
+    """What ``robot`` does; its controller made now if it is an ``OnStart``."""
+    member = team.member(robot.name)
+    if route is not None:
+        _check_inside(route, team.heightfield)
+    folder = out / robot.name if out is not None else None
+    write_route(folder, member, route, options)
+    ctrl, heard = started(robot.controller, member, route)
+    return MemberDrive(robot.name, robot_rng(seed, "sensors", robot.name), route, ctrl,
+                       robot.command, robot.seconds or seconds, folder, options.pursuit,
+                       listeners=heard,
+                       meta={"ros": RosNames.for_robot(robot.name).to_dict()})
+
+
+def _exported(out: Path | None, name: str, result: DriveResult, route: Route | None,
+              export: ExportOptions, wall_s: float, team: TeamSim) -> DriveRun:
+    """One robot's :class:`DriveRun`, its bag and datasets written from its run folder."""
+    folder = out / name if out is not None else None
+    t1 = time.perf_counter()
+    bag, datasets = export_run(folder, export, None, None)
+    return DriveRun(folder, result, route, bag, datasets, wall_s=wall_s,
+                    export_s=time.perf_counter() - t1, rocks_kept=team.rocks_kept)
 
 
 def _team_json(robots: Sequence[Robot], drives: Mapping[str, DriveRun], seed: int,
-               wall_s: float) -> dict[str, Any]:
+               wall_s: float, flights: Mapping[str, Any]) -> dict[str, Any]:
     return {
         "seed": seed,
         "robots": [{"name": r.name, "folder": r.name, "rover": r.rover_type,
                     "status": drives[r.name].summary["status"],
                     "sim_time_s": drives[r.name].sim_s} for r in robots],
+        **({"scouts": [{"name": n, "folder": n, "images": f.summary["images"],
+                        "reached": all(f.reached), "sim_time_s": f.summary["sim_time_s"]}
+                       for n, f in flights.items()]} if flights else {}),
         "wall_s": round(wall_s, 3),
     }
-
-
-
-def read_team_file(path: str | os.PathLike[str]) -> tuple[list[Robot], dict[str, Any]]:
-    """The robots of a team file: TOML with ``[[robots]]`` tables (:meth:`Robot.from_dict`;
-    routes relative to the file) and optional top-level ``seconds`` and ``seed``.
-
-    Returns the robots and the top-level settings (``{"seconds": ..., "seed": ...}``, those
-    given)."""
-    import tomllib
-
-    p = Path(path)
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as err:
-        raise ConfigError(f"cannot read team file {p}: {err}") from None
-    extra = sorted(set(doc) - {"robots", "seconds", "seed"})
-    if extra:
-        raise ConfigError(f"{p}: unknown keys {extra}; known: robots, seconds, seed")
-    tables = doc.get("robots")
-    if not isinstance(tables, list) or not tables:
-        raise ConfigError(f"{p}: no [[robots]] tables")
-    robots = [Robot.from_dict(t, base=p.parent) for t in tables]
-    return robots, {k: doc[k] for k in ("seconds", "seed") if k in doc}

@@ -89,10 +89,13 @@ def _legs(sim: ScoutSim, waypoints: NDArray[np.float64], plan: FlightPlan
 def fly(scene_dir: str | Path, waypoints: ArrayLike, *, plan: FlightPlan | None = None,
         scout: ScoutConfig | None = None, density_kg_m3: float | None = None,
         out_dir: str | Path | None = None, seed: int = 0,
-        start_xy_m: tuple[float, float] | None = None) -> Flight:
+        start_xy_m: tuple[float, float] | None = None,
+        rng: np.random.Generator | None = None) -> Flight:
     """Fly the scout through ``waypoints`` ((N, 2) map x, y in m) and land at the last.
 
-    ``density_kg_m3``: the air density (default :func:`air_density_kg_m3` at Jezero).
+    ``density_kg_m3``: the air density (default :func:`air_density_kg_m3` at Jezero);
+    ``rng``: the altimeter's noise stream (default ``default_rng([seed, 0x5C0])``; a team's
+    scout has its own, keyed by its name).
     """
     plan = plan if plan is not None else FlightPlan()
     cfg = scout if scout is not None else ScoutConfig.load()
@@ -105,7 +108,8 @@ def fly(scene_dir: str | Path, waypoints: ArrayLike, *, plan: FlightPlan | None 
     if ((wp[:, 0] < x0) | (wp[:, 0] > x1) | (wp[:, 1] < y0) | (wp[:, 1] > y1)).any():
         raise ConfigError(f"fly: waypoints outside the terrain [{x0}, {x1}] x [{y0}, {y1}] m")
     t0 = time.perf_counter()
-    log = _fly(sim, wp, plan, rho, np.random.default_rng([seed, _SCOUT_STREAM]))
+    log = _fly(sim, wp, plan, rho,
+               rng if rng is not None else np.random.default_rng([seed, _SCOUT_STREAM]))
     wall = time.perf_counter() - t0
     gt = Trajectory(np.asarray(log["t"]), np.asarray(log["p"]), np.asarray(log["q"]))
     summary = {

@@ -13,6 +13,7 @@ rocks through their vertex normals (:func:`marsscene.sensors.camera_shadow.shado
 from __future__ import annotations
 
 import csv
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,10 +23,14 @@ from numpy.typing import NDArray
 from marsscene.sensors.camera_shadow import shadowed_normals
 from marsscene.terrain.horizon import SunShadow
 
-__all__ = ["ATLAS", "PEBBLE_MAX_M", "RockLOD", "read_rock_catalog", "read_rock_columns",
-           "rock_arrays"]
+__all__ = ["ATLAS", "ATLAS_CELL_PX", "PEBBLE_MAX_M", "RockLOD", "RockLook", "read_rock_catalog",
+           "read_rock_columns", "rock_arrays", "rock_look"]
 
 ATLAS = 8  # rock texture atlas: 8 x 8 colour cells
+#: Texels a side of one atlas cell.
+ATLAS_CELL_PX = 32
+#: The rock texture's speckle: exp(SPECKLE_SIGMA N(0, 1)) per texel.
+SPECKLE_SIGMA = 0.25
 _VARIANTS = 8
 #: Rocks smaller than this are drawn with 20 faces instead of 80.
 PEBBLE_MAX_M = 0.15
@@ -104,6 +109,38 @@ class RockLOD:
         self.uv = np.c_[0.5 + 0.45 * np.cos(lon) * (1 - np.abs(base[:, 2])) ** 0.5,
                         0.5 + 0.45 * base[:, 2]]
         self.capacity = 0
+
+
+@dataclass(frozen=True, eq=False)
+class RockLook:
+    """The camera's rocks' looks, drawn in this order from the camera's texture stream:
+    ``colours`` (ATLAS**2, 3) the atlas cells' albedo, ``speckle`` (texels, texels) the
+    texture's multiplicative speckle, ``lods`` the 80- and 20-face meshes' templates."""
+
+    colours: NDArray[np.float64]
+    speckle: NDArray[np.float64]
+    lods: tuple[RockLOD, RockLOD]
+
+    def face_albedo(self, rock_ids: NDArray[np.int64], uv: NDArray[np.float64]
+                    ) -> NDArray[np.float64]:
+        """Albedo (N, 3) of points ``uv`` (N, 2) of the atlas on rocks ``rock_ids`` (N,): their
+        cell's colour times the speckle texel there (the texture a rock's mesh samples)."""
+        size = self.speckle.shape[0]
+        col = np.clip((uv[:, 0] * size).astype(np.int64), 0, size - 1)
+        row = np.clip((uv[:, 1] * size).astype(np.int64), 0, size - 1)
+        cell = (np.asarray(rock_ids, dtype=np.int64) * 2654435761) % (ATLAS * ATLAS)
+        return self.colours[cell] * self.speckle[row, col][:, None]
+
+
+def rock_look(rng: np.random.Generator) -> RockLook:
+    """The rocks' :class:`RockLook` from the camera's texture stream (after its regolith
+    tile)."""
+    from marsscene.terrain.appearance import rock_albedo_rgb
+
+    colours = np.asarray(rock_albedo_rgb(ATLAS * ATLAS, rng=rng), dtype=np.float64)
+    speckle = np.exp(SPECKLE_SIGMA * rng.standard_normal((ATLAS * ATLAS_CELL_PX,) * 2))
+    return RockLook(colours, speckle, (RockLOD("cam_rocks", True, rng),
+                                       RockLOD("cam_pebbles", False, rng)))
 
 
 def rock_arrays(lod: RockLOD, rocks: NDArray[np.float64], idx: NDArray[np.int64], *,

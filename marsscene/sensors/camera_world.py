@@ -37,14 +37,16 @@ from numpy.typing import NDArray
 from marsscene.sensors.camera_ground import GroundWindow
 from marsscene.sensors.camera_rocks import (
     ATLAS,
+    ATLAS_CELL_PX,
     PEBBLE_MAX_M,
     RockLOD,
     read_rock_catalog,
     rock_arrays,
+    rock_look,
 )
 from marsscene.sensors.rock_shadow import BAKED_BELOW_DEG
 from marsscene.terrain.albedo_field import AlbedoField
-from marsscene.terrain.appearance import bump_shading, regolith_tile, rock_albedo_rgb
+from marsscene.terrain.appearance import bump_shading, regolith_tile
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.terrain.horizon import SUN_RADIUS_RAD, SunShadow, shadow_with_outer, sun_shadow
 
@@ -52,7 +54,6 @@ __all__ = ["ALBEDO_SCALE", "PEBBLE_MAX_M", "CameraWorld", "read_rock_catalog"]
 
 #: Texture value 1.0 means this albedo.
 ALBEDO_SCALE = 0.5
-_CELL_PX = 32
 
 
 class CameraWorld:
@@ -103,13 +104,13 @@ class CameraWorld:
             if self.rocks_baked else None)
         self.nr, self.nc = self.ground.nr, self.ground.nc
         self.rocks = read_rock_catalog(scene_dir)
-        colours = rock_albedo_rgb(ATLAS * ATLAS, rng=rng)
-        speckle = np.exp(0.25 * rng.standard_normal((ATLAS * _CELL_PX,) * 2))
-        cell = np.repeat(np.repeat(colours.reshape(ATLAS, ATLAS, 3), _CELL_PX, 0), _CELL_PX, 1)
-        self.rock_rgb = _to_u8(cell * speckle[..., None] / ALBEDO_SCALE)
+        look = rock_look(rng)
+        cell = np.repeat(np.repeat(look.colours.reshape(ATLAS, ATLAS, 3), ATLAS_CELL_PX, 0),
+                         ATLAS_CELL_PX, 1)
+        self.rock_rgb = _to_u8(cell * look.speckle[..., None] / ALBEDO_SCALE)
         # two levels of detail: 80 faces for rocks >= PEBBLE_MAX_M in the near square, 20 for
         # the others (pebbles, and rocks farther away: a few pixels wide)
-        self.lods = [RockLOD("cam_rocks", True, rng), RockLOD("cam_pebbles", False, rng)]
+        self.lods = list(look.lods)
 
     # ---- spec ------------------------------------------------------------------------------
     def add_to_spec(self, spec: Any, xy_m: tuple[float, float],

@@ -22,7 +22,11 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Exposure", "srgb_encode"]
+__all__ = ["FULL_WELL_E", "READ_NOISE_E", "Exposure", "srgb_encode"]
+
+#: The sensor noise's full well (electrons at a linear value of 1) and read noise (electrons).
+FULL_WELL_E = 10000.0
+READ_NOISE_E = 10.0
 
 
 def srgb_encode(linear: NDArray[np.floating]) -> NDArray[np.float64]:
@@ -73,8 +77,8 @@ class Exposure:
         fixed_gain: float = 1.0,
         max_saturated: float = 0.01,
         smoothing: float = 0.5,
-        full_well_e: float = 10000.0,
-        read_noise_e: float = 10.0,
+        full_well_e: float = FULL_WELL_E,
+        read_noise_e: float = READ_NOISE_E,
         input_scale: float = 1.0,
         max_gain: float = math.inf,
     ) -> None:

@@ -30,9 +30,11 @@ def depth_buffer_to_m(buffer: NDArray[np.float32], znear_m: float, zfar_m: float
 
 
 class OffscreenView:
-    """An offscreen GL context, scene and framebuffer of ``width`` x ``height`` pixels."""
+    """An offscreen GL context, scene and framebuffer of ``width`` x ``height`` pixels;
+    ``max_geom`` sizes the scene's geom buffer (default: the model's geoms and 100 more)."""
 
-    def __init__(self, model: Any, *, width: int, height: int, max_geom: int = 1000) -> None:
+    def __init__(self, model: Any, *, width: int, height: int,
+                 max_geom: int | None = None) -> None:
         from mujoco import gl_context
 
         self.model = model
@@ -45,7 +47,9 @@ class OffscreenView:
         owned = type("_OwnedGLContext", (gl_context.GLContext,), {"__del__": lambda self: None})
         self._gl = owned(self.width, self.height)
         self._gl.make_current()
-        self.scene = mujoco.MjvScene(model, maxgeom=max_geom)
+        # room for every geom of the model (a world of many rocks passes MuJoCo's usual
+        # 1,000: the geoms past the buffer, the terrain among them, were not drawn)
+        self.scene = mujoco.MjvScene(model, maxgeom=max_geom or max(1000, model.ngeom + 100))
         self.option = mujoco.MjvOption()
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED

@@ -84,6 +84,7 @@ class DriveInterrupted(KeyboardInterrupt):
     def __init__(self, result: DriveResult):
         super().__init__(f"drive interrupted at {result.summary['sim_time_s']:.2f} sim s")
         self.result = result
+        self.team: dict[str, DriveResult] = {}  # a team drive's: every robot's, by name
 
 
 class _Rows:

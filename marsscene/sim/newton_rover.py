@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from marsscene._optional import quiet_warp
 from marsscene.errors import RuntimeSimError, missing_dependency
 from marsscene.export.usd.rock_colliders import COLLIDERS_PATH
 from marsscene.export.usd.rock_colliders_read import merged_rocks, rock_instances
@@ -54,9 +55,7 @@ def _newton() -> tuple[Any, Any]:
         import warp as wp
     except ImportError as err:
         raise missing_dependency("newton", "newton") from err
-    config: Any = wp.config  # typed in some Warp releases, not in others
-    config.quiet = True
-    return newton, wp
+    return newton, quiet_warp(wp)
 
 
 class NewtonRover:

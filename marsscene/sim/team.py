@@ -209,6 +209,17 @@ class TeamMember(RoverView):
             np.flatnonzero([(m.geom_contype[g] != 0 and names[g].startswith(f"{p.name}/"))
                             for g in range(m.ngeom)])
             for p in team.placements if p.name != placement.name]
+        bodies = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in m.dof_bodyid]
+        self._dofs = np.flatnonzero([b.startswith(self.prefix) for b in bodies])  # its own
+
+    def place(self, *, xy_m: tuple[float, float], yaw_rad: float) -> None:
+        """Move this robot to ``xy_m`` facing ``yaw_rad``, set on the terrain at rest (its own
+        joints only; the others drive on), without resetting the clock (a live teleport)."""
+        q = spawn_pose(self.heightfield, xy_m, yaw_rad, self.rover)
+        self.data.qpos[self.qpos_root: self.qpos_root + 7] = q
+        self.data.qvel[self._dofs] = 0.0
+        self.reset_soil()
+        mujoco.mj_forward(self.model, self.data)
 
     def other_robots(self) -> Any:
         """The collision geoms of every other robot, as boxes at the current state (what this

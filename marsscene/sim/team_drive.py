@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -40,8 +40,9 @@ __all__ = ["MemberDrive", "TeamProgress", "drive_team_sim"]
 @dataclass(frozen=True)
 class MemberDrive:
     """What one robot of a team does: a route, a controller or an open-loop command (as
-    :func:`~marsscene.sim.driver.drive_sim` takes them), its time limit, its noise stream and
-    its run folder (None: kept in memory)."""
+    :func:`~marsscene.sim.driver.drive_sim` takes them), its time limit, its noise stream,
+    its run folder (None: kept in memory), listeners of its samples and extra ``run.json``
+    entries."""
 
     name: str
     rng: np.random.Generator
@@ -51,6 +52,8 @@ class MemberDrive:
     seconds: float | None = None
     out_dir: Path | None = None
     pursuit: PursuitConfig | None = None
+    listeners: tuple[Any, ...] = ()
+    meta: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -72,11 +75,12 @@ class _Driving:
         self.limit_s = _time_limit_s(plan.route, plan.seconds)
         self.limit_steps = round(self.limit_s / team.dt_physics_s)
         self.rows = _Rows() if plan.out_dir is None else None
-        opts = options if self.rows is None else replace(
-            options, listeners=(*options.listeners, self.rows))
+        heard = (*plan.listeners, *((self.rows,) if self.rows is not None else ()))
+        opts = replace(options, listeners=(*options.listeners, *heard)) if heard else options
         self.member = team.member(plan.name)
         self.loop = DriveSession(self.member, rng=plan.rng, out_dir=plan.out_dir, options=opts,
-                                 meta={**meta, "team": [m.name for m in team.members]})
+                                 meta={**meta, "team": [m.name for m in team.members],
+                                       **plan.meta})
         self.follower = self.ctrl if isinstance(self.ctrl, PurePursuit) else None
         self.result: DriveResult | None = None
 
@@ -123,7 +127,8 @@ def drive_team_sim(
 
     Returns each robot's :class:`~marsscene.sim.driver.DriveResult` by name. On Ctrl-C every
     robot still driving has its run folder finished up to that moment (``"interrupted"``)
-    and :class:`~marsscene.sim.driver.DriveInterrupted` carries the first robot's result.
+    and :class:`~marsscene.sim.driver.DriveInterrupted` carries the first robot's result
+    (``result``) and every robot's (``team``, by name).
     """
     opts = session if session is not None else SessionOptions()
     driving = [_Driving(team, p, opts, progress) for p in plans]
@@ -152,7 +157,9 @@ def drive_team_sim(
         first = driving[0].result
         if first is None:
             raise
-        raise DriveInterrupted(first) from None
+        stop = DriveInterrupted(first)
+        stop.team = {d.name: d.result for d in driving if d.result is not None}
+        raise stop from None
     except BaseException:
         for d in active:
             if d.result is None:

@@ -3,12 +3,12 @@ factor per rover for batches of drives, each writing its whole run folder.
 
 Usage::
 
-    python perf/run.py batch_drives [--drives 6,64,1024] [--sensors state,depth+lidar]
+    python perf/run.py batch_drives [--drives 6,64,1024] [--sensors state,rgbd+lidar]
         [--seconds 20] [--image 640x480] [--lidar os1-64] [--device cuda:0]
 
 Each drive follows a straight route of ``route_m`` across one procedural scene (built once,
 ``size_m`` square; drive i offset sideways so the routes differ) with the LN-200S noise.
-``state``: ground truth, odometry, wheels, IMU; ``depth+lidar``: those plus depth at ``image``
+``state``: ground truth, odometry, wheels, IMU; ``rgbd+lidar``: those plus RGB-D at ``image``
 at 10 Hz and the ``lidar`` model at 10 Hz. The wall time is ``drive_batch``'s loop and the
 writing (the model build and settling apart); drives/s is drives over that wall time, the
 real-time factor sim seconds over it. Disk is the run folders' bytes.
@@ -26,8 +26,8 @@ from perf.suite import Param, ints, names, optional
 
 PARAMS = (
     Param("drives", ints, "drives in a batch", quick=(2,), full=(6, 64, 1024)),
-    Param("sensors", names, "state, depth+lidar", quick=("state", "depth+lidar"),
-          full=("state", "depth+lidar")),
+    Param("sensors", names, "state, rgbd+lidar", quick=("state", "rgbd+lidar"),
+          full=("state", "rgbd+lidar")),
     Param("seconds", float, "sim seconds of each drive", quick=0.4, full=20.0),
     Param("image", str, "depth image size (WIDTHxHEIGHT)", quick="32x24", full="640x480"),
     Param("lidar", str, "LiDAR model", quick="vlp16", full="os1-64"),
@@ -59,11 +59,11 @@ def _config(sensors: str, size: str, lidar: str, physics_hz: float) -> Any:
 
     w, _, h = size.partition("x")
     extra: dict[str, Any] = {}
-    if sensors == "depth+lidar":
+    if sensors == "rgbd+lidar":
         extra = {"camera": ms.CameraConfig(width_px=int(w), height_px=int(h), rate_hz=10.0),
                  "lidar": ms.LidarConfig(model=lidar)}
     elif sensors != "state":
-        raise ValueError(f"sensors {sensors!r}: state or depth+lidar")
+        raise ValueError(f"sensors {sensors!r}: state or rgbd+lidar")
     return ms.RunConfig(physics_hz=physics_hz, noise=ms.NoiseConfig(profile="ln200s"), **extra)
 
 

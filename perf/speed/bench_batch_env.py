@@ -8,6 +8,7 @@ Usage::
     python perf/run.py batch_env --what run --path OUT.npz [--envs 1,1024,4096] [--folders DIR]
     python perf/run.py batch_env --what repro --path OUT.npz [--envs 4096]
     python perf/run.py batch_env --what sim2sim --path POLICY.npz --folders DIR [--episodes 50]
+        [--workers 0]
     python perf/run.py batch_env --what curve --path run/curve.csv --out curve.png [--gpu 91]
 
 ``pack`` builds the benchmark's worlds (the three world kinds with rock abundance k = 0.2: 6
@@ -19,8 +20,9 @@ spacings and prints how far apart they end. ``run`` times environment steps per 
 core (one process a core). ``repro`` makes and drives the same batch twice and compares the
 bytes. ``--variants`` picks the wheels' collision shape, the solver's iteration limits and
 MuJoCo Warp's deterministic mode (``cylinder/100/50/det``). ``sim2sim`` runs a policy
-(``examples/train_batch_ppo.py``) in the CPU environment (MuJoCo C, mesh rocks) over seeded
-episodes. Without ``--path`` the batch is :data:`BATCH` (in the temporary folder); quick:
+(``examples/train_batch_ppo.py``: the height scan's MLP, or with ``--obs depth`` the depth
+image's CNN, seeing the CPU camera's depth) in the CPU environment (MuJoCo C, mesh rocks) over
+seeded episodes. Without ``--path`` the batch is :data:`BATCH` (in the temporary folder); quick:
 ``pack`` there, full: ``run`` on it.
 """
 
@@ -75,10 +77,14 @@ PARAMS = (
     Param("final_sensors", bool, "run: also cast the sensors for info['final_observation']",
           quick=True, full=True),
     Param("episodes", int, "sim2sim: seeded episodes", quick=5, full=50),
+    Param("workers", int, "sim2sim: processes the episodes are spread over (0: one a core)",
+          quick=1, full=0),
     Param("out", Path, "curve: the figure to write", quick=Path("curve.png"),
           full=Path("curve.png")),
     Param("gpu", optional(float), "curve: the policy's GPU success (%)", quick=None, full=None),
     Param("cpu", optional(float), "curve: the policy's CPU success (%)", quick=None, full=None),
+    Param("observes", str, "curve: what the policy sees, for the title", quick="a height scan",
+          full="a height scan"),
 )
 KINDS = {"plain": 6, "craters": 5, "rocks": 5}
 SECONDS_CPU = 20.0
@@ -301,7 +307,8 @@ def repro(batch_path: Path, n: int, variants: tuple[str, ...],
     return out
 
 
-def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None) -> dict[str, Any]:
+def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None,
+          observes: str = "a height scan") -> dict[str, Any]:
     """The learning curve of ``train_batch_ppo.py`` (success of the episodes ended in each
     iteration against wall time), with the trained policy's GPU and CPU success beside it."""
     import matplotlib
@@ -313,7 +320,8 @@ def curve(csv_path: Path, out: Path, gpu: float | None, cpu: float | None) -> di
     per_env = _example().TRAIN["num_steps_per_env"]
     rovers = int(rows["env_steps"][0] / rows["iteration"][0] / per_env)
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=120)
-    ax.set_title(f"PPO on BatchNavEnv: {rovers:,} rovers, goals 20-50 m", fontsize=10)
+    ax.set_title(f"PPO on BatchNavEnv: {rovers:,} rovers seeing {observes}, goals 20-50 m",
+                 fontsize=10)
     ax.plot(rows["wall_s"] / 60.0, 100.0 * np.nan_to_num(rows["success"]), lw=1.2,
             label="episodes ended in each PPO iteration (GPU batch)")
     for value, style, what in ((gpu, "--", "trained policy, GPU batch"),
@@ -353,34 +361,53 @@ def _cpu_rate(folders: str) -> float:
     return n / (time.perf_counter() - t0)
 
 
-def sim2sim(policy_path: Path, folders: Path, episodes: int) -> dict[str, Any]:
-    from marsscene.env.policy import MLPPolicy
-
-    policy = MLPPolicy.load(policy_path)
-    env = _cpu_env(str(folders), policy.observations())
+def sim2sim(policy_path: Path, folders: Path, episodes: int, workers: int = 1
+            ) -> dict[str, Any]:
+    """A policy (:class:`~marsscene.env.policy.MLPPolicy` with its height scan, or
+    :class:`~marsscene.env.cnn_policy.CNNPolicy` with the CPU camera's depth at the batch
+    camera's size and field of view) in the CPU environment over seeded episodes, spread over
+    ``workers`` processes (0: one a core; an episode's end depends on its seed alone)."""
+    procs = min(workers or os.cpu_count() or 1, episodes)
     ends: dict[str, int] = {}
     t0 = time.perf_counter()
-    for seed in range(episodes):
-        obs, info = env.reset(seed=seed)
-        done = False
-        while not done:
-            obs, _, te, tr, info = env.step(policy(obs))
-            done = te or tr
-        why = info["termination"] or "time limit"
-        ends[why] = ends.get(why, 0) + 1
-        print(f"episode {seed:3d}: {why:10s} {info['distance_m']:6.2f} m from the goal",
-              flush=True)
+    args = [(str(policy_path), str(folders), seed) for seed in range(episodes)]
+    with mp.get_context("spawn").Pool(procs) as pool:
+        for seed, (why, distance_m) in enumerate(pool.imap(_sim2sim_episode, args)):
+            ends[why] = ends.get(why, 0) + 1
+            print(f"episode {seed:3d}: {why:10s} {distance_m:6.2f} m from the goal", flush=True)
     won = ends.get("goal", 0)
     print(f"CPU environment (MuJoCo C, mesh rocks): {won}/{episodes} = {won / episodes:.0%} "
-          f"reached the goal; ends {ends} ({time.perf_counter() - t0:.0f} s)")
+          f"reached the goal; ends {ends} ({time.perf_counter() - t0:.0f} s, {procs} "
+          "processes)")
     return {"episodes": episodes, "goal": won, "success": won / episodes, "ends": ends}
+
+
+@functools.cache
+def _sim2sim_env(policy_path: str, folders: str) -> tuple[Any, RoverNavEnv]:
+    """A worker's policy and CPU environment (made once a process)."""
+    from marsscene.env.cnn_policy import load_policy
+
+    policy = load_policy(policy_path)
+    return policy, _cpu_env(folders, policy.observations())
+
+
+def _sim2sim_episode(job: tuple[str, str, int]) -> tuple[str, float]:
+    """One seeded episode of the policy: how it ended and how far from the goal (m)."""
+    policy, env = _sim2sim_env(job[0], job[1])
+    obs, info = env.reset(seed=job[2])
+    done = False
+    while not done:
+        obs, _, te, tr, info = env.step(policy(obs))
+        done = te or tr
+    return info["termination"] or "time limit", float(info["distance_m"])
 
 
 def main(what: str, path: Path | None, folders: Path | None, posts: tuple[float, ...],
          device: str, envs: tuple[int, ...], variants: tuple[str, ...], steps: int,
-         episodes: int, out: Path, gpu: float | None, depth_px: int, lidar: str | None,
+         episodes: int, workers: int, out: Path, gpu: float | None, depth_px: int,
+         lidar: str | None,
          final_sensors: bool,
-         cpu: float | None) -> dict[str, Any] | list[dict[str, Any]]:
+         cpu: float | None, observes: str) -> dict[str, Any] | list[dict[str, Any]]:
     if what in ("sim2sim", "curve") and path is None:
         raise ConfigError(f"batch_env --what {what} needs --path (the "
                           f"{'policy .npz' if what == 'sim2sim' else 'curve.csv'})")
@@ -400,6 +427,6 @@ def main(what: str, path: Path | None, folders: Path | None, posts: tuple[float,
     if what == "repro":
         return repro(batch, envs[0], variants, steps)
     if what == "curve":
-        return curve(batch, out, gpu, cpu)
+        return curve(batch, out, gpu, cpu, observes)
     assert folders is not None
-    return sim2sim(batch, folders, episodes)
+    return sim2sim(batch, folders, episodes, workers)

@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import subprocess
 import tempfile
 import time
 from collections.abc import Iterator
@@ -31,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from marsscene.testing.pds3 import write_pds3_dtm
+from perf._measure import marsscene_build
 from perf.speed.bench_dem import dtm_surface
 from perf.suite import Param, ints
 
@@ -76,24 +76,9 @@ def _rocks(manifest: Path) -> tuple[str, dict[str, Any]]:
              "outer_d_min_raised": levels["outer_d_min_raised"]})
 
 
-def _build(args: list[str], out: Path) -> tuple[float, float, int]:
-    """``marsscene build ARGS --out OUT`` niced in a fresh process: wall s, peak MB, status."""
-    cmd = ["nice", "-n", "10", "marsscene", "build", *args, "--seed", "7", "--out", str(out)]
-    t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    assert proc.stderr is not None
-    err = proc.stderr.read()
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    wall = time.perf_counter() - t0
-    if proc.returncode:
-        print("   " + err.strip().splitlines()[-1] if err.strip() else "   (no message)")
-    return wall, usage.ru_maxrss / 1024.0, proc.returncode
-
-
 def _row(name: str, args: list[str], tmp: Path) -> dict[str, Any]:
     out = tmp / "scene"
-    wall, peak_mb, rc = _build(args, out)
+    wall, peak_mb, rc = marsscene_build(args, out)
     rocks, counts = _rocks(out / "manifest.json") if rc == 0 else (f"FAILED (exit {rc})", {})
     ok = rc == 0 and wall < 150 and peak_mb < 4096
     print(f"{name:<32} {wall:7.1f} s {peak_mb / 1024:6.2f} GB  {rocks}  "

@@ -180,7 +180,8 @@ BY_DEFAULT = re.compile(OPT_SPAN + r"\** \(([\d.]+[^)\n]*?) by default\)")
 #: "(default 2)" in a table row that documents one option
 ROW_DEFAULT = re.compile(r"\((?:the )?default:? ([^);:\n]+)[);:]")
 #: options of other programs that the prose names (scripts, the VPR-methods-evaluation CLI)
-FOREIGN = {"--cpu-envs", "--collider-min-m", "--save_descriptors"}
+FOREIGN = {"--cpu-envs", "--collider-min-m", "--save_descriptors", "--obs", "--save-every",
+           "--deadline", "--total-minutes"}  # examples/train_batch_ppo.py and outside tools
 TABLE_ROW = re.compile(r"^\|(.*)\|\s*$")
 UNITS = {"m": "m", "deg": "deg", "°": "deg", "s": "s", "h": "h", "hz": "hz", "px": "px"}
 HELP_UNIT = re.compile(r"\((m|deg|s|h|Hz)[);,]")

@@ -154,9 +154,19 @@ def test_gymnasium_vector_api(env: BatchNavEnv) -> None:
 def test_world_batch_round_trip_and_bad_input(batch: WorldBatch, tmp_path: Any) -> None:
     path = batch.save(tmp_path / "b.npz")
     back = WorldBatch.load(path)
-    for name in ("posts_z_m", "rock_xy_m", "starts_xy_m", "goals_xy_m", "yaws_rad"):
+    for name in ("posts_z_m", "rock_xy_m", "starts_xy_m", "goals_xy_m", "yaws_rad",
+                 "catalogue_rocks", "catalogue_world"):
         np.testing.assert_array_equal(getattr(back, name), getattr(batch, name))
     assert back.cell_m == batch.cell_m and back.bounds_xy_m.shape == (2, 4)
+    # the camera's catalogue rocks: each world's rows of its scene's catalogue (not MJCF)
+    cats = batch.catalogues()
+    assert len(cats) == 2 and all(len(c) > 0 for c in cats)
+    assert not np.array_equal(cats[0][:, 1:3].mean(0), cats[1][:, 1:3].mean(0))
+    with np.load(path) as z:  # a batch saved before the catalogue loads with none
+        old = {k: z[k] for k in z.files if not k.startswith("catalogue")}
+    with open(tmp_path / "old.npz", "wb") as f:
+        np.savez(f, **old)
+    assert WorldBatch.load(tmp_path / "old.npz").catalogues()[0].shape == (0, 6)
     (tmp_path / "bad.npz").write_bytes(b"not a batch")
     with pytest.raises(ConfigError, match="not a world batch"):
         WorldBatch.load(tmp_path / "bad.npz")

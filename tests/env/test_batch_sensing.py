@@ -123,7 +123,8 @@ def test_depth_on_flat_ground_is_the_range_to_the_plane(batch: WorldBatch) -> No
     flat = dataclasses.replace(
         batch, posts_z_m=np.zeros_like(batch.posts_z_m),
         rock_xy_m=np.zeros((0, 2)), rock_radius_m=np.zeros(0), rock_height_m=np.zeros(0),
-        rock_world=np.zeros(0, np.int64))
+        rock_world=np.zeros(0, np.int64), catalogue_rocks=np.zeros((0, 6)),
+        catalogue_world=np.zeros(0, np.int64))
     obs_cfg = dataclasses.replace(SENSED, lidar=None)
     env = BatchNavEnv(flat, num_envs=2, device="cpu", library="numpy", seed=0,
                       observations=obs_cfg)

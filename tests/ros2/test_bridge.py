@@ -96,17 +96,17 @@ def test_teleport_reset_and_a_refused_pose(bridge, caplog):
     b, sim = bridge, bridge.sim
     sim.advance(50)
     clock = sim.time_s
-    b.control_readers["/marsscene/teleport"].items.append(_cdr(b, _pose(b, 5.0, -3.0, 1.0)))
+    b.control_readers["teleport"].items.append(_cdr(b, _pose(b, 5.0, -3.0, 1.0)))
     b(_obs(1.0))
     xyz, _ = sim.pose()
     assert xyz[:2] == pytest.approx((5.0, -3.0), abs=0.02)  # set on the ground's normal
     assert sim.yaw_rad() == pytest.approx(1.0, abs=0.05)
     assert sim.time_s == clock > 0.0  # a teleport does not touch the clock
-    b.control_readers["/marsscene/teleport"].items.append(_cdr(b, _pose(b, 500.0, 0.0, 0.0)))
+    b.control_readers["teleport"].items.append(_cdr(b, _pose(b, 500.0, 0.0, 0.0)))
     b(_obs(1.02))
     assert "teleport refused" in caplog.text and sim.pose()[0][0] == pytest.approx(5.0, abs=0.02)
     empty = b.store.types["std_msgs/msg/Empty"]()
-    b.control_readers["/marsscene/reset"].items.append(_cdr(b, empty))
+    b.control_readers["reset"].items.append(_cdr(b, empty))
     b(_obs(1.04))
     assert sim.pose()[0][:2] == pytest.approx((0.0, 0.0), abs=0.02)
     assert (b.stats.teleports, b.stats.resets) == (1, 1)
@@ -117,7 +117,7 @@ def test_goal_reached_ends_the_session(bridge):
     t = b.store.types
     goal = t["geometry_msgs/msg/PoseStamped"](header=b.msgs.b.header(0.0, "map"),
                                               pose=_pose(b, 10.0, 0.0, 0.0))
-    b.control_readers["/marsscene/goal"].items.append(_cdr(b, goal))
+    b.control_readers["goal"].items.append(_cdr(b, goal))
     b(_obs(2.0, (0.0, 0.0)))
     assert b.goal_xy == (10.0, 0.0) and not b.done
     b(_obs(2.02, (9.7, 0.1)))

@@ -33,3 +33,31 @@ def test_the_start_heading_is_in_degrees_as_build_takes_it(runner, tmp_path):
     assert res.exit_code == 2 and "--yaw-deg" in res.output  # out of -360..360
     res = runner.invoke(main, ["serve", str(tmp_path / "scene"), "--yaw", "1.0"])
     assert res.exit_code == 2 and "No such option '--yaw'" in res.output  # the old alias, gone
+
+
+def test_serve_team_mistakes_are_one_line_and_a_team_serves(runner, tmp_path, gentle_scene):
+    """``serve --team``: a served robot with a route, ``--record`` without ``--out`` and a start
+    option are one-line errors; a team file serves each robot under its name and writes its
+    run folder and bag."""
+    team = tmp_path / "team.toml"
+    team.write_text('[[robots]]\nname = "a"\nstart_xy_m = [-6.0, -3.0]\n'
+                    '[[robots]]\nname = "b"\nrover = "mer"\nstart_xy_m = [-6.0, 3.0]\n')
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[robots]]\nname = "a"\nwaypoints = [[0.0, 0.0], [5.0, 0.0]]\n')
+    res = runner.invoke(main, ["serve", str(gentle_scene), "--team", str(bad), "--localhost"])
+    assert res.exit_code == 1 and "Traceback" not in res.output
+    assert res.output.strip().splitlines()[-1].startswith("Error: robot 'a': a served robot")
+    res = runner.invoke(main, ["serve", str(gentle_scene), "--team", str(team), "--record"])
+    assert res.exit_code == 2 and "--record needs --out" in res.output
+    res = runner.invoke(main, ["serve", str(gentle_scene), "--team", str(team),
+                               "--start-xy", "0", "0"])
+    assert res.exit_code == 2 and "no --start-xy" in res.output
+    out = tmp_path / "served"
+    res = runner.invoke(main, ["serve", str(gentle_scene), "--team", str(team), "--localhost",
+                               "--domain-id", "219", "--pace", "max", "--seconds", "1",
+                               "--out", str(out), "--record"])
+    assert res.exit_code == 0, res.output
+    assert "served: 2 robots" in res.output
+    for name in ("a", "b"):
+        assert f"  {name}: 1.0 sim s" in res.output
+        assert (out / name / "gt.tum").is_file() and (out / name / "bag").is_dir()

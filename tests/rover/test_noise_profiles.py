@@ -337,9 +337,12 @@ def test_exports_declare_the_simulated_noise(ln_runs: list[Path], tmp_path: Path
     # ROS: /rover/imu_noisy covariances are the per-sample white-noise variances
     calls: dict[str, list[tuple[Any, ...]]] = defaultdict(list)
 
+    from marsscene.runs.export.topic_table import ROVER
+
     class _Bag:
         def __init__(self) -> None:
             self.T: dict[str, Any] = defaultdict(lambda: (lambda *a, **k: None))
+            self.names = ROVER
 
         def add(self, topic: str, t: float, fn: Any, *args: Any) -> None:
             calls[topic].append(args)

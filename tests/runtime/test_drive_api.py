@@ -86,11 +86,12 @@ _WIRING_NAMES = {"drive_sim", "prepare_drive", "DriveSession", "JpegCache", "wri
                  "export_dataset", "stage_rng", "scene_dir", "jpeg_cache", "export_run"}
 #: Where a piece may still be imported, and why: ``marsscene bag`` and ``marsscene export``
 #: convert existing run folders, and so does a SLAM benchmark cell (its finished drive's
-#: datasets, a stage of their own so that a killed export resumes without a new drive); a
+#: datasets, a stage of their own so that a killed export resumes without a new drive; and a
+#: batch drive's bag, written from its finished folder: ``benchmark/slam/device.py``); a
 #: Gymnasium environment steps a session itself (one control period per ``step``), its world
 #: and start drawn by its task, not a drive.
 _ALLOWED = {("cli", "bag.py", "write_bag"), ("cli", "export.py", "export_dataset"),
-            ("benchmark", "cell.py", "export_dataset"),
+            ("benchmark", "cell.py", "export_dataset"), ("benchmark", "device.py", "write_bag"),
             ("env", "nav.py", "DriveSession"), ("env", "episode.py", "DriveSession")}
 #: The packages that make the drive's pieces (and the run side's API that wires them).
 _PIECES = {"runtime", "sim", "runs", "sensors", "rover", "testing"}

@@ -317,3 +317,18 @@ def _with_fovy(model: Any, camera_id: int, fovy_deg: float) -> Any:
     out = copy.copy(model)
     out.cam_fovy[camera_id] = fovy_deg
     return out
+
+
+def test_a_worlds_noise_stream_is_keyed_by_its_stream_not_its_slot() -> None:
+    """``world_seeds``: world w's seed depends on (seed, streams[w]) only, so a batch drive's
+    LiDAR noise is the same in any slot (streams = the drives' seeds); by default the stream is
+    the world's index; a count that does not match is a one-line error."""
+    from marsscene.sensors.batch.lidar import world_seeds
+
+    a = world_seeds(5, 3, streams=[7, 9, 7])
+    assert a[0] == a[2] != a[1]
+    np.testing.assert_array_equal(world_seeds(5, 2, streams=[9, 7]), a[[1, 0]])
+    np.testing.assert_array_equal(world_seeds(5, 3), world_seeds(5, 3, streams=range(3)))
+    assert world_seeds(6, 1, streams=[7])[0] != a[0]  # the batch's seed still counts
+    with pytest.raises(ConfigError, match="2 noise streams for 3 worlds"):
+        world_seeds(5, 3, streams=[1, 2])

@@ -109,10 +109,16 @@ def test_drive_rover_option_and_team_file_from_the_command_line(gentle_scene: Pa
                     '[[robots]]\nname = "b"\nrover = "mer"\nwaypoints = [[-6, 4], [6, 4]]\n'
                     '[robots.run.lidar]\nmodel = "simple"\n')
     res = CliRunner().invoke(main, ["drive", str(gentle_scene), "--team", str(team), "--out",
-                                    str(tmp_path / "t")])
+                                    str(tmp_path / "t"), "--bag", "--keep-lidar-files"])
     assert res.exit_code == 0, res.output
     assert len(list((tmp_path / "t" / "b" / "lidar").glob("*.ply"))) == 11  # 10 Hz, 0 to 1 s
     assert not (tmp_path / "t" / "a" / "lidar").exists()  # a robot's sensors are its own
+    assert "bag: " + str(tmp_path / "t" / "b" / "bag") + " (topics under /b)" in res.output
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([tmp_path / "t" / "b" / "bag"]) as r:
+        lidar = [c for c in r.connections if c.topic == "/b/lidar/points"]
+        assert sum(1 for _ in r.messages(lidar)) == 11
 
 
 @pytest.mark.parametrize(("text", "says"), [
@@ -163,3 +169,81 @@ def test_a_lidar_sees_the_other_rover(flat_scene: Path):
     near_x = above[1][:, 0].min()  # rover b's rear, about 1.5 m behind its centre at x = 2
     assert len(above[1]) > 50 and 0.0 < near_x < 1.2
     assert np.abs(above[1][:, 1]).max() < 1.6  # within b's width
+
+
+def test_each_robots_bag_is_the_single_drives_under_its_namespace(gentle_scene: Path,
+                                                                  tmp_path: Path):
+    """A team of one writes the single drive's bag, its topics under ``/rover1`` and its
+    frames prefixed ``rover1/`` (``map`` shared): the same messages otherwise."""
+    from rosbags.highlevel import AnyReader
+
+    wp, bag = [[-6.0, -2.0], [6.0, -2.0]], ms.ExportOptions(bag=ms.BagOptions())
+    ms.drive(gentle_scene, waypoints=wp, seconds=1.0, out_dir=tmp_path / "single", export=bag)
+    team = ms.drive_team(gentle_scene, [ms.Robot(name="rover1", waypoints=wp)], seconds=1.0,
+                         out_dir=tmp_path / "team", export=bag)
+    assert team.robots["rover1"].bag is not None
+    read = {}
+    for key, folder in (("single", tmp_path / "single" / "bag"),
+                        ("team", tmp_path / "team" / "rover1" / "bag")):
+        with AnyReader([folder]) as r:
+            read[key] = [(c.topic, r.deserialize(raw, c.msgtype)) for c, _, raw in r.messages()]
+    assert [t.replace("/rover/", "/rover1/") for t, _ in read["single"]] == \
+        [t for t, _ in read["team"]]
+    prefixed = lambda f: f if f == "map" else f"rover1/{f}"  # noqa: E731
+    for (topic, a), (_, b) in zip(read["single"], read["team"], strict=True):
+        for x, y in zip(getattr(a, "transforms", [a]), getattr(b, "transforms", [b]),
+                        strict=True):
+            if hasattr(x, "header"):
+                assert y.header.frame_id == prefixed(x.header.frame_id), topic
+                assert y.header.stamp == x.header.stamp, topic
+            if getattr(x, "child_frame_id", ""):
+                assert y.child_frame_id == prefixed(x.child_frame_id), topic
+        if topic == "/rover/odom":
+            pa, pb = a.pose.pose.position, b.pose.pose.position
+            assert (pb.x, pb.y, pb.z) == (pa.x, pa.y, pa.z)
+    meta = json.loads((tmp_path / "team" / "rover1" / "run.json").read_text())
+    assert meta["ros"] == {"namespace": "rover1", "frame_prefix": "rover1/",
+                           "control": "/marsscene/rover1"}
+
+
+def test_a_scout_flies_over_the_team_and_its_images_pair_with_the_rovers(gentle_scene: Path,
+                                                                       tmp_path: Path):
+    """A ``[[scouts]]`` table flies over the rovers' terrain in their map frame; each of its
+    images seen near a rover pairs with that rover's frame (``crossview.csv``), and the scout's
+    noise is its own (its name's stream)."""
+    team = tmp_path / "team.toml"
+    team.write_text('seconds = 3.0\n[[robots]]\nname = "rover1"\n'
+                    'waypoints = [[-6, 0], [6, 0]]\n[robots.run.camera]\nwidth_px = 64\n'
+                    'height_px = 48\nshadows = false\n'
+                    '[[scouts]]\nname = "heli"\nstart_xy_m = [-12.0, 0.0]\n'
+                    'waypoints = [[-6.0, 0.0], [12.0, 0.0]]\naltitude_m = 6.0\n'
+                    'camera_hz = 1.0\n')
+    res = CliRunner().invoke(main, ["drive", str(gentle_scene), "--team", str(team), "--out",
+                                    str(tmp_path / "t"), "--dataset", "tum-rgbd"])
+    if "OpenGL" in res.output:
+        pytest.skip("no headless OpenGL (EGL/OSMesa) here")
+    assert res.exit_code == 0, res.output
+    doc = json.loads((tmp_path / "t" / "team.json").read_text())
+    assert doc["scouts"][0]["name"] == "heli" and doc["scouts"][0]["reached"]
+    rgb = (tmp_path / "t" / "rover1" / "tum_rgbd" / "rgb.txt").read_text().splitlines()
+    assert len([r for r in rgb if not r.startswith("#")]) == 31  # the rover's dataset: 10 Hz
+    rows = (tmp_path / "t" / "crossview.csv").read_text().splitlines()
+    from marsscene.runtime.crossview import HEADER
+
+    assert rows[0] == HEADER and len(rows) > 1
+    for row in rows[1:]:
+        f = row.split(",")
+        assert f[0] == "heli" and f[6] == "rover1"
+        assert (tmp_path / "t" / f[1]).is_file() and (tmp_path / "t" / f[7]).is_file()
+        d = float(f[12])
+        assert d <= 5.0 and d == pytest.approx(np.hypot(float(f[3]) - float(f[9]),
+                                                        float(f[4]) - float(f[10])), abs=2e-4)
+    from marsscene.scout import FlightPlan, fly
+
+    plan, wp = FlightPlan(altitude_m=6.0, camera_hz=1.0), [[-6.0, 0.0], [12.0, 0.0]]
+    fly(gentle_scene, wp, plan=plan, start_xy_m=(-12.0, 0.0), out_dir=tmp_path / "alone",
+        rng=robot_rng(0, "sensors", "heli"))
+    fly(gentle_scene, wp, plan=plan, start_xy_m=(-12.0, 0.0), out_dir=tmp_path / "seed0")
+    team_alt = (tmp_path / "t" / "heli" / "altimeter.csv").read_bytes()
+    assert team_alt == (tmp_path / "alone" / "altimeter.csv").read_bytes()  # the same flight
+    assert team_alt != (tmp_path / "seed0" / "altimeter.csv").read_bytes()  # its own noise

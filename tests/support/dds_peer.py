@@ -7,9 +7,10 @@ loopback only (127.0.0.1, no multicast, unicast discovery). Modes (JSON on stdou
 
 * ``listen DOMAIN SECONDS TOPICS_JSON``: take every sample of the topics (``{name: [msgtype,
   reliable, transient_local]}``), decode each with rosbags; counts, stamps, sizes, and the
-  SHA-256 of each topic's first payload (``--dump DIR`` writes the raw payloads;
-  ``--until-idle S`` stops S seconds after the last sample of a volatile topic);
-* ``cmd DOMAIN SECONDS V W [--stamped] [--hz 20]``: publish ``/cmd_vel`` for SECONDS;
+  SHA-256 of each topic's first payload, the frame ids seen (``--dump DIR`` writes the raw
+  payloads; ``--until-idle S`` stops S seconds after the last sample of a volatile topic);
+* ``cmd DOMAIN SECONDS V W [--stamped] [--hz 20] [--topic /cmd_vel]``: publish the command
+  on the topic for SECONDS;
 * ``latency DOMAIN V [--repeats 5]``: command ``V`` from rest, wall time until ``/rover/odom``
   reports ``|v| >= V / 2``, then stop and wait until it stops;
 * ``lockstep DOMAIN STEPS DT V W [--sleep-per-scan S]``: drive a lockstep session
@@ -156,12 +157,21 @@ def listen(peer: Peer, seconds: float, topics: dict[str, list[Any]],
                 g["n"] += 1
                 g["bytes"] = len(data)
                 g["stamps"].append(stamp_s(msg))
+                g["frames"] = sorted(set(map(tuple, g.get("frames", []))) | _frames(msg))
                 for node in getattr(msg, "node_entities_info_seq", ()):  # ros_discovery_info
                     g["nodes"] = [*g.get("nodes", []), [
                         node.node_namespace, node.node_name, len(node.reader_gid_seq),
                         len(node.writer_gid_seq)]]
         time.sleep(0.002)
     return got
+
+
+def _frames(msg: Any) -> set[tuple[str, str]]:
+    """A message's ``(frame_id, child_frame_id)`` pairs: each transform's of a ``TFMessage``,
+    else its header's (child ``""`` where it has none)."""
+    items = getattr(msg, "transforms", None) or [msg]
+    return {(m.header.frame_id, getattr(m, "child_frame_id", "")) for m in items
+            if hasattr(m, "header")}
 
 
 def latency(peer: Peer, v: float, repeats: int) -> dict[str, Any]:
@@ -314,6 +324,7 @@ def main() -> None:
         c.add_argument(name, type=ty)
     c.add_argument("--stamped", action="store_true")
     c.add_argument("--hz", type=float, default=20.0)
+    c.add_argument("--topic", default="/cmd_vel")
     la = sub.add_parser("latency")
     la.add_argument("domain", type=int)
     la.add_argument("v", type=float)
@@ -334,7 +345,7 @@ def main() -> None:
         out: Any = listen(peer, args.seconds, json.loads(args.topics), args.dump,
                           args.until_idle)
     elif args.mode == "cmd":
-        w = peer.writer("/cmd_vel", "geometry_msgs/msg/TwistStamped" if args.stamped
+        w = peer.writer(args.topic, "geometry_msgs/msg/TwistStamped" if args.stamped
                         else "geometry_msgs/msg/Twist")
         t0, n = time.monotonic(), 0
         while time.monotonic() - t0 < args.seconds:

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from marsscene.errors import ConfigError
@@ -16,7 +16,7 @@ from marsscene.rover.terramechanics import soil
 from marsscene.soil.map import SoilMap
 from marsscene.terrain.heightfield import Heightfield
 from marsscene.traversability import HAZARD_BITS, RoverFootprint, TraversabilityConfig, compute
-from marsscene.traversability.compute import _combine
+from marsscene.traversability.compute import _combine, _limits
 from marsscene.traversability.slip import rigid_slip, soil_slip
 
 FP = RoverFootprint.of()
@@ -117,13 +117,14 @@ TERMS = ("slope", "roughness", "step", "rock", "belly", "slip")
 
 
 @settings(max_examples=40, deadline=None)
+@example([0.0, 0.0, 0.0, 0.0, 1.0, 0.0], "slope", 0.0)  # a term exactly at its limit
 @given(st.lists(st.floats(0.0, 2.0), min_size=6, max_size=6), st.sampled_from(TERMS),
        st.floats(0.0, 1.0))
 def test_cost_is_monotone_in_each_term_and_one_at_a_hazard(ratios: list[float], term: str,
                                                           more: float) -> None:
-    limits = {"slope": 30.0, "roughness": 0.15, "step": 0.525, "rock": 0.525, "belly": 0.6,
-              "slip": 0.5}
     cfg = TraversabilityConfig()
+    limits = _limits(FP, cfg)  # the rover's own (belly: 0.6000000000000001 m, not 0.6)
+    assert limits["slope"] == 30.0 and limits["belly"] == pytest.approx(0.6)
 
     def cost(r: list[float]):
         terms = {k: np.array([[v * limits[k]]]) for k, v in zip(TERMS, r, strict=True)}

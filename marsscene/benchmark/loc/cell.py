@@ -53,10 +53,10 @@ def _scene_dir(scene: LocScene, spec: LocSpec, cell_dir: Path) -> tuple[Path, st
                               "marsscene build --orbital-map")
         return path, digest({"scene_dir": str(path)})
     import marsscene as ms
-    from marsscene.orbital import orbital_map, write_orbital_map
+    from marsscene.orbital import OrbitalModel, orbital_map, write_orbital_map
 
     cfg = {**scene.as_scene_spec().base_config(), "seed": spec.seed}
-    key = digest({"config": cfg})
+    key = digest({"config": cfg, "orbital": OrbitalModel().to_dict()})
     done = read_json(cell_dir / "build.json")
     if done is None or done.get("key") != key or not (cell_dir / "scene").is_dir():
         with replacing_dir(cell_dir / "scene") as tmp:
@@ -127,9 +127,9 @@ def _query(spec: LocSpec, scene_dir: Path, omap: Any, route_xy: Any, s_m: float,
     from marsscene.benchmark.loc.query import write_query
     from marsscene.sim.route import Route
 
-    first = tau == spec.tau[0]
+    first, camera = tau == spec.tau[0], spec.needs_camera
     key = digest({"base": base_key, "s_m": s_m, "prior": dataclasses.asdict(prior), "k": k,
-                  "tau": tau, "first": first, "spec": {f: spec.doc()[f] for f in (
+                  "tau": tau, "first": first, "camera": camera, "spec": {f: spec.doc()[f] for f in (
                       "scans", "lidar_model", "lidar_rate_hz", "radius_m", "camera",
                       "sun_elevation_deg", "position_error_m", "heading_error_deg")}})
     done = read_json(qdir / "truth.json")
@@ -139,7 +139,8 @@ def _query(spec: LocSpec, scene_dir: Path, omap: Any, route_xy: Any, s_m: float,
     with replacing_dir(qdir) as tmp:
         t0 = time.perf_counter()
         ms.drive(scene_dir, route=Route(seg), seconds=spec.drive_s,
-                 config=spec.run_config(lidar=first, tau=tau), out_dir=tmp / "run", seed=k)
+                 config=spec.run_config(lidar=first, tau=tau, camera=camera),
+                 out_dir=tmp / "run", seed=k)
         truth = write_query(tmp / "run", omap, tmp / "query", prior_error=prior,
                             radius_m=spec.radius_m,
                             position_error_max_m=float(spec.position_error_m[1]),

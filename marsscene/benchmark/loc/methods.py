@@ -5,7 +5,8 @@
 * ``dem-correlation``: :func:`marsscene.orbital.match_dem` of the local elevation map
   (:func:`marsscene.orbital.local_elevation_map` of ``local/points.npy``, the map tile's posts)
   over the prior's search square (``position_error_max_m`` + 5 m) and heading window
-  (``heading_error_max_deg`` + 2 deg);
+  (``heading_error_max_deg`` + 2 deg); option ``scans = N`` keeps the query's last N scans
+  only (the local map of fewer scans on the same query);
 * ``ortho-match``: :func:`.ortho.match_ortho` of the camera's ground image (needs OpenCV);
 * ``prior``: the prior itself (the floor any method must beat);
 * ``command``: ``command.format(query_dir=..., answer=...)`` run in a shell;
@@ -28,7 +29,7 @@ from scipy.spatial.transform import Rotation
 from marsscene.benchmark.loc.spec import LocMethod
 from marsscene.errors import ConfigError, missing_dependency
 
-__all__ = ["read_answer", "run_method", "write_answer"]
+__all__ = ["last_scans", "read_answer", "run_method", "write_answer"]
 
 
 def write_answer(path: Path, x_m: float, y_m: float, yaw_rad: float, *, stamp_s: float = 0.0,
@@ -64,12 +65,26 @@ def _prior(doc: dict[str, Any]) -> tuple[float, float, float]:
     return float(p["x_m"]), float(p["y_m"]), float(p["yaw_rad"])
 
 
+def last_scans(points: np.ndarray, doc: dict[str, Any], scans: Any) -> np.ndarray:
+    """The points of a query's last ``scans`` LiDAR scans (``query.json``'s per-scan counts)."""
+    counts = (doc.get("lidar") or {}).get("points_per_scan")
+    if counts is None:
+        raise ConfigError("option scans needs a query folder with lidar.points_per_scan "
+                          "(made by this version)")
+    if isinstance(scans, bool) or not isinstance(scans, int) or not 1 <= scans <= len(counts):
+        raise ConfigError(f"option scans = {scans!r}; need 1..{len(counts)} (the query's scans)")
+    return points[len(points) - int(sum(counts[-scans:])):]
+
+
 def _dem(qdir: Path, answer: Path, options: dict[str, Any]) -> str:
     from marsscene.orbital import local_elevation_map, match_dem, read_orbital_map
 
     doc = _query(qdir)
     tile = read_orbital_map(qdir)
     pts = np.load(qdir / "local" / "points.npy").astype(np.float64)
+    options = dict(options)
+    if "scans" in options:
+        pts = last_scans(pts, doc, options.pop("scans"))
     local = local_elevation_map(pts, cell_m=tile.cell_m, radius_m=float(doc["local_radius_m"]))
     s = doc["search"]
     m = match_dem(local, tile, _prior(doc),

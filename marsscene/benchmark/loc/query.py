@@ -7,7 +7,8 @@ run folder: the run-folder adapter) into the query folder::
     query.json           stamp, the prior (x_m, y_m, yaw_rad), the search bounds, the sensors
     prior.tum            the prior pose of the local frame in the scene (one TUM line)
     orbital/             the map tile around the prior (SCENE_DIR/orbital/ format, cropped)
-    local/points.npy     every scan's points (float32 (n, 3)) in the local frame, deskewed
+    local/points.npy     every scan's points (float32 (n, 3)) in the local frame, deskewed,
+                         scan after scan (query.json: lidar.points_per_scan)
     local/scan_poses.tum the LiDAR's pose at each scan stamp in the local frame
     local/camera/        NNNNNN_rgb.png, NNNNNN_depth.png (uint16 mm), poses.tum (optical
                          frame in the local frame), intrinsics.json
@@ -102,8 +103,9 @@ def map_tile(omap: OrbitalMap, cx_m: float, cy_m: float, half_m: float) -> Orbit
 
 
 def _lidar(run_dir: Path, gt: Trajectory, odom: Trajectory, t_q: float, mount: Any
-           ) -> tuple[NDArray[np.float32], NDArray[np.float64], NDArray[np.float64]]:
-    """Every scan's points in the local frame (each point posed at its firing time)."""
+           ) -> tuple[NDArray[np.float32], list[int], NDArray[np.float64], NDArray[np.float64]]:
+    """Every scan's points in the local frame (each point posed at its firing time), in scan
+    order, and each scan's point count."""
     from marsscene.runs.runlog import read_ply
 
     stamps = np.loadtxt(run_dir / "lidar" / "stamps.csv", delimiter=",", skiprows=1,
@@ -118,7 +120,7 @@ def _lidar(run_dir: Path, gt: Trajectory, odom: Trajectory, t_q: float, mount: A
         m = local_poses(gt, odom, np.broadcast_to(tp, (len(p),)), t_q) @ mount
         parts.append(np.einsum("nij,nj->ni", m[:, :3, :3], p) + m[:, :3, 3])
     poses = local_poses(gt, odom, stamps, t_q) @ mount
-    return np.concatenate(parts).astype(np.float32), stamps, poses
+    return np.concatenate(parts).astype(np.float32), [len(p) for p in parts], stamps, poses
 
 
 def write_query(run_dir: str | os.PathLike[str], omap: OrbitalMap, query_dir: Path, *,
@@ -149,10 +151,11 @@ def write_query(run_dir: str | os.PathLike[str], omap: OrbitalMap, query_dir: Pa
                                       "heading_error_max_deg": heading_error_max_deg},
                            "lidar": None, "camera": None}
     if (run / "lidar" / "stamps.csv").is_file():
-        pts, stamps, poses = _lidar(run, gt, odom, t_q, lidar_mount(rover))
+        pts, counts, stamps, poses = _lidar(run, gt, odom, t_q, lidar_mount(rover))
         np.save(local / "points.npy", pts)
         (local / "scan_poses.tum").write_text(_tum_lines(stamps, poses, "lidar in local frame"))
-        doc["lidar"] = {"scans": len(stamps), "points": len(pts)}
+        doc["lidar"] = {"scans": len(stamps), "points": len(pts),
+                        "points_per_scan": [int(n) for n in counts]}
     if (run / "camera" / "stamps.csv").is_file():
         (cx, cy, cz), pitch = sensor_mounts(rover)["camera"]
         mount = np.eye(4)

@@ -154,20 +154,30 @@ class LocSpec:
         """Sim seconds of a query's short drive: ``scans`` scans at ``lidar_rate_hz``."""
         return (self.scans - 1) / self.lidar_rate_hz
 
+    @property
+    def needs_camera(self) -> bool:
+        """Whether the drives log the camera: unless every method is a built-in one that
+        reads no image (``dem-correlation``, ``prior``), which makes a LiDAR-only drive."""
+        return any(m.kind not in ("dem-correlation", "prior") or m.sensor == "camera"
+                   for m in self.methods)
+
     def methods_for(self, tau: float) -> tuple[LocMethod, ...]:
         """Camera methods run in every tau's cell; the others in the first tau's."""
         first = tau == self.tau[0]
         return tuple(m for m in self.methods if first or m.sensor == "camera")
 
-    def run_config(self, *, lidar: bool, tau: float | None = None) -> Any:
-        """The drive's :class:`~marsscene.rover.config.RunConfig` (camera at ``tau``)."""
+    def run_config(self, *, lidar: bool, tau: float | None = None, camera: bool = True
+                   ) -> Any:
+        """The drive's :class:`~marsscene.rover.config.RunConfig` (camera at ``tau``, or
+        none)."""
         from marsscene.rover import CameraConfig, LidarConfig, NoiseConfig, RunConfig
 
         cam = {"rate_hz": 1.0 / max(self.drive_s, 1.0), **self.camera, "tau": tau,
                "sun_elevation_deg": self.sun_elevation_deg}
-        camera = dataclass_from_mapping(CameraConfig, cam, "local.camera")
+        cam_cfg = dataclass_from_mapping(CameraConfig, cam, "local.camera")
         lid = LidarConfig(model=self.lidar_model, rate_hz=self.lidar_rate_hz) if lidar else None
-        return RunConfig(camera=camera, lidar=lid, noise=NoiseConfig(profile="ln200s"))
+        return RunConfig(camera=cam_cfg if camera else None, lidar=lid,
+                         noise=NoiseConfig(profile="ln200s"))
 
     def doc(self) -> dict[str, Any]:
         """The spec as JSON-able data (``benchmark.json``; a resumed run must match it)."""

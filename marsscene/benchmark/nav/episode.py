@@ -39,6 +39,8 @@ def episode_key(spec: NavSpec, scene_key: str, params: dict[str, Any]) -> str:
     method = next(m for m in spec.methods if m.name == params["method"])
     doc = {"scene": scene_key, "params": params, "method": repr(method),
            "time_factor": spec.time_factor, "version": 1}
+    if method.policy is not None:  # a retrained policy of the same name runs again
+        doc["policy_sha256"] = hashlib.sha256(Path(method.policy).read_bytes()).hexdigest()
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:16]
 
 
@@ -72,7 +74,8 @@ def _drive(spec: NavSpec, scene_dir: str, pair: dict[str, Any], method: Any,
     limit = time_limit_s(float(pair["shortest_m"]), spec.time_factor)
     t0 = time.perf_counter()
     run = ms.drive(scene_dir, route=plan.route, controller=_recording(plan.controller, made),
-                   seconds=limit, options=DriveOptions(corridor_m=corridor), seed=spec.seed)
+                   seconds=limit, config=plan.config, options=DriveOptions(corridor_m=corridor),
+                   seed=spec.seed)
     wall = time.perf_counter() - t0
     calls, plan_s = plan.plan_calls, plan.plan_s
     if made and hasattr(made[0], "calls"):

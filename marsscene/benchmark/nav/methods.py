@@ -12,7 +12,12 @@
   observe it) with the goal from the ground-truth pose;
 - ``controller``: a user's ``MODULE:NAME``, a callable ``controller(obs) -> (v, omega)`` or a
   class, instantiated with those of ``goal_xy_m``, ``route`` (the straight route) and ``sim``
-  its constructor takes; the drive ends at its ``done`` or at the goal.
+  its constructor takes; the drive ends at its ``done`` or at the goal;
+- ``policy``: a trained policy's ``.npz`` (:class:`~marsscene.env.policy.MLPPolicy` on the
+  height scan, :class:`~marsscene.env.cnn_policy.CNNPolicy` on the navcam's depth) fed what
+  :class:`~marsscene.env.RoverNavEnv` feeds it, at its control rate: the observation vector
+  of the true pose towards the goal with the last (normalised, clipped) action, and the
+  height scan or the depth frame taken at that step; its action is held between steps.
 """
 
 from __future__ import annotations
@@ -36,7 +41,8 @@ from marsscene.rover.config import OMEGA_MAX_RAD_S, V_MAX_M_S
 from marsscene.sim.goal import goal_reached
 from marsscene.sim.route import Route, resample_xy
 
-__all__ = ["GoalArcController", "MethodPlan", "plan_method", "straight_route"]
+__all__ = ["GoalArcController", "MethodPlan", "PolicyController", "plan_method",
+           "policy_run_config", "straight_route"]
 
 ROUTE_SPACING_M = 0.1
 #: The arc navigator's height scan side (m): the 10 m scan its results were measured with.
@@ -53,6 +59,8 @@ class MethodPlan:
     controller: Any = None
     plan_calls: int = 0
     plan_s: float = 0.0
+    config: Any = None
+    """The drive's :class:`~marsscene.rover.config.RunConfig` (None: the default)."""
 
 
 def straight_route(start: NDArray[np.float64], goal: NDArray[np.float64]) -> Route:
@@ -115,6 +123,64 @@ class GoalArcController:
         return float(act[0]) * V_MAX_M_S, float(act[1]) * OMEGA_MAX_RAD_S
 
 
+class PolicyController:
+    """A trained policy towards a fixed goal, observing as :class:`~marsscene.env.RoverNavEnv`
+    observes (called at :func:`policy_run_config`'s control rate)."""
+
+    def __init__(self, sim: Any, goal_xy_m: NDArray[np.float64], policy: Any) -> None:
+        from marsscene.env.observe import HeightScanner
+        from marsscene.sim.world import scene_obstacles
+
+        self.policy, self.rover = policy, sim.rover
+        obs_config = policy.observations()
+        self.scanner = (HeightScanner(obs_config.height_scan, sim.heightfield,
+                                      scene_obstacles(sim))
+                        if obs_config.height_scan is not None else None)
+        self.depth_px = obs_config.camera if obs_config.depth else None
+        self.goal = np.asarray(goal_xy_m, dtype=np.float64)
+        self.last_action = np.zeros(2)
+        self.done = False
+        self.calls, self.seconds = 0, 0.0
+
+    def observe(self, obs: Any) -> dict[str, Any]:
+        """The policy's observation dict at ``obs``."""
+        from marsscene.env.state import RoverState
+
+        out = RoverState.of_observation(obs, self.rover).observations(self.goal,
+                                                                        self.last_action)
+        if self.scanner is not None:
+            out["height_scan"] = self.scanner(obs.gt_xyz_m, float(obs.gt_yaw_rad))
+        if self.depth_px is not None:
+            frame = obs.camera
+            if frame is None or frame.depth_m is None:  # before the first frame: all far
+                out["depth"] = np.zeros(self.depth_px[::-1], np.float32)
+            else:
+                out["depth"] = np.nan_to_num(frame.depth_m, nan=0.0,
+                                             posinf=0.0).astype(np.float32)
+        return out
+
+    def __call__(self, obs: Any) -> tuple[float, float]:
+        t0 = time.perf_counter()
+        self.done = bool(goal_reached(np.asarray(obs.gt_xyz_m[:2]), self.goal))
+        act = np.clip(np.asarray(self.policy(self.observe(obs)), np.float64).reshape(2),
+                      -1.0, 1.0)
+        self.last_action = act
+        self.calls += 1
+        self.seconds += time.perf_counter() - t0
+        return float(act[0]) * V_MAX_M_S, float(act[1]) * OMEGA_MAX_RAD_S
+
+
+def policy_run_config(policy: Any) -> Any:
+    """The drive's rates and camera for ``policy``: :class:`~marsscene.env.RoverNavEnv`'s
+    control rate (its action period), IMU at twice that, the navcam at the policy's size
+    at the control rate if it sees depth."""
+    from marsscene.env.nav import CONTROL_HZ
+    from marsscene.rover.config import RunConfig
+
+    camera = policy.observations().camera_config(CONTROL_HZ)
+    return RunConfig(control_hz=CONTROL_HZ, imu_hz=2 * CONTROL_HZ, camera=camera)
+
+
 class _Stopping:
     """A user's controller, ended at the goal (or at its own ``done``)."""
 
@@ -175,5 +241,13 @@ def plan_method(method: NavMethodSpec, start: NDArray[np.float64], goal: NDArray
         from marsscene.sim.control import OnStart
 
         return MethodPlan(route, OnStart(lambda sim: GoalArcController(sim, goal)))
+    if kind == "policy":
+        from marsscene.env.cnn_policy import load_policy
+        from marsscene.sim.control import OnStart
+
+        assert method.policy is not None
+        policy = load_policy(method.policy)
+        return MethodPlan(route, OnStart(lambda sim: PolicyController(sim, goal, policy)),
+                          config=policy_run_config(policy))
     assert method.controller is not None
     return MethodPlan(route, _user(method.controller, route, goal))

@@ -20,6 +20,10 @@
     name = "mine"
     kind = "controller"
     controller = "my_nav:Planner"     # MODULE:NAME, as `marsscene drive --controller`
+    [[methods]]
+    name = "ppo"
+    kind = "policy"
+    policy = "policy.npz"             # an MLPPolicy or CNNPolicy file (marsscene.env)
 
 docs/benchmark_nav.md documents every key; every error is a one-line
 :class:`~marsscene.errors.ConfigError`.
@@ -37,8 +41,10 @@ from marsscene.errors import ConfigError
 
 __all__ = ["DISTANCE_RANGE_M", "METHOD_KINDS", "NavMethodSpec", "NavSceneSpec", "NavSpec"]
 
-#: The built-in methods and ``controller`` (a user's ``MODULE:NAME``).
-METHOD_KINDS = ("straight", "global-astar", "orbital-astar", "arc-navigator", "controller")
+#: The built-in methods, ``controller`` (a user's ``MODULE:NAME``) and ``policy`` (a trained
+#: policy's ``.npz``).
+METHOD_KINDS = ("straight", "global-astar", "orbital-astar", "arc-navigator", "controller",
+                "policy")
 #: The range start-goal distances may be drawn from (m).
 DISTANCE_RANGE_M = (20.0, 500.0)
 
@@ -110,11 +116,16 @@ def _merged(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
 
 @dataclass(frozen=True, kw_only=True)
 class NavMethodSpec:
-    """One method: a built-in kind, or ``controller`` with ``controller = "MODULE:NAME"``."""
+    """One method: a built-in kind, ``controller`` with ``controller = "MODULE:NAME"``, or
+    ``policy`` with ``policy`` a trained policy's ``.npz``."""
 
     name: str
     kind: str | None = None
     controller: str | None = None
+    policy: str | None = None
+    """``kind = "policy"``: the file of :meth:`MLPPolicy.save
+    <marsscene.env.policy.MLPPolicy.save>` or :meth:`CNNPolicy.save
+    <marsscene.env.cnn_policy.CNNPolicy.save>` (relative to the spec's folder)."""
     cost_weight: float = 4.0
     """Planners: a cell's step cost is its length x (1 + cost_weight x cost)."""
 
@@ -129,6 +140,11 @@ class NavMethodSpec:
         if (kind == "controller") != (self.controller is not None):
             raise ConfigError(f"method {self.name!r}: controller = 'MODULE:NAME' goes with "
                               "kind = 'controller' (and only with it)")
+        if (kind == "policy") != (self.policy is not None):
+            raise ConfigError(f"method {self.name!r}: policy = 'FILE.npz' goes with "
+                              "kind = 'policy' (and only with it)")
+        if self.policy is not None and not Path(self.policy).is_file():
+            raise ConfigError(f"method {self.name!r}: policy file {self.policy} not found")
         if self.controller is not None and ":" not in self.controller:
             raise ConfigError(f"method {self.name!r}: controller = {self.controller!r}; give "
                               "MODULE:NAME, e.g. my_nav:Planner")
@@ -207,6 +223,9 @@ class NavSpec:
         for i, raw in enumerate(data.get("methods") or ()):
             if not isinstance(raw, dict):
                 raise ConfigError(f"methods[{i}] must be a table; got {raw!r}")
+            raw = dict(raw)
+            if isinstance(raw.get("policy"), str):
+                raw["policy"] = str((here / raw["policy"]).resolve())
             methods.append(dataclass_from_mapping(NavMethodSpec, raw, f"methods[{i}]"))
         return cls(scenes=tuple(scenes), methods=tuple(methods), source=source, **bench)
 

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 import time
 from concurrent.futures import ThreadPoolExecutor
 from functools import partial
@@ -35,10 +34,18 @@ from pathlib import Path
 from typing import Any
 
 from marsscene._atomic import replacing_dir, write_atomic
-from marsscene.benchmark.slam.keys import drive_key, method_file, read_json, write_json
+from marsscene.benchmark.slam.keys import (
+    batch_error,
+    batch_key,
+    drive_key,
+    method_file,
+    read_json,
+    write_json,
+)
 from marsscene.benchmark.slam.methods import DRIVE_FILE, CellData, estimate
 from marsscene.benchmark.slam.metrics import failed_score, score_estimate
 from marsscene.benchmark.slam.pack import scored_cell
+from marsscene.benchmark.slam.plan import cell_plan
 from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
 from marsscene.errors import MarsSceneError
 from marsscene.sweep.cell import run_cell
@@ -48,11 +55,6 @@ __all__ = ["DRIVE_FILE", "run_slam_cell"]
 
 log = logging.getLogger("marsscene")
 IMAGES_REMOVED = "images_removed.txt"  # in drive/: the camera images were deleted after scoring
-
-
-def is_lidar_cell(spec: SlamSpec, tau: float) -> bool:
-    """The cell of each scene and seed that logs the LiDAR and runs the tau-free methods."""
-    return math.isclose(tau, float(spec.lidar_tau or spec.tau[0]))
 
 
 def _route(scene: SceneSpec, scene_dir: Path) -> dict[str, Any]:
@@ -71,22 +73,26 @@ def _route(scene: SceneSpec, scene_dir: Path) -> dict[str, Any]:
 
 
 def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_hash: str,
-           force: bool, camera: bool = True, live: tuple[MethodSpec, ...] = ()
-           ) -> dict[str, Any]:
+           force: bool, camera: bool = True, live: tuple[MethodSpec, ...] = (),
+           device: str | None = None) -> dict[str, Any]:
     """Drive the cell's route with its sensors into ``cell_dir/drive`` (unless done); the
-    ``live`` methods (KISS-ICP) run on the LiDAR during the drive."""
+    ``live`` methods (KISS-ICP) run on the LiDAR during the drive. With ``device`` the drive
+    was made in a batch (:mod:`.device`): it is read, or its error raised."""
     final = cell_dir / "drive"
     live = live if lidar else ()
     key, bag = drive_key(spec, scene, lidar, scene_hash, camera, live)
     run = spec.run_config(lidar=lidar, camera=camera)
-    done = None if force else read_json(final / DRIVE_FILE)
+    if device is not None:
+        key = batch_key(key)
+    done = None if force and device is None else read_json(final / DRIVE_FILE)
     if done is not None and done.get("key") == key:
         _export_datasets(final, camera=run.camera is not None)
         return dict(done["summary"])
+    if device is not None:
+        raise MarsSceneError(batch_error(cell_dir, device))
     import marsscene as ms
     from marsscene.benchmark.slam.kiss_icp import LiveKissIcp, lidar_mount
     from marsscene.rover.config import RoverConfig
-    from marsscene.runs.tum import write_tum
 
     # every sensor with [sensors] bag = true, else the LiDAR alone (a command reading {bag_dir})
     bag_options = ms.BagOptions(sensors=None if spec.sensors.get("bag") else ("lidar",)) \
@@ -102,22 +108,30 @@ def _drive(spec: SlamSpec, scene: SceneSpec, cell_dir: Path, lidar: bool, scene_
                                     route_note=f"route of scene {scene.name}: {{length_m:.1f}} m"),
             export=ms.ExportOptions(bag=bag_options,  # the datasets: a stage of their own
                                     lidar_files=bag or bool(spec.sensors.get("lidar_files"))))
-        for name, odo in odometry.items():
-            traj = odo.trajectory()
-            if traj is not None:
-                prior = " with the wheel odometry's prior" if odo.wheel_prior else ""
-                write_tum(tmp / "live" / f"{name}.tum", traj,
-                          header=f"{name}: KISS-ICP fed each scan during the drive{prior}")
         summary = {"route_m": round(drv.route.length_m, 3) if drv.route else None,
                    "t_drive_s": time.perf_counter() - t0 - drv.export_s,
-                   "t_live_s": {n: round(o.seconds, 3) for n, o in odometry.items()},
-                   "icp_steps_kept": {n: [o.icp_steps_kept, len(o.poses)]
-                                      for n, o in odometry.items() if o.wheel_prior},
+                   **write_live(tmp, odometry, "during the drive"),
                    **{k: drv.summary.get(k) for k in ("path_length_m", "sim_time_s",
                                                       "goal_reached", "cross_track_rms_m")}}
         write_json(tmp / DRIVE_FILE, {"key": key, "summary": summary})
     _export_datasets(final, camera=run.camera is not None)
     return summary
+
+
+def write_live(run_dir: Path, odometry: dict[str, Any], when: str) -> dict[str, Any]:
+    """Each live KISS-ICP's estimate as ``run_dir/live/<name>.tum`` (``when``: how it was fed,
+    for the header); the drive summary's ``t_live_s`` and ``icp_steps_kept``."""
+    from marsscene.runs.tum import write_tum
+
+    for name, odo in odometry.items():
+        traj = odo.trajectory()
+        if traj is not None:
+            prior = " with the wheel odometry's prior" if odo.wheel_prior else ""
+            write_tum(run_dir / "live" / f"{name}.tum", traj,
+                      header=f"{name}: KISS-ICP fed each scan {when}{prior}")
+    return {"t_live_s": {n: round(o.seconds, 3) for n, o in odometry.items()},
+            "icp_steps_kept": {n: [o.icp_steps_kept, len(o.poses)]
+                               for n, o in odometry.items() if o.wheel_prior}}
 
 
 def _export_datasets(run_dir: Path, camera: bool) -> None:
@@ -226,7 +240,8 @@ def _with_drive(row: dict[str, Any], drv: dict[str, Any]) -> dict[str, Any]:
 
 
 def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = False,
-                  method_workers: int = 1, method_processes: int = 1) -> dict[str, Any]:
+                  method_workers: int = 1, method_processes: int = 1,
+                  device: str | None = None) -> dict[str, Any]:
     """Build, drive and score one cell into ``out_dir/<cell_id>/``; return its row.
 
     The row has the sweep's build row (``status``, ``error``, timings ...) plus ``drive``
@@ -235,20 +250,17 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
     ``status = "failed"`` and a ``failed`` row for every method. ``method_workers`` threads
     score the methods side by side (rows in the spec's order whatever the finishing order);
     ``method_processes`` processes share a method's work where it splits (Open3D RGB-D's
-    frame pairs). Neither changes a row.
+    frame pairs). Neither changes a row. With ``device`` the cell's drive was made in a batch
+    on that device (:func:`.device.drive_cells`) and is read from its folder.
     """
-    scene = next(s for s in spec.scenes if s.name == cell.params["scene"])
-    tau, seed = float(cell.params["tau"]), int(cell.params["seed"])
-    methods = list(spec.methods_for(tau, seed))
-    # the main seeds' cells log every sensor of the spec; an extra seed's only what its
-    # methods need (e.g. none for the wheel odometry)
-    main = seed in spec.seeds
-    lidar = is_lidar_cell(spec, tau) and (main or any(m.sensor == "lidar" for m in methods))
-    camera = main or any(m.sensor == "camera" for m in methods)
+    plan = cell_plan(spec, cell)
+    scene, tau, seed, lidar, camera = plan.scene, plan.tau, plan.seed, plan.lidar, plan.camera
+    methods = list(plan.methods)
     cell_dir = Path(out_dir) / cell.cell_id
     live = tuple(m for m in methods if m.kind == "kiss-icp")
     stored_row = None if force else scored_cell(spec, scene, cell, cell_dir, methods,
-                                                lidar=lidar, camera=camera, live=live)
+                                                lidar=lidar, camera=camera, live=live,
+                                                device=device)
     if stored_row is not None and not _images_to_remove(spec, camera, cell_dir):
         return _with_drive(stored_row, stored_row["drive"])  # a packed cell: no scene needed
     row = run_cell(cell, out_dir, None, force=force)
@@ -258,7 +270,7 @@ def run_slam_cell(cell: Cell, *, out_dir: str, spec: SlamSpec, force: bool = Fal
             raise MarsSceneError(row["error"])
         redrive = force or _needs_images(spec, methods, cell_dir)
         drv = _drive(spec, scene, cell_dir, lidar, str(row.get("config_hash")), redrive,
-                     camera, live)
+                     camera, live, device)
         _with_drive(row, drv)
         stored = read_json(cell_dir / "drive" / DRIVE_FILE) or {}
         data = CellData(cell_dir, scene.name, tau, seed)

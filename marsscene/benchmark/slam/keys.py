@@ -14,7 +14,13 @@ from marsscene._atomic import write_atomic
 from marsscene.benchmark.slam.odometry_prior import PRIOR_MODEL
 from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
 
-__all__ = ["digest", "drive_key", "method_file", "read_json", "write_json"]
+__all__ = ["BATCH_ENGINE", "ERROR_FILE", "batch_error", "batch_key", "digest", "drive_key",
+           "method_file", "read_json", "write_json"]
+
+#: The engine of a batch drive (``run.json``'s ``batch.engine``), part of its key.
+BATCH_ENGINE = "mujoco_warp"
+#: In a cell folder: why its batch drive (:mod:`.device`) did not finish.
+ERROR_FILE = "drive_error.txt"
 
 
 def digest(doc: Any) -> str:
@@ -64,3 +70,18 @@ def method_file(spec: SlamSpec, method: MethodSpec, cell_dir: Path, drive: str
                   "min_tracked": spec.min_tracked_fraction, "rpe_m": spec.rpe_distance_m,
                   **({"prior": PRIOR_MODEL} if method.options.get("wheel_prior") else {})})
     return cell_dir / "methods" / f"{method.name}.json", key
+
+
+def batch_key(key: str) -> str:
+    """The key of a batch drive (:mod:`.device`) of the inputs whose CPU drive has ``key``:
+    its physics differs, so the two are never taken for each other."""
+    return digest({"drive": key, "engine": BATCH_ENGINE})
+
+
+def batch_error(cell_dir: Path, device: str) -> str:
+    """The one-line reason the cell has no batch drive on ``device``."""
+    try:
+        why = (cell_dir / ERROR_FILE).read_text(encoding="utf-8").strip()
+    except OSError:
+        why = "it was not driven"
+    return f"the cell's batch drive on {device} did not finish: {why}"

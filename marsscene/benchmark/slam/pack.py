@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from marsscene.benchmark.slam.keys import drive_key, method_file, read_json
+from marsscene.benchmark.slam.keys import batch_key, drive_key, method_file, read_json
 from marsscene.benchmark.slam.methods import DRIVE_FILE
 from marsscene.benchmark.slam.spec import MethodSpec, SceneSpec, SlamSpec
 from marsscene.errors import ConfigError, MarsSceneError
@@ -54,7 +54,8 @@ class Pack:
 
 def scored_cell(spec: SlamSpec, scene: SceneSpec, cell: Cell, cell_dir: Path,
                 methods: list[MethodSpec], *, lidar: bool, camera: bool,
-                live: tuple[MethodSpec, ...]) -> dict[str, Any] | None:
+                live: tuple[MethodSpec, ...], device: str | None = None
+                ) -> dict[str, Any] | None:
     """The stored row of a cell whose build, drive and every method row are current (read
     from its result files alone), or None when anything must run."""
     if any(m.kind == "tum-file" for m in methods):
@@ -70,6 +71,8 @@ def scored_cell(spec: SlamSpec, scene: SceneSpec, cell: Cell, cell_dir: Path,
     if row.get("config_hash") != scene_hash or drive is None:
         return None
     key, _ = drive_key(spec, scene, lidar, scene_hash, camera, live if lidar else ())
+    if device is not None:  # a batch drive (:mod:`.device`)
+        key = batch_key(key)
     if drive.get("key") != key:
         return None
     rows = []

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -29,6 +30,8 @@ from marsscene.benchmark.slam.table import method_rows, write_results_csv
 from marsscene.errors import ConfigError
 from marsscene.sweep.grid import Cell, cell_id
 from marsscene.sweep.spec import set_dotted
+
+log = logging.getLogger("marsscene")
 
 __all__ = ["SPEC_FILE", "SlamBenchmarkResult", "run_slam_benchmark", "slam_cells"]
 
@@ -100,6 +103,7 @@ def run_slam_benchmark(
     report: bool = True,
     method_workers: int = 2,
     method_processes: int = 1,
+    device: str | None = None,
 ) -> SlamBenchmarkResult:
     """Run the benchmark ``spec`` into ``out_dir``.
 
@@ -128,6 +132,9 @@ def run_slam_benchmark(
         Processes that share a method's work where it splits: Open3D RGB-D's frame pairs, in
         chunks (for cores no cell is using, e.g. one long cell on a many-core machine). Rows
         do not depend on it.
+    device : str, optional
+        Drive the cells as batches on this Warp device (``"cuda"``, ``"cpu"``;
+        :mod:`.device`), then run the methods as usual. Without it each cell drives on the CPU.
     """
     from marsscene.sweep.run import map_cells
     from marsscene.sweep.table import write_results
@@ -135,9 +142,16 @@ def run_slam_benchmark(
     root = Path(out_dir).resolve()
     _claim(root, spec, resume)
     cells_dir = root / "cells"
+    cells = slam_cells(spec)
+    if device is not None:
+        from marsscene.benchmark.slam.device import drive_cells
+
+        drive_cells(spec, cells, cells_dir, device=device, workers=workers,
+                    progress=(lambda msg: log.info("%s", msg)))
     task = partial(run_slam_cell, out_dir=str(cells_dir), spec=spec,
-                   method_workers=method_workers, method_processes=method_processes)
-    cell_rows = map_cells(slam_cells(spec), task, cells_dir, workers=workers,
+                   method_workers=method_workers, method_processes=method_processes,
+                   device=device)
+    cell_rows = map_cells(cells, task, cells_dir, workers=workers,
                           scheduler=scheduler, serial=serial, progress=progress)
     for row in cell_rows:  # a cell lost with its worker has no method rows: give them
         if "methods" not in row:

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import csv
 import functools
-import io
 import json
 import logging
 from collections.abc import Callable
@@ -36,26 +35,18 @@ from numpy.typing import NDArray
 
 from marsscene._atomic import replacing_dir, write_atomic
 from marsscene.benchmark.vpr.spec import SPLITS, TraversalSpec, VprSpec
+from marsscene.benchmark.vpr.traversal import (
+    image_name,
+    irradiance_scale,
+    offset_route,
+    write_rows,
+    write_traversal,
+)
 from marsscene.errors import RuntimeSimError
 
 __all__ = ["generate_vpr", "image_name", "irradiance_scale", "offset_route"]
 
 log = logging.getLogger(__name__)
-
-
-def image_name(east_m: float, north_m: float, frame: int, yaw_deg: float, pitch_deg: float,
-               roll_deg: float, z_m: float, t_s: float, split: str) -> str:
-    """``@east@north@zone@letter@lat@lon@id@tile@heading@pitch@roll@height@time@note@.jpg``."""
-    return (f"@{east_m:.3f}@{north_m:.3f}@@@@@D{frame:07d}@@{yaw_deg:.2f}@{pitch_deg:.2f}"
-            f"@{roll_deg:.2f}@{z_m:.3f}@{t_s:.3f}@{split}@.jpg")
-
-
-def offset_route(xy_m: NDArray[np.float64], offset_m: float) -> NDArray[np.float64]:
-    """The polyline shifted sideways by ``offset_m`` (positive: to the left of travel)."""
-    d = np.gradient(np.asarray(xy_m, dtype=np.float64), axis=0)
-    n = np.column_stack([-d[:, 1], d[:, 0]]) / np.maximum(np.hypot(d[:, 0], d[:, 1]),
-                                                          1e-12)[:, None]
-    return xy_m + offset_m * n
 
 
 def _scene(spec: VprSpec, out: Path) -> Path:
@@ -93,21 +84,6 @@ def _route(spec: VprSpec, scene_dir: Path) -> Any:
     return auto_route(centred_on_asset(r, scene_dir), world.heightfield, world.obstacles)
 
 
-def irradiance_scale(lighting: TraversalSpec, scene_dir: Path) -> float:
-    """Global horizontal irradiance of the sun at ``irradiance_of_sun_elevation_deg`` over
-    that of the traversal's own sun (1 without it), on the scene's site and ``tau``."""
-    if lighting.irradiance_of_sun_elevation_deg is None:
-        return 1.0
-    from marsscene.sensors.camera_scene import scene_lighting
-
-    def ghi(el: float) -> float:
-        return float(scene_lighting(scene_dir, tau=lighting.tau, sun_elevation_deg=el,
-                                    sun_azimuth_deg=lighting.sun_azimuth_deg
-                                    ).global_horizontal_w_m2)
-
-    return ghi(lighting.irradiance_of_sun_elevation_deg) / ghi(lighting.sun_elevation_deg)
-
-
 def _traverse(spec: VprSpec, split: str, lighting: TraversalSpec, scene_dir: Path, route: Any,
               offset_m: float, lookahead_m: float, run_dir: Path,
               progress: Callable[[Any], None] | None) -> None:
@@ -120,52 +96,6 @@ def _traverse(spec: VprSpec, split: str, lighting: TraversalSpec, scene_dir: Pat
              config=ms.RunConfig(camera=camera),
              options=ms.DriveOptions(pursuit=PursuitConfig(lookahead_m=lookahead_m)),
              out_dir=run_dir, seed=spec.seed + 1000 * SPLITS.index(split), progress=progress)
-
-
-def _write_split(split: str, run_dir: Path, dest: Path, quality: int,
-                 lighting: TraversalSpec) -> list[list[Any]]:
-    """JPEGs named by pose into ``dest``; the run's PNGs are removed. Rows of poses.csv."""
-    from PIL import Image
-    from scipy.spatial.transform import Rotation
-
-    from marsscene.runs.export.datasets import camera_trajectory
-    from marsscene.runs.export.frames import camera_frame, frame_in_base, static_transforms
-    from marsscene.runs.runlog import RunLog
-
-    run = RunLog(run_dir)
-    cam = run.camera_streams()[0]
-    xyz, q = camera_trajectory(run, frame_in_base(static_transforms(run.rover, {}),
-                                                  camera_frame(cam.name)))
-    idx = np.clip(np.searchsorted(run.gt.timestamps_s, cam.stamps_s - 1e-7), 0, len(xyz) - 1)
-    # heading / pitch / roll of the camera's viewing axis (optical +z) in the map frame
-    fwd = Rotation.from_quat(q[idx]).apply([0.0, 0.0, 1.0])
-    yaw = np.degrees(np.arctan2(fwd[:, 1], fwd[:, 0]))
-    pitch = np.degrees(np.arcsin(np.clip(fwd[:, 2], -1.0, 1.0)))
-    roll = Rotation.from_quat(run.gt.quat_xyzw[idx]).as_euler("xyz", degrees=True)[:, 0]
-    dest.mkdir()
-    rows = []
-    for i, (t, png) in enumerate(zip(cam.stamps_s, cam.rgb_files, strict=True)):
-        p, r = xyz[idx[i]], q[idx[i]]
-        name = image_name(p[0], p[1], i, yaw[i], pitch[i], roll[i], p[2], t, split)
-        with Image.open(png) as im:
-            im.convert("RGB").save(dest / name, format="JPEG", quality=quality)
-        png.unlink()
-        rows.append([split, f"{split}/{name}", f"{t:.6f}", *(f"{v:.6f}" for v in p),
-                     *(f"{v:.9f}" for v in r), f"{yaw[i]:.3f}", lighting.tau,
-                     lighting.sun_elevation_deg])
-    return rows
-
-
-_COLUMNS = ["split", "file", "t_s", "x_m", "y_m", "z_m", "qx", "qy", "qz", "qw", "yaw_deg", "tau",
-            "sun_elevation_deg"]
-
-
-def _write_rows(path: Path, rows: list[list[Any]], *, landmark: bool = False) -> None:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(_COLUMNS + (["landmark_px"] if landmark else []))
-    w.writerows(rows)
-    write_atomic(path, buf.getvalue())
 
 
 def _landmark(name: str, scene_dir: Path, out: Path, rows: list[list[Any]],
@@ -210,13 +140,11 @@ def _make_split(spec: VprSpec, split: str, scene_dir: Path, route_xy_m: NDArray[
             replacing_dir(out / split, overwrite=True, create=False) as dest:
         _traverse(spec, split, lighting, scene_dir, Route(route_xy_m), offset_m, lookahead_m,
                   run_dir, progress)
-        rows = _write_split(split, run_dir, dest, spec.jpeg_quality, lighting)
-        _write_rows(run_dir / "poses.csv", rows)
-        (run_dir / "vpr_key.json").write_text(key, encoding="utf-8")
+        write_traversal(spec, split, run_dir, dest, key)
 
 
 def generate_vpr(spec: VprSpec, out_dir: str | Path, *, overwrite: bool = False,
-                 resume: bool = False, workers: int = 1,
+                 resume: bool = False, workers: int = 1, device: str | None = None,
                  progress: Callable[[str, Any], None] | None = None) -> dict[str, Any]:
     """Build the scene, drive both traversals, write the dataset; returns ``dataset.json``.
 
@@ -244,16 +172,23 @@ def generate_vpr(spec: VprSpec, out_dir: str | Path, *, overwrite: bool = False,
                            "traversals": {}}
     todo = []
     for split in SPLITS:
-        key = json.dumps({"spec": doc["spec"], "split": split,
-                          "route": np.round(route.xy_m, 6).tolist()}, sort_keys=True,
-                         default=str)
+        parts = {"spec": doc["spec"], "split": split, "route": np.round(route.xy_m, 6).tolist()}
+        if device is not None:
+            from marsscene.benchmark.vpr.device import BATCH_ENGINE
+
+            parts["engine"] = doc["engine"] = BATCH_ENGINE
+        key = json.dumps(parts, sort_keys=True, default=str)
         done = out / "traversals" / split / "vpr_key.json"
         if resume and done.is_file() and done.read_text(encoding="utf-8") == key \
                 and (out / split).is_dir():
             log.info("%s: reusing the finished traversal", split)
         else:
             todo.append((spec, split, scene_dir, route.xy_m, *draws[split], out, key))
-    if workers > 1 and len(todo) > 1:
+    if device is not None and todo:
+        from marsscene.benchmark.vpr.device import drive_traversals
+
+        drive_traversals(todo, device)
+    elif workers > 1 and len(todo) > 1:
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor
 
@@ -279,7 +214,7 @@ def generate_vpr(spec: VprSpec, out_dir: str | Path, *, overwrite: bool = False,
     if spec.landmark_name:
         doc["landmark"] = _landmark(spec.landmark_name, scene_dir, out, rows,
                                     spec.camera_config(spec.database).terrain_window_m)
-    _write_rows(out / "poses.csv", rows, landmark=bool(spec.landmark_name))
+    write_rows(out / "poses.csv", rows, landmark=bool(spec.landmark_name))
     from marsscene.runs.tum import write_tum
     from marsscene.sim.world import load_world
 

@@ -27,6 +27,7 @@ import mujoco
 import numpy as np
 from array_api_compat import device
 
+from marsscene._optional import quiet_warp
 from marsscene.env import judgement, taskmath
 from marsscene.env.batch.backend import Backend
 from marsscene.env.batch.judge import RockContacts, collided
@@ -111,7 +112,7 @@ class BatchNavEnv:
         self.ids: dict[str, Any] = {  # index lists: numpy and PyTorch take them
             k: [int(i) for i in v] if isinstance(v, np.ndarray) else v
             for k, v in tiled.ids.items()}
-        wp.init()
+        quiet_warp(wp).init()
         self.bk = bk = Backend(device or ("cuda:0" if wp.is_cuda_available() else "cpu"),
                                library, seed)
         self.device, self.xp = bk.device, bk.xp

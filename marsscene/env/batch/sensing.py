@@ -101,7 +101,8 @@ class BatchSensors:
         self.camera_id = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_CAMERA, NAVCAM)
         with backend.wp.ScopedDevice(backend.device):
             self.camera = (BatchCamera(batch, self.n, config=cam, offsets_xy_m=offsets_xy_m,
-                                       device=backend.device) if cam is not None else None)
+                                       catalogue=batch.catalogues(), device=backend.device)
+                           if cam is not None else None)
             self.lidar = (BatchLidar(mj_model, mjw_model, self.n, lidar, seed=seed)
                           if lidar is not None else None)
         self._bounds: Any = None  # the last call's (kept alive while the kernels read it)

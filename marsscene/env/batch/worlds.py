@@ -14,7 +14,7 @@ machine then loads it with numpy alone, no scene folders, no build.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +28,8 @@ __all__ = ["WorldBatch"]
 #: The arrays of a saved batch (``np.savez``); ``rock_world`` holds the world of each rock.
 _FIELDS = ("posts_z_m", "cell_m", "origins_xy_m", "rock_xy_m", "rock_radius_m", "rock_height_m",
            "rock_world", "starts_xy_m", "yaws_rad", "goals_xy_m")
+#: Saved too, absent from a batch saved before them (then empty).
+_OPTIONAL = ("catalogue_rocks", "catalogue_world")
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,6 +48,10 @@ class WorldBatch:
         The rocks of all worlds (centre, footprint radius, exposed height, world index).
     starts_xy_m, goals_xy_m : ndarray (W, P, 2); yaws_rad : ndarray (W, P)
         The drawn episodes: start, start heading, goal.
+    catalogue_rocks : ndarray (K, 6); catalogue_world : ndarray (K,)
+        The rock catalogue's rocks that are not MJCF geoms (what the camera draws besides
+        the rocks above; :func:`~marsscene.sensors.camera_rocks.read_rock_catalog`'s rows:
+        id, x, y, z, diameter, height + burial) and the world of each.
     """
 
     posts_z_m: NDArray[np.float32]
@@ -58,6 +64,9 @@ class WorldBatch:
     starts_xy_m: NDArray[np.float64]
     yaws_rad: NDArray[np.float64]
     goals_xy_m: NDArray[np.float64]
+    catalogue_rocks: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 6)))
+    catalogue_world: NDArray[np.int64] = field(
+        default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def count(self) -> int:
@@ -97,6 +106,10 @@ class WorldBatch:
         k = self.rock_world == world
         return Obstacles(self.rock_xy_m[k], self.rock_radius_m[k], self.rock_height_m[k])
 
+    def catalogues(self) -> list[NDArray[np.float64]]:
+        """Each world's catalogue rocks (rows of :attr:`catalogue_rocks`)."""
+        return [self.catalogue_rocks[self.catalogue_world == w] for w in range(self.count)]
+
     def rock_terrains(self) -> list[Any]:
         """Each world's terrain with its rocks on it, as the height scan samples it
         (:func:`~marsscene.env.observe.rock_terrain`; up to 5 cm posts)."""
@@ -114,6 +127,7 @@ class WorldBatch:
         from marsscene.env.task import NavTask, TaskMap
         from marsscene.env.worlds import world_paths
         from marsscene.rover.config import RunConfig
+        from marsscene.sensors.camera_rocks import read_rock_catalog
         from marsscene.sim.rover_sim import RoverSim
         from marsscene.sim.world import scene_obstacles
 
@@ -125,6 +139,7 @@ class WorldBatch:
         origins: list[tuple[float, float]] = []
         rocks: list[Any] = []
         draws: list[list[Any]] = []
+        catalogue: list[NDArray[np.float64]] = []
         cell = None
         for w in range(count):
             sim = RoverSim(path(w), run=RunConfig(), settle_s=0.0, soil="rigid")  # terrain only
@@ -138,6 +153,7 @@ class WorldBatch:
             posts.append(np.asarray(hf.z_m, dtype=np.float32))
             origins.append(hf.origin_xy_m)
             rocks.append(obstacles)
+            catalogue.append(read_rock_catalog(Path(path(w))))
             task_map = TaskMap(hf, obstacles, task)
             rng = np.random.default_rng([seed, w])
             draws.append([task_map.draw(rng, tries=1000) for _ in range(int(pool))])
@@ -154,13 +170,17 @@ class WorldBatch:
             starts_xy_m=np.array([[d[0] for d in ds] for ds in draws], dtype=np.float64),
             yaws_rad=np.array([[d[1] for d in ds] for ds in draws], dtype=np.float64),
             goals_xy_m=np.array([[d[2] for d in ds] for ds in draws], dtype=np.float64),
+            catalogue_rocks=np.concatenate(catalogue).reshape(-1, 6),
+            catalogue_world=np.concatenate([np.full(len(c), w) for w, c in
+                                            enumerate(catalogue)]).astype(np.int64),
         )
 
     def save(self, path: str | Path) -> Path:
         """Write the batch as one ``.npz`` (the arrays above)."""
         out = Path(path)
         with open(out, "wb") as f:
-            arrays: dict[str, Any] = {k: np.asarray(getattr(self, k)) for k in _FIELDS}
+            arrays: dict[str, Any] = {k: np.asarray(getattr(self, k))
+                                      for k in (*_FIELDS, *_OPTIONAL)}
             np.savez_compressed(f, **arrays)
         return out
 
@@ -170,6 +190,7 @@ class WorldBatch:
         try:
             with np.load(Path(path)) as z:
                 arrays = {k: z[k] for k in _FIELDS}
+                arrays.update({k: z[k] for k in _OPTIONAL if k in z.files})
         except (OSError, KeyError, ValueError) as err:
             raise ConfigError(f"{path}: not a world batch written by WorldBatch.save "
                               f"({err})") from None

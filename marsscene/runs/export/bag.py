@@ -22,6 +22,7 @@ from marsscene.runs.export import bag_topics as bt
 from marsscene.runs.export.bag_images import JpegCache
 from marsscene.runs.export.bag_messages import MessageBuilder
 from marsscene.runs.export.options import BagOptions
+from marsscene.runs.export.topic_table import RosNames
 from marsscene.runs.runlog import RunLog
 
 __all__ = ["BagOptions", "BagSummary", "MessageBuilder", "write_bag"]
@@ -98,7 +99,7 @@ def write_bag(
         depth_encoding=opts.depth_encoding, cloud_stride_px=opts.cloud_stride_px,
         depth_cloud=opts.depth_cloud_on, jpeg_cache=jpeg_cache,
     )
-    bag = MessageBuilder(opts.ros_distro)
+    bag = MessageBuilder(opts.ros_distro, RosNames.of_meta(run.meta))  # a team robot's names
     bt.add_state(bag, run, cams, "stereo" in wanted)
     if "camera" in wanted:
         bt.add_camera(bag, cams[0], image_opts)

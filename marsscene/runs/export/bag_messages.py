@@ -17,7 +17,7 @@ import numpy as np
 
 from marsscene._threads import ordered_map
 from marsscene.errors import missing_dependency
-from marsscene.runs.export.topic_table import QOS_PROFILES, Topic
+from marsscene.runs.export.topic_table import QOS_PROFILES, ROVER, RosNames, Topic
 
 __all__ = ["MessageBuilder"]
 
@@ -27,15 +27,18 @@ class MessageBuilder:
 
     ``register`` adds topics (:mod:`.topic_table` rows; in write order for equal stamps),
     ``add`` queues a message, ``write`` builds, serialises (CDR) and writes them in stamp order.
+    Every frame id a message carries is the robot's (``names.frame``: ``base_link`` is
+    ``scout1/base_link`` for robot ``scout1`` of a team); the composers name bare frames.
     """
 
-    def __init__(self, distro: str = "jazzy") -> None:
+    def __init__(self, distro: str = "jazzy", names: RosNames = ROVER) -> None:
         try:
             from rosbags.typesys import Stores, get_typestore
         except ImportError:  # pragma: no cover - exercised without the extra only
             raise missing_dependency("rosbags", "ros") from None
         self.store = get_typestore(Stores.ROS2_HUMBLE if distro == "humble" else Stores.ROS2_JAZZY)
-        self.distro = distro
+        self.distro, self.names = distro, names
+        self._frame = names.frame if names.frame_prefix else str  # the rover's frames: as named
         self.T: Any = self.store.types
         self.topics: dict[str, Topic] = {}
         self.events: list[tuple[int, int, int, Callable[..., Any], tuple[Any, ...]]] = []
@@ -62,7 +65,7 @@ class MessageBuilder:
         ns = round(t_s * 1e9)
         return self.T["std_msgs/msg/Header"](
             stamp=self.T["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9),
-            frame_id=frame,
+            frame_id=self._frame(frame),
         )
 
     def vec(self, v: Any) -> Any:
@@ -76,7 +79,7 @@ class MessageBuilder:
     def tf(self, t_s: float, parent: str, child: str, xyz: Any, q: Any) -> Any:
         tr = self.T["geometry_msgs/msg/Transform"](translation=self.vec(xyz), rotation=self.quat(q))
         return self.T["geometry_msgs/msg/TransformStamped"](
-            header=self.header(t_s, parent), child_frame_id=child, transform=tr
+            header=self.header(t_s, parent), child_frame_id=self._frame(child), transform=tr
         )
 
     def odometry(self, t_s: float, parent: str, xyz: Any, q: Any, lin: Any, ang: Any,
@@ -87,7 +90,7 @@ class MessageBuilder:
         pose = self.T["geometry_msgs/msg/Pose"](position=point, orientation=self.quat(q))
         twist = self.T["geometry_msgs/msg/Twist"](linear=self.vec(lin), angular=self.vec(ang))
         return self.T["nav_msgs/msg/Odometry"](
-            header=self.header(t_s, parent), child_frame_id="base_link",
+            header=self.header(t_s, parent), child_frame_id=self._frame("base_link"),
             pose=self.T["geometry_msgs/msg/PoseWithCovariance"](
                 pose=pose, covariance=np.zeros(36) if pose_cov is None else pose_cov),
             twist=self.T["geometry_msgs/msg/TwistWithCovariance"](

@@ -40,7 +40,7 @@ class ImageOptions:
 
     ``images``: ``"raw"`` (``sensor_msgs/Image``), ``"compressed"`` (image_transport's
     ``compressed`` / ``compressedDepth`` sub-topics) or ``"both"``; ``codec``: ``"png"`` or
-    ``"jpeg"`` for colour and mono; ``depth_cloud``: write ``/rover/depth/points`` (stride
+    ``"jpeg"`` for colour and mono; ``depth_cloud``: write ``depth/points`` (stride
     ``cloud_stride_px``).
     """
 
@@ -64,42 +64,45 @@ def add_state(bag: MessageBuilder, run: RunLog, cams: list[CameraStream], stereo
     extra = {c.name: c.intrinsics for c in cams[1:]} if stereo else {}
     statics = static_transforms(run.rover, extra)
     t0 = float(run.gt.timestamps_s[0])
-    bag.register(tt.state_topics(imu_true=run.imu_true is not None, soil=run.soil is not None))
+    n = bag.names.topic
+    bag.register(tt.state_topics(bag.names, imu_true=run.imu_true is not None,
+                                 soil=run.soil is not None))
     bag.add("/tf_static", t0, cs.tf_static, bag, t0, statics)
-    bag.add("/rover/robot_description", t0, cs.robot_description, bag, run.rover, statics)
+    bag.add(n("robot_description"), t0, cs.robot_description, bag, run.rover, statics)
     for t in run.imu[:, 0]:
         bag.add("/clock", t, bag.clock, t)
     f = cs.ControlFields(cs.ControlRows.of_run(run), run.rover, bd.noise_of_run(run.meta))
     for i, t in enumerate(f.t_s):
         bag.add("/tf", t, cs.tf, bag, f, i)
-        bag.add("/rover/odom", t, cs.odometry, bag, f, i)
-        bag.add("/rover/GT_Trajectory", t, cs.ground_truth, bag, f, i)
+        bag.add(n("odom"), t, cs.odometry, bag, f, i)
+        bag.add(n("GT_Trajectory"), t, cs.ground_truth, bag, f, i)
     for i, t in enumerate(f.t_s):
-        bag.add("/rover/joint_states", t, cs.joint_states, bag, f, i)
+        bag.add(n("joint_states"), t, cs.joint_states, bag, f, i)
     if run.soil is not None:  # columns: t, slip (6), sinkage (6), load (6)
         for row in run.soil:
-            bag.add(tt.WHEEL_SOIL_TOPIC, row[0], cs.wheel_soil, bag, row[0], row[7:13],
+            bag.add(n(tt.WHEEL_SOIL), row[0], cs.wheel_soil, bag, row[0], row[7:13],
                     row[1:7], row[13:19])
     for row in run.cmd:
-        bag.add("/rover/cmd_vel", row[0], bag.twist, row[1], row[2])
+        bag.add(n("cmd_vel"), row[0], bag.twist, row[1], row[2])
     g_var, a_var = cs.imu_variances(run.meta.get("noise", {}), rate_hz(run.imu[:, 0]))
     for row in run.imu:
-        bag.add("/rover/imu_noisy", row[0], bag.imu, row[0], row[1:4], row[4:7], g_var, a_var)
+        bag.add(n("imu_noisy"), row[0], bag.imu, row[0], row[1:4], row[4:7], g_var, a_var)
     if run.imu_true is not None:
         for row in run.imu_true:
-            bag.add("/rover/imu", row[0], bag.imu, row[0], row[1:4], row[4:7], 0.0, 0.0)
+            bag.add(n("imu"), row[0], bag.imu, row[0], row[1:4], row[4:7], 0.0, 0.0)
 
 
 def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> None:
     """RGB, depth, camera infos and (``opts.depth_cloud``) the organised depth cloud."""
     frame, intr = camera_frame(cam.name), cam.intrinsics
     raw, packed = opts.images in ("raw", "both"), opts.images in ("compressed", "both")
-    bag.register(tt.camera_topics(images=opts.images, depth=bool(cam.depth_files),
-                                   depth_cloud=opts.depth_cloud))
-    _add_colour(bag, cam, opts, "/rover/rgb")
+    n = bag.names.topic
+    bag.register(tt.camera_topics(bag.names, images=opts.images, depth=bool(cam.depth_files),
+                                  depth_cloud=opts.depth_cloud))
+    _add_colour(bag, cam, opts, n("rgb"))
     if not cam.depth_files:
         return
-    encoding, depth_topic = opts.depth_encoding, "/rover/depth/image_raw"
+    encoding, depth_topic = opts.depth_encoding, n("depth/image_raw")
     # the image and the cloud share one PNG decode
     depth = _Shared(lambda i: read_image(cam.depth_files[i]), int(raw) + int(opts.depth_cloud))
 
@@ -118,15 +121,15 @@ def add_camera(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> No
             bag.add(depth_topic, t, image, i, t)
         if packed:
             bag.add(depth_topic + "/compressedDepth", t, image_packed, i, t)
-        bag.add("/rover/depth/camera_info", t, sensors.camera_info, bag, t, frame, intr, 0.0)
+        bag.add(n("depth/camera_info"), t, sensors.camera_info, bag, t, frame, intr, 0.0)
         if opts.depth_cloud:
-            bag.add("/rover/depth/points", t, cloud, i, t)
+            bag.add(n("depth/points"), t, cloud, i, t)
 
 
 def add_stereo(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions) -> None:
     """One view of the stereo pair: its image(s) and camera info."""
-    bag.register(tt.stereo_topics(cam.name, images=opts.images))
-    _add_colour(bag, cam, opts, f"/rover/stereo/{cam.name}")
+    bag.register(tt.stereo_topics(cam.name, bag.names, images=opts.images))
+    _add_colour(bag, cam, opts, bag.names.topic(f"stereo/{cam.name}"))
 
 
 def _add_colour(bag: MessageBuilder, cam: CameraStream, opts: ImageOptions, prefix: str) -> None:
@@ -158,7 +161,7 @@ def add_lidar(
     cfg = run.meta.get("lidar") or {}
     if "channels" not in cfg:
         raise RuntimeSimError(f"{run.path / 'run.json'} has no LiDAR configuration")
-    bag.register(tt.lidar_topics())
+    bag.register(tt.lidar_topics(bag.names))
     load = _Shared(lambda i: read_ply(files[i]), 2)  # the cloud and the scan share one read
 
     def laser(i: int, t: float) -> Any:
@@ -168,8 +171,8 @@ def add_lidar(
         return sensors.lidar_cloud(bag, t, load(i))
 
     for i, t in enumerate(stamps):
-        bag.add("/rover/lidar/points", t, cloud, i, t)
-        bag.add("/rover/scan", t, laser, i, t)
+        bag.add(bag.names.topic("lidar/points"), t, cloud, i, t)
+        bag.add(bag.names.topic("scan"), t, laser, i, t)
 
 
 class _Shared:

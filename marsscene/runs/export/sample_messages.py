@@ -29,7 +29,14 @@ from marsscene.runs.export import compose_state as cs
 from marsscene.runs.export.bag_messages import MessageBuilder
 from marsscene.runs.export.bag_topics import ImageOptions
 from marsscene.runs.export.frames import camera_frame, static_transforms
-from marsscene.runs.export.topic_table import STEREO_SIDES, WHEEL_SOIL_TOPIC, Topic, topic_table
+from marsscene.runs.export.topic_table import (
+    ROVER,
+    STEREO_SIDES,
+    WHEEL_SOIL,
+    RosNames,
+    Topic,
+    topic_table,
+)
 from marsscene.runs.logs import depth_mm, scan_record
 
 __all__ = ["SampleMessages"]
@@ -69,6 +76,8 @@ class SampleMessages:
     soil : WheelSoil, optional
         The simulation's wheel--soil model (``RoverSim.wheel_soil``): each control step also
         gives ``/rover/wheel_soil`` (sinkage, slip and load per wheel, as the bag's).
+    names : RosNames
+        The robot's topic namespace and frame prefix (a team robot's; default ``/rover``).
     """
 
     def __init__(self, rover: RoverConfig, noise: NoiseConfig, *, imu_hz: float,
@@ -76,8 +85,9 @@ class SampleMessages:
                  stereo: dict[str, dict[str, Any]] | None = None, camera_depth: bool = True,
                  images: ImageOptions | None = None, distro: str = "jazzy",
                  wanted: Callable[[str], bool] | None = None, map_tf: bool = True,
-                 soil: Any = None) -> None:
-        self.b = MessageBuilder(distro)
+                 soil: Any = None, names: RosNames = ROVER) -> None:
+        self.b = MessageBuilder(distro, names)
+        self.names = names
         self.rover, self.noise, self.lidar_cfg = rover, noise, lidar
         self.cam_intr, self.stereo_intr, self.camera_depth = camera, stereo or {}, camera_depth
         self.opts = images if images is not None else ImageOptions()
@@ -90,7 +100,7 @@ class SampleMessages:
 
     def topics(self) -> list[Topic]:
         """Every topic this publisher can make (:mod:`.topic_table` rows, in the bag's order)."""
-        return topic_table(images=self.opts.images, camera=self.cam_intr is not None,
+        return topic_table(self.names, images=self.opts.images, camera=self.cam_intr is not None,
                            depth=self.camera_depth, stereo=bool(self.stereo_intr),
                            lidar=self.lidar_cfg is not None, depth_cloud=self.opts.depth_cloud,
                            soil=self.soil is not None)
@@ -99,13 +109,14 @@ class SampleMessages:
         """``/tf_static`` (sensor mounts) and ``/rover/robot_description`` (the URDF)."""
         statics = static_transforms(self.rover, self.stereo_intr)
         return [("/tf_static", cs.tf_static(self.b, t_s, statics)),
-                ("/rover/robot_description", cs.robot_description(self.b, self.rover, statics))]
+                (self.names.topic("robot_description"),
+                 cs.robot_description(self.b, self.rover, statics))]
 
     def control(self, t: float, v: float, w: float, rates: Any, steer: Any,
                 gt: tuple[Any, Any], odom: tuple[Any, Any]) -> Pairs:
         """``/tf``, ``/rover/odom``, ``/rover/GT_Trajectory``, ``/rover/joint_states`` and the
         command in force (``/rover/cmd_vel``) of one control step."""
-        b, want = self.b, self.wanted
+        b, want, n = self.b, self.wanted, self.names.topic
         row = (t, gt[0], _xyzw(gt[1]), odom[0], _xyzw(odom[1]), rates, steer)
         rows = [row] if self._prev is None else [self._prev, row]
         self._prev = row
@@ -114,27 +125,26 @@ class SampleMessages:
         out: Pairs = []
         if want("/tf"):
             out.append(("/tf", cs.tf(b, f, 0, self.map_tf)))
-        if want("/rover/cmd_vel"):
-            out.append(("/rover/cmd_vel", b.twist(v, w)))
-        for topic, build in (("/rover/odom", cs.odometry), ("/rover/GT_Trajectory",
-                                                            cs.ground_truth),
-                             ("/rover/joint_states", cs.joint_states)):
+        if want(n("cmd_vel")):
+            out.append((n("cmd_vel"), b.twist(v, w)))
+        for topic, build in ((n("odom"), cs.odometry), (n("GT_Trajectory"), cs.ground_truth),
+                             (n("joint_states"), cs.joint_states)):
             if want(topic):
                 out.append((topic, build(b, f, 0)))
-        if self.soil is not None and want(WHEEL_SOIL_TOPIC):
+        if self.soil is not None and want(n(WHEEL_SOIL)):
             ws = self.soil  # the simulation's wheel--soil state now
-            out.append((WHEEL_SOIL_TOPIC, cs.wheel_soil(b, t, ws.sinkage_m, ws.slip, ws.load_n)))
+            out.append((n(WHEEL_SOIL), cs.wheel_soil(b, t, ws.sinkage_m, ws.slip, ws.load_n)))
         return out
 
     def imu(self, t: float, acc: Any, gyr: Any, acc_true: Any, gyr_true: Any,
             bias: Any = None) -> Pairs:
         """``/clock`` (the IMU's clock is the finest) and both IMU topics."""
-        b, want = self.b, self.wanted
+        b, want, n = self.b, self.wanted, self.names.topic
         out: Pairs = [("/clock", b.clock(t))] if want("/clock") else []
-        if want("/rover/imu_noisy"):
-            out.append(("/rover/imu_noisy", b.imu(t, acc, gyr, *self.imu_var)))
-        if want("/rover/imu"):
-            out.append(("/rover/imu", b.imu(t, acc_true, gyr_true, 0.0, 0.0)))
+        if want(n("imu_noisy")):
+            out.append((n("imu_noisy"), b.imu(t, acc, gyr, *self.imu_var)))
+        if want(n("imu")):
+            out.append((n("imu"), b.imu(t, acc_true, gyr_true, 0.0, 0.0)))
         return out
 
     def lidar(self, t: float, index: int, scan: dict[str, Any]) -> Pairs:
@@ -142,37 +152,39 @@ class SampleMessages:
         b, cfg = self.b, self.lidar_cfg
         if cfg is None:
             return []
-        want_cloud, want_scan = self.wanted("/rover/lidar/points"), self.wanted("/rover/scan")
+        cloud, laser = self.names.topic("lidar/points"), self.names.topic("scan")
+        want_cloud, want_scan = self.wanted(cloud), self.wanted(laser)
         if not (want_cloud or want_scan):
             return []
         rec = scan_record(scan["xyz_m"], scan["intensity"], scan["ring"], scan.get("t_s"))
         out: Pairs = []
         if want_cloud:
-            out.append(("/rover/lidar/points", sensors.lidar_cloud(b, t, rec)))
+            out.append((cloud, sensors.lidar_cloud(b, t, rec)))
         if want_scan:
-            out.append(("/rover/scan", sensors.laser_scan(b, t, rec, cfg)))
+            out.append((laser, sensors.laser_scan(b, t, rec, cfg)))
         return out
 
     def camera(self, t: float, index: int, rgb: Any, depth: Any) -> Pairs:
         """The navcam's colour, depth, camera infos and (``depth_cloud``) the depth cloud."""
         if self.cam_intr is None:
             return []
-        frame, out = camera_frame("navcam"), self._colour("/rover/rgb", t, "navcam", rgb)
+        n = self.names.topic
+        frame, out = camera_frame("navcam"), self._colour(n("rgb"), t, "navcam", rgb)
         if depth is None:
             return out
         b, want, opts, intr = self.b, self.wanted, self.opts, self.cam_intr
         mm = depth_mm(depth)
-        if want("/rover/depth/image_raw") and opts.images in ("raw", "both"):
-            out.append(("/rover/depth/image_raw",
+        if want(n("depth/image_raw")) and opts.images in ("raw", "both"):
+            out.append((n("depth/image_raw"),
                         sensors.depth_image(b, t, frame, mm, opts.depth_encoding)))
-        topic = "/rover/depth/image_raw/compressedDepth"
+        topic = n("depth/image_raw/compressedDepth")
         if want(topic) and opts.images in ("compressed", "both"):
             out.append((topic, b.compressed(t, frame, bi.compressed_depth_mm(
                 mm, opts.depth_encoding, b.distro))))
-        if want("/rover/depth/camera_info"):
-            out.append(("/rover/depth/camera_info", sensors.camera_info(b, t, frame, intr, 0.0)))
-        if want("/rover/depth/points") and opts.depth_cloud:
-            out.append(("/rover/depth/points", sensors.depth_cloud(
+        if want(n("depth/camera_info")):
+            out.append((n("depth/camera_info"), sensors.camera_info(b, t, frame, intr, 0.0)))
+        if want(n("depth/points")) and opts.depth_cloud:
+            out.append((n("depth/points"), sensors.depth_cloud(
                 b, t, frame, mm, intr, opts.cloud_stride_px)))
         return out
 
@@ -181,7 +193,7 @@ class SampleMessages:
         out: Pairs = []
         for side, img in zip(STEREO_SIDES, pair, strict=True):
             if self.stereo_intr.get(side) is not None:
-                out += self._colour(f"/rover/stereo/{side}", t, side, img)
+                out += self._colour(self.names.topic(f"stereo/{side}"), t, side, img)
         return out
 
     def _colour(self, prefix: str, t: float, stream: str, img: Any) -> Pairs:

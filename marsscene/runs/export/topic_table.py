@@ -1,5 +1,11 @@
 """The rover's ROS 2 topics, stated once: name, message type and QoS of each, in the bag's order.
 
+A robot's topics live under its namespace and its frames carry its prefix (:class:`RosNames`):
+the single rover of a drive is ``/rover/...`` with bare frames (``base_link``), robot ``scout1``
+of a team ``/scout1/...`` with ``scout1/base_link``, as multi-robot ROS 2 systems name them
+(Nav2's multi-robot bringup, ``robot_state_publisher``'s ``frame_prefix``). ``/clock``,
+``/tf`` and ``/tf_static`` are global and ``map`` is shared.
+
 The bag (:mod:`.bag_topics` registers these rows on its :class:`~.bag_messages.MessageBuilder`),
 the live messages (:class:`~.sample_messages.SampleMessages`) and the live bridge
 (:mod:`marsscene.ros2.bridge`) all read this table; so do the QoS settings: the bag's offered
@@ -10,6 +16,8 @@ Examples
 --------
 >>> [t.name for t in topic_table(images="compressed") if t.latched]
 ['/tf_static', '/rover/robot_description']
+>>> [t.name for t in state_topics(RosNames.for_robot("scout1"))][3:6]
+['/scout1/robot_description', '/scout1/cmd_vel', '/scout1/odom']
 >>> QOS_PROFILES["latched"]
 QosProfile(reliable=True, depth=1, transient_local=True)
 """
@@ -17,8 +25,10 @@ QosProfile(reliable=True, depth=1, transient_local=True)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
-__all__ = ["QOS_PROFILES", "STEREO_SIDES", "QosProfile", "Topic", "camera_topics",
+__all__ = ["QOS_PROFILES", "ROVER", "STEREO_SIDES", "QosProfile", "RosNames", "Topic",
+           "camera_topics",
            "lidar_topics", "state_topics", "stereo_topics", "topic_table"]
 
 
@@ -41,6 +51,49 @@ QOS_PROFILES: dict[str, QosProfile] = {
     "clock": QosProfile(False, 1), "tf": QosProfile(True, 100),
     "latched": QosProfile(True, 1, transient_local=True), "default": QosProfile(True, 10),
 }
+
+#: Frames every robot shares (not prefixed).
+SHARED_FRAMES = ("map", "world")
+
+
+@dataclass(frozen=True)
+class RosNames:
+    """One robot's names on ROS 2: its topics' namespace and its TF frames' prefix.
+
+    ``control`` is the namespace of the bridge's own command topics (reset, teleport, goal).
+    """
+
+    namespace: str = "rover"
+    frame_prefix: str = ""
+    control: str = "/marsscene"
+
+    @classmethod
+    def for_robot(cls, name: str) -> RosNames:
+        """A team robot's: ``/NAME/...`` topics, ``NAME/...`` frames, ``/marsscene/NAME``."""
+        return cls(name, f"{name}/", f"/marsscene/{name}")
+
+    @classmethod
+    def of_meta(cls, meta: dict[str, Any]) -> RosNames:
+        """The names a run folder's ``run.json`` states (``"ros"``), else the rover's."""
+        ros = meta.get("ros") or {}
+        return cls(**{k: str(v) for k, v in ros.items() if k in ("namespace", "frame_prefix",
+                                                                   "control")})
+
+    def to_dict(self) -> dict[str, str]:
+        return {"namespace": self.namespace, "frame_prefix": self.frame_prefix,
+                "control": self.control}
+
+    def topic(self, relative: str) -> str:
+        """``odom`` -> ``/rover/odom``."""
+        return f"/{self.namespace}/{relative}"
+
+    def frame(self, frame: str) -> str:
+        """``base_link`` -> ``scout1/base_link``; shared frames (``map``) as they are."""
+        return frame if frame in SHARED_FRAMES or not frame else self.frame_prefix + frame
+
+
+#: The single rover's names (every drive, bag and session without a team).
+ROVER = RosNames()
 
 #: The stereo pair's views, in the bag's order.
 STEREO_SIDES = ("left", "right")
@@ -69,24 +122,26 @@ class Topic:
 
 #: Per wheel on deformable soil, as a ``JointState`` of the drive joints: position = sinkage
 #: (m), velocity = slip (-1 to 1), effort = the soil's load on the wheel (N).
-WHEEL_SOIL_TOPIC = "/rover/wheel_soil"
+WHEEL_SOIL = "wheel_soil"
 
 
-def state_topics(*, imu_true: bool = True, soil: bool = False) -> list[Topic]:
+def state_topics(names: RosNames = ROVER, *, imu_true: bool = True,
+                 soil: bool = False) -> list[Topic]:
     """Clock, TF, the URDF, the command, odometry, ground truth, joints, (``soil``) the
     wheels' slip and sinkage and the IMU (``imu_true``: also the noise-free ``/rover/imu``)."""
+    n = names.topic
     out = [Topic("/clock", "rosgraph_msgs/msg/Clock", "clock"),
            Topic("/tf", "tf2_msgs/msg/TFMessage", "tf"),
            Topic("/tf_static", "tf2_msgs/msg/TFMessage", "latched"),
-           Topic("/rover/robot_description", "std_msgs/msg/String", "latched"),
-           Topic("/rover/cmd_vel", "geometry_msgs/msg/Twist", "default"),
-           Topic("/rover/odom", "nav_msgs/msg/Odometry", "default"),
-           Topic("/rover/GT_Trajectory", "nav_msgs/msg/Odometry", "default"),
-           Topic("/rover/joint_states", "sensor_msgs/msg/JointState", "default"),
-           *([Topic(WHEEL_SOIL_TOPIC, "sensor_msgs/msg/JointState", "default")] if soil
+           Topic(n("robot_description"), "std_msgs/msg/String", "latched"),
+           Topic(n("cmd_vel"), "geometry_msgs/msg/Twist", "default"),
+           Topic(n("odom"), "nav_msgs/msg/Odometry", "default"),
+           Topic(n("GT_Trajectory"), "nav_msgs/msg/Odometry", "default"),
+           Topic(n("joint_states"), "sensor_msgs/msg/JointState", "default"),
+           *([Topic(n(WHEEL_SOIL), "sensor_msgs/msg/JointState", "default")] if soil
              else []),
-           Topic("/rover/imu_noisy", "sensor_msgs/msg/Imu")]
-    return [*out, Topic("/rover/imu", "sensor_msgs/msg/Imu")] if imu_true else out
+           Topic(n("imu_noisy"), "sensor_msgs/msg/Imu")]
+    return [*out, Topic(n("imu"), "sensor_msgs/msg/Imu")] if imu_true else out
 
 
 def _colour(prefix: str, images: str) -> list[Topic]:
@@ -97,36 +152,40 @@ def _colour(prefix: str, images: str) -> list[Topic]:
     return [*out, Topic(f"{prefix}/camera_info", _CAMERA_INFO)]
 
 
-def camera_topics(*, images: str, depth: bool = True,
+def camera_topics(names: RosNames = ROVER, *, images: str, depth: bool = True,
                   depth_cloud: bool = False) -> list[Topic]:
     """The navcam: colour, then (``depth``) depth images, camera info and (``depth_cloud``)
     the organised cloud; ``images`` is ``"raw"``, ``"compressed"`` or ``"both"``."""
-    out = _colour("/rover/rgb", images)
+    n = names.topic
+    out = _colour(n("rgb"), images)
     if not depth:
         return out
-    out += [Topic("/rover/depth/image_raw", _IMAGE)] if images in ("raw", "both") else []
+    out += [Topic(n("depth/image_raw"), _IMAGE)] if images in ("raw", "both") else []
     if images in ("compressed", "both"):
-        out.append(Topic("/rover/depth/image_raw/compressedDepth", _COMPRESSED))
-    out.append(Topic("/rover/depth/camera_info", _CAMERA_INFO))
-    return [*out, Topic("/rover/depth/points", _CLOUD)] if depth_cloud else out
+        out.append(Topic(n("depth/image_raw/compressedDepth"), _COMPRESSED))
+    out.append(Topic(n("depth/camera_info"), _CAMERA_INFO))
+    return [*out, Topic(n("depth/points"), _CLOUD)] if depth_cloud else out
 
 
-def stereo_topics(side: str, *, images: str) -> list[Topic]:
+def stereo_topics(side: str, names: RosNames = ROVER, *, images: str) -> list[Topic]:
     """One view of the stereo pair (``side``: one of :data:`STEREO_SIDES`)."""
-    return _colour(f"/rover/stereo/{side}", images)
+    return _colour(names.topic(f"stereo/{side}"), images)
 
 
-def lidar_topics() -> list[Topic]:
+def lidar_topics(names: RosNames = ROVER) -> list[Topic]:
     """The LiDAR's point cloud and its ``LaserScan``."""
-    return [Topic("/rover/lidar/points", _CLOUD), Topic("/rover/scan", "sensor_msgs/msg/LaserScan")]
+    return [Topic(names.topic("lidar/points"), _CLOUD),
+            Topic(names.topic("scan"), "sensor_msgs/msg/LaserScan")]
 
 
-def topic_table(*, images: str, imu_true: bool = True, camera: bool = False,
-                depth: bool = False, stereo: bool = False, lidar: bool = False,
-                depth_cloud: bool = False, soil: bool = False) -> list[Topic]:
+def topic_table(names: RosNames = ROVER, *, images: str, imu_true: bool = True,
+                camera: bool = False, depth: bool = False, stereo: bool = False,
+                lidar: bool = False, depth_cloud: bool = False,
+                soil: bool = False) -> list[Topic]:
     """Every topic of a bag (or a live session) with these sensors, in the bag's order."""
-    out = state_topics(imu_true=imu_true, soil=soil)
-    out += camera_topics(images=images, depth=depth, depth_cloud=depth_cloud) if camera else []
+    out = state_topics(names, imu_true=imu_true, soil=soil)
+    out += (camera_topics(names, images=images, depth=depth, depth_cloud=depth_cloud)
+            if camera else [])
     for side in STEREO_SIDES if stereo else ():
-        out += stereo_topics(side, images=images)
-    return out + lidar_topics() if lidar else out
+        out += stereo_topics(side, names, images=images)
+    return out + lidar_topics(names) if lidar else out

@@ -58,7 +58,7 @@ def histogram(linear: wp.array2d[wp.vec3], width: int, sub_cols: int,
 
 @wp.kernel
 def auto_gain(hist: wp.array2d[int], peak: wp.array2d[int], target_mean: float,
-              max_saturated: float, max_gain: float, smoothing: float,
+              max_saturated: float, max_gain: wp.array[float], smoothing: float,
               gain: wp.array[float]):
     """Camera ``i``'s gain from its histograms, smoothed with its last (0: none yet)."""
     i = wp.tid()
@@ -85,11 +85,19 @@ def auto_gain(hist: wp.array2d[int], peak: wp.array2d[int], target_mean: float,
             lo_g = mid
         else:
             hi_g = mid
-    g = wp.min(wp.min(wp.sqrt(lo_g * hi_g), hi), max_gain)
+    g = wp.min(wp.min(wp.sqrt(lo_g * hi_g), hi), max_gain[i])
     last = gain[i]
     if last > 0.0:
         g = wp.exp((1.0 - smoothing) * wp.log(last) + smoothing * wp.log(g))
     gain[i] = g
+
+
+@wp.kernel
+def keep_fixed(fixed: wp.array[int], fixed_gain: wp.array[float], gain: wp.array[float]):
+    """The fixed-exposure cameras' gain, after the auto exposure's."""
+    i = wp.tid()
+    if fixed[i] != 0:
+        gain[i] = fixed_gain[i]
 
 
 @wp.kernel
@@ -102,3 +110,21 @@ def encode(linear: wp.array2d[wp.vec3], gain: wp.array[float], width: int,
     c = k - r * width
     for ch in range(3):
         rgb[i, ch, r, c] = wp.uint8(int(wp.rint(255.0 * srgb(x[ch]))))
+
+
+@wp.kernel
+def encode_noisy(linear: wp.array2d[wp.vec3], gain: wp.array[float], width: int,
+                 seeds: wp.array[int], frame: int, full_well_e: float, read_noise_e: float,
+                 rgb: wp.array4d[wp.uint8]):
+    """:func:`encode` with the CPU camera's sensor noise: ``e = clip(x) full_well_e``, ``e +
+    sqrt(e) N + read_noise_e N``; camera ``i``'s frame ``frame`` draws from a stream seeded by
+    ``(seeds[i], frame)``, one counter a pixel."""
+    i, k = wp.tid()
+    x = linear[i, k] * gain[i]
+    r = k // width
+    c = k - r * width
+    state = wp.rand_init(wp.randi(wp.rand_init(seeds[i], frame)), k)
+    for ch in range(3):
+        e = wp.clamp(x[ch], 0.0, 1.0) * full_well_e
+        e = e + wp.sqrt(e) * wp.randn(state) + read_noise_e * wp.randn(state)
+        rgb[i, ch, r, c] = wp.uint8(int(wp.rint(255.0 * srgb(e / full_well_e))))

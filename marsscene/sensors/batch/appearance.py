@@ -32,7 +32,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from marsscene.sensors.camera import FIXED_REFERENCE_W_M2
-from marsscene.sensors.camera_rocks import RockLOD
+from marsscene.sensors.camera_rocks import (
+    PEBBLE_MAX_M,
+    SPECKLE_SIGMA,
+    RockLOD,
+    RockLook,
+    rock_arrays,
+    rock_look,
+)
 from marsscene.sensors.camera_world import ALBEDO_SCALE
 
 __all__ = ["BURIED_FRACTION", "GAIN_STEP_M", "Appearance", "Lights", "appearance",
@@ -133,20 +140,78 @@ def mip_levels(tile: NDArray[np.float32]) -> list[NDArray[np.float32]]:
     return out
 
 
-def rock_mesh(batch: Any, offsets_xy_m: Any, rng: np.random.Generator
+def rock_mesh(batch: Any, offsets_xy_m: Any, rng: np.random.Generator,
+              catalogue: Any = None, assets: Any = None
               ) -> tuple[NDArray[np.float32], NDArray[np.int32], NDArray[np.float32],
                          NDArray[np.float32]]:
-    """Every rock of ``batch`` as one mesh in the tile frame (world + ``offsets_xy_m[w]``):
-    vertices (V, 3), faces (F, 3), vertex normals (V, 3), face albedo (F, 3). A batch without
-    rocks gets one tiny triangle far below its terrain (a Warp mesh needs one)."""
-    speckle_sigma = 0.25  # the CPU camera's rock texture speckle exp(0.25 N)
-    lod = RockLOD("cam_rocks", True, rng)
-    n = len(batch.rock_radius_m)
-    if n == 0:
+    """Every rock of ``batch`` and of ``catalogue`` as one mesh in the tile frame (world +
+    ``offsets_xy_m[w]``): vertices (V, 3), faces (F, 3), vertex normals (V, 3), face albedo
+    (F, 3). ``catalogue``: per world, catalogue rocks (N, 6) as
+    :func:`~marsscene.sensors.camera_rocks.read_rock_catalog` reads them, drawn as the CPU
+    camera draws them (:func:`~marsscene.sensors.camera_rocks.rock_arrays`: 80 faces from
+    ``PEBBLE_MAX_M`` up, 20 below; their atlas colour and speckle per face). The looks come
+    from ``rng`` in the CPU camera's order (:func:`~marsscene.sensors.camera_rocks.rock_look`).
+    ``assets``: per world, its placed assets' :class:`~marsscene.sim.world.AssetMesh` (or
+    None), flat-shaded in their material's colour. A batch without rocks gets one tiny
+    triangle far below its terrain (a Warp mesh needs one)."""
+    look = rock_look(rng)
+    parts = []
+    if len(batch.rock_radius_m):
+        parts.append(_batch_rocks(batch, offsets_xy_m, look.lods[0], rng))
+    off = np.asarray(offsets_xy_m, dtype=np.float64).reshape(-1, 2)
+    for w, rocks in enumerate(catalogue or ()):
+        parts += _catalogue_rocks(np.asarray(rocks, dtype=np.float64).reshape(-1, 6), off[w],
+                                  look)
+    for w, mesh in enumerate(assets or ()):
+        if mesh is not None and len(mesh.faces):
+            parts.append(_asset_part(mesh, off[w]))
+    if not parts:
         deep = float(np.min(batch.posts_z_m)) - 100.0
         v = np.array([[0, 0, deep], [1e-3, 0, deep], [0, 1e-3, deep]], dtype=np.float32)
         return (v, np.array([[0, 1, 2]], np.int32), np.tile([0, 0, 1.0], (3, 1)).astype(
             np.float32), np.zeros((1, 3), np.float32))
+    starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
+    return (np.concatenate([p[0] for p in parts]).astype(np.float32),
+            np.concatenate([p[1] + k for p, k in zip(parts, starts, strict=True)]).astype(
+                np.int32),
+            np.concatenate([p[2] for p in parts]).astype(np.float32),
+            np.concatenate([p[3] for p in parts]).astype(np.float32))
+
+
+def _catalogue_rocks(rocks: NDArray[np.float64], offset_xy_m: NDArray[np.float64],
+                     look: RockLook) -> list[tuple[Any, Any, Any, Any]]:
+    """One world's catalogue rocks as mesh parts (vertices, faces, normals, face albedo)."""
+    big = rocks[:, 4] >= PEBBLE_MAX_M
+    parts = []
+    for lod, idx in zip(look.lods, (np.flatnonzero(big), np.flatnonzero(~big)), strict=True):
+        if not len(idx):
+            continue
+        lod.capacity = len(idx)
+        v, n, uv, f = rock_arrays(lod, rocks, idx, hidden_z_m=0.0, shadow=None)
+        v = v + np.array([offset_xy_m[0], offset_xy_m[1], 0.0])
+        ids = np.repeat(rocks[idx, 0].astype(np.int64), len(lod.faces))
+        parts.append((v, f, n, look.face_albedo(ids, uv[f].mean(axis=1))))
+    return parts
+
+
+def _asset_part(mesh: Any, offset_xy_m: NDArray[np.float64]) -> tuple[Any, Any, Any, Any]:
+    """One world's assets as a flat-shaded mesh part: each face its own three vertices with the
+    face's normal, its material colour as the CPU camera renders it (a texture value of 1 is
+    ``ALBEDO_SCALE``)."""
+    tri = np.asarray(mesh.vertices_m, dtype=np.float64)[np.asarray(mesh.faces)]  # (F, 3, 3)
+    tri = tri + np.array([offset_xy_m[0], offset_xy_m[1], 0.0])
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
+    nf = len(tri)
+    return (tri.reshape(-1, 3), np.arange(3 * nf).reshape(nf, 3), np.repeat(normal, 3, axis=0),
+            np.asarray(mesh.rgb, dtype=np.float64) * ALBEDO_SCALE)
+
+
+def _batch_rocks(batch: Any, offsets_xy_m: Any, lod: RockLOD, rng: np.random.Generator
+                 ) -> tuple[Any, Any, Any, Any]:
+    """The batch's (MJCF) rocks: ``lod``'s icospheres at each rock's footprint radius and
+    exposed height, the CPU camera's MJCF rock albedo times a speckle per face."""
+    n = len(batch.rock_radius_m)
     xy = np.asarray(batch.rock_xy_m, dtype=np.float64)
     world = np.asarray(batch.rock_world, dtype=np.int64)
     z = np.zeros(n)
@@ -170,7 +235,6 @@ def rock_mesh(batch: Any, offsets_xy_m: Any, rng: np.random.Generator
     nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
     nv, nf = lod.v.shape[1], len(lod.faces)
     faces = (lod.faces[None] + (ids * nv)[:, None, None]).reshape(-1, 3)
-    speck = np.exp(speckle_sigma * rng.standard_normal(n * nf))
+    speck = np.exp(SPECKLE_SIGMA * rng.standard_normal(n * nf))
     albedo = np.asarray(ROCK_GEOM_ALBEDO_RGB)[None, :] * speck[:, None]
-    return (v.reshape(-1, 3).astype(np.float32), faces.astype(np.int32),
-            nrm.reshape(-1, 3).astype(np.float32), albedo.astype(np.float32))
+    return v.reshape(-1, 3), faces, nrm.reshape(-1, 3), albedo

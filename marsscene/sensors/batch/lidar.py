@@ -39,9 +39,17 @@ LIDAR_SITE = "rover/lidar"
 LIDAR_GROUPS = (0, 1)
 
 
-def world_seeds(seed: int, n: int) -> NDArray[np.int32]:
-    """Seed of each of ``n`` worlds: world ``w``'s depends on ``(seed, w)`` only."""
-    states = [np.random.SeedSequence([int(seed), w]).generate_state(1)[0] for w in range(n)]
+def world_seeds(seed: int, n: int, streams: Any = None, sensor: int = 0) -> NDArray[np.int32]:
+    """Seed of each of ``n`` worlds: world ``w``'s depends on ``(seed, streams[w])`` only
+    (``streams`` default: the world's index; a batch of drives passes each drive's seed, so a
+    drive's LiDAR noise does not depend on its slot in the batch); ``sensor`` > 0 gives another
+    sensor of the same worlds streams of its own (the LiDAR's is 0, the camera's 1)."""
+    keys = range(n) if streams is None else [int(k) for k in streams]
+    if len(keys) != n:
+        raise ConfigError(f"{len(keys)} noise streams for {n} worlds")
+    extra = [int(sensor)] if sensor else []
+    states = [np.random.SeedSequence([int(seed), k, *extra]).generate_state(1)[0]
+              for k in keys]
     return np.asarray(states, dtype=np.uint32).view(np.int32)
 
 
@@ -106,6 +114,8 @@ class BatchLidar:
         The LiDAR site (default the rover's ``rover/lidar``).
     seed : int
         Seed of the range noise and dropouts (:func:`world_seeds`).
+    streams : sequence of int, optional
+        Each world's noise stream under ``seed`` (default: its index; :func:`world_seeds`).
     geom_groups : tuple of int
         The geom groups it sees (default: 0 and 1, as the CPU LiDAR).
     render_context : mujoco_warp.RenderContext, optional
@@ -119,7 +129,8 @@ class BatchLidar:
     def __init__(self, mj_model: Any, model: Any, nworld: int,
                  config: LidarConfig | None = None, *, site: str | int = LIDAR_SITE,
                  seed: int = 0, geom_groups: tuple[int, ...] = LIDAR_GROUPS,
-                 render_context: Any = None, cast_order: str = "beam") -> None:
+                 render_context: Any = None, cast_order: str = "beam",
+                 streams: Any = None) -> None:
         import mujoco_warp as mjw
         import warp as wp
 
@@ -154,7 +165,8 @@ class BatchLidar:
             self._dist = wp.zeros((n, rays), dtype=float)
             self._geom = wp.zeros((n, rays), dtype=int)
             self._normal = wp.zeros((n, rays), dtype=wp.vec3)
-            self._seed: Any = wp.array(world_seeds(seed, n), dtype=int)
+            self._streams = None if streams is None else [int(k) for k in streams]
+            self._seed: Any = wp.array(world_seeds(seed, n, self._streams), dtype=int)
             self._count = wp.zeros(n, dtype=int)
             self.out = BatchScan(
                 range_m=wp.zeros((n, rays), dtype=float), xyz_m=wp.zeros((n, rays), dtype=wp.vec3),
@@ -168,7 +180,7 @@ class BatchLidar:
     def restart(self, seed: int) -> None:
         """Restart every world's stream of draws from ``seed`` (scan count 0)."""
         wp = self._wp
-        wp.copy(self._seed, wp.array(world_seeds(seed, self.nworld), dtype=int,
+        wp.copy(self._seed, wp.array(world_seeds(seed, self.nworld, self._streams), dtype=int,
                                      device=self._seed.device))
         self._count.zero_()
 

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from marsscene.errors import ConfigError
 from marsscene.sensors.batch.appearance import (
@@ -45,7 +46,7 @@ from marsscene.sensors.batch.appearance import (
     rock_mesh,
 )
 from marsscene.sensors.camera import MAX_EXPOSURE_GAIN
-from marsscene.sensors.exposure import Exposure
+from marsscene.sensors.exposure import FULL_WELL_E, READ_NOISE_E, Exposure
 
 __all__ = ["BatchCamera", "camera_rays", "scene_lights"]
 
@@ -89,21 +90,29 @@ class BatchCamera:
         Cameras N.
     config : CameraConfig, optional
         Size, field of view, exposure (``"auto"`` or ``"fixed"``); default ``CameraConfig()``.
-    lighting : Lighting, optional
-        Every camera's lighting (default :func:`scene_lights` of ``config``).
+    lighting : Lighting or sequence of Lighting, optional
+        Every camera's lighting, or one per camera (default :func:`scene_lights` of
+        ``config``). The detail tile's micro-relief shading is baked for the first.
     offsets_xy_m : array (W, 2), optional
         The tile frame the poses are in, minus world coordinates (the batch model's
         ``TiledModel.offsets_xy_m``); default 0 (one world, or poses in world coordinates).
     seeds : sequence of int, optional
         Each world's scene seed (its albedo field; default ``0 .. W-1``); ``texture_seed`` the
         detail tile's and the rocks' colours (default ``seeds[0]``).
+    catalogue : sequence of array (N, 6), optional
+        Per world, the rock catalogue's rocks to draw beside the batch's (MJCF) rocks, as
+        :func:`~marsscene.sensors.camera_rocks.read_rock_catalog` reads them (id, x, y, z,
+        diameter, height + burial; world coordinates): the CPU camera's meshes and colours of
+        them. Default: none (only the batch's rocks).
     device : str, optional
         Warp device (default the current one).
     """
 
     def __init__(self, batch: Any, num_cameras: int, *, config: Any = None,
                  lighting: Any = None, offsets_xy_m: Any = None, seeds: Any = None,
-                 texture_seed: int | None = None, device: str | None = None) -> None:
+                 texture_seed: int | None = None, catalogue: Any = None,
+                 noise_seeds: Any = None, assets: Any = None, fixed_exposure: Any = None,
+                 device: str | None = None) -> None:
         import warp as wp
 
         from marsscene.rover.config import CameraConfig
@@ -113,8 +122,13 @@ class BatchCamera:
             raise ConfigError(f"exposure {cfg.exposure!r}; use 'auto' or 'fixed'")
         self.width, self.height, self.n = int(cfg.width_px), int(cfg.height_px), int(num_cameras)
         self.device = wp.get_device(device)
-        self.lighting = lighting if lighting is not None else scene_lights(cfg)
-        self.lights = light_arrays(self.lighting)
+        lightings = (list(lighting) if isinstance(lighting, (list, tuple)) else
+                     [lighting if lighting is not None else scene_lights(cfg)] * self.n)
+        if len(lightings) != self.n:
+            raise ConfigError(f"{len(lightings)} lightings for {self.n} cameras")
+        self.lighting = lightings[0]
+        per = [light_arrays(lt) for lt in lightings]
+        self.lights = per[0]
         nw = batch.count
         seeds = list(seeds) if seeds is not None else list(range(nw))
         off = (np.zeros((nw, 2)) if offsets_xy_m is None
@@ -122,7 +136,11 @@ class BatchCamera:
         look = appearance(batch, self.lighting, seeds=seeds,
                           texture_seed=seeds[0] if texture_seed is None else texture_seed,
                           tile_m=cfg.texture_tile_m, tile_px=cfg.texture_px)
-        verts, faces, vnormal, albedo = rock_mesh(batch, off, look.rng)
+        if catalogue is not None and len(catalogue) != nw:
+            raise ConfigError(f"{len(catalogue)} rock catalogues for {nw} worlds")
+        if assets is not None and len(assets) != nw:
+            raise ConfigError(f"{len(assets)} asset meshes for {nw} worlds")
+        verts, faces, vnormal, albedo = rock_mesh(batch, off, look.rng, catalogue, assets)
         sx, sy = batch.size_m
         self.far_m = float(math.hypot(sx, sy) + 10.0)
         def arr(a: Any, t: Any) -> Any:
@@ -131,21 +149,22 @@ class BatchCamera:
         self._points = arr(verts, wp.vec3)
         self._faces = arr(faces.ravel(), int)
         self.mesh = wp.Mesh(points=self._points, indices=self._faces)
-        lt, n, hw = self.lights, self.n, self.width * self.height
+        n, hw = self.n, self.width * self.height
         self._static = dict(
             rays=arr(camera_rays(cfg), wp.vec3),
             posts=arr(batch.posts_z_m.astype(np.float32), float),
             grid_origin=arr(np.asarray(batch.origins_xy_m) + off, wp.vec2),
-            z_top=arr(batch.posts_z_m.reshape(nw, -1).max(axis=1)
-                      + np.array([_rock_top(batch, w) for w in range(nw)]), float),
+            z_top=arr(_tops_z_m(batch, catalogue, assets), float),
             offset=arr(off, wp.vec2), vnormal=arr(vnormal, wp.vec3),
             face_albedo=arr(albedo, wp.vec3),
             tile=arr(np.concatenate([t.reshape(-1, 3) for t in look.tile_rgb]), wp.vec3),
             gain=arr(look.gain, float), gain_corner=arr(look.gain_origin_xy_m, wp.vec2),
-            sun_dir=arr(np.tile(lt.sun_dir, (n, 1)), wp.vec3),
-            sun_rgb=arr(np.tile(lt.sun_rgb, (n, 1)), wp.vec3),
-            sky_rgb=arr(np.tile(lt.sky_rgb, (n, 1)), wp.vec3),
-            visibility_m=arr(np.full(n, lt.visibility_m), float))
+            sun_dir=arr([lt.sun_dir for lt in per], wp.vec3),
+            sun_rgb=arr([lt.sun_rgb for lt in per], wp.vec3),
+            sky_rgb=arr([lt.sky_rgb for lt in per], wp.vec3),
+            visibility_m=arr([lt.visibility_m for lt in per], float),
+            max_gain=arr([MAX_EXPOSURE_GAIN * lt.fixed_scale for lt in per], float),
+            fixed_gain=arr([float(cfg.exposure_gain) * lt.fixed_scale for lt in per], float))
         self._cell_m, self._texel_m = float(batch.cell_m), float(look.tile_texel_m)
         self._levels, self._tile_px = len(look.tile_rgb), int(look.tile_rgb[0].shape[0])
         zeros = lambda shape, t: wp.zeros(shape, dtype=t, device=self.device)  # noqa: E731
@@ -157,6 +176,17 @@ class BatchCamera:
         self.gain = zeros(n, float)
         self._hist, self._peak = zeros((n, 256), int), zeros((n, 256), int)
         self._world: Any = None
+        noise = (np.arange(n) if noise_seeds is None else np.asarray(noise_seeds)).astype(
+            np.int64) % (2 ** 31)
+        if len(noise) != n:
+            raise ConfigError(f"{len(noise)} noise seeds for {n} cameras")
+        self._noise_seeds, self._frame = arr(noise.astype(np.int32), int), 0
+        mask = (np.full(n, cfg.exposure == "fixed") if fixed_exposure is None
+                else np.asarray(fixed_exposure, dtype=bool))
+        if mask.shape != (n,):
+            raise ConfigError(f"{mask.size} exposures for {n} cameras")
+        self._fixed = arr(mask.astype(np.int32), int) if 0 < mask.sum() < n else None
+        self._all_fixed = bool(mask.all())
 
     def intrinsics(self) -> tuple[float, float, float, float]:
         """``fx, fy, cx, cy`` in pixels (pinhole; the CPU camera's)."""
@@ -174,7 +204,9 @@ class BatchCamera:
         :attr:`depth` (N, H, W) float32 planar m (0: sky), :attr:`segmentation` (N, H, W)
         uint8 (0 sky, 1 terrain, 2 rock) and :attr:`linear`; returns :attr:`rgb`. The
         buffers are the camera's own, overwritten by the next call (``wp.to_torch`` views
-        them); nothing is copied to the host."""
+        them); nothing is copied to the host. With ``config.sensor_noise`` each frame carries
+        the CPU camera's shot and read noise, camera ``i``'s from its ``noise_seeds[i]`` and
+        the frame's count since the camera was made."""
         import warp as wp
 
         from marsscene.sensors.batch import _expose, _trace
@@ -194,8 +226,8 @@ class BatchCamera:
             GAIN_STEP_M, s["sun_dir"], s["sun_rgb"], s["sky_rgb"], s["visibility_m"], NEAR_M,
             self.far_m, SHADOW_LIFT_M], outputs=[self.linear, self._depth, self._seg])
         cfg = self.config
-        if cfg.exposure == "fixed":
-            self.gain.fill_(float(cfg.exposure_gain) * self.lights.fixed_scale)
+        if self._all_fixed:
+            wp.copy(self.gain, self._static["fixed_gain"])
         else:
             sub_r, sub_c = -(-self.height // 4), -(-self.width // 4)
             self._hist.zero_()
@@ -204,16 +236,39 @@ class BatchCamera:
                       inputs=[self.linear, self.width, sub_c], outputs=[self._hist, self._peak])
             wp.launch(_expose.auto_gain, dim=n, device=dev, inputs=[
                 self._hist, self._peak, float(cfg.target_mean), _AE.max_saturated,
-                MAX_EXPOSURE_GAIN * self.lights.fixed_scale, _AE.smoothing],
+                s["max_gain"], _AE.smoothing],
                 outputs=[self.gain])
-        wp.launch(_expose.encode, dim=(n, hw), device=dev,
-                  inputs=[self.linear, self.gain, self.width], outputs=[self.rgb])
+            if self._fixed is not None:  # some cameras keep their fixed gain
+                wp.launch(_expose.keep_fixed, dim=n, device=dev,
+                          inputs=[self._fixed, s["fixed_gain"]], outputs=[self.gain])
+        if cfg.sensor_noise:
+            wp.launch(_expose.encode_noisy, dim=(n, hw), device=dev,
+                      inputs=[self.linear, self.gain, self.width, self._noise_seeds,
+                              self._frame, FULL_WELL_E, READ_NOISE_E], outputs=[self.rgb])
+        else:
+            wp.launch(_expose.encode, dim=(n, hw), device=dev,
+                      inputs=[self.linear, self.gain, self.width], outputs=[self.rgb])
+        self._frame += 1
         return self.rgb
 
     def render_data(self, data: Any, world: Any, camera_id: int) -> Any:
         """:meth:`render` from a MuJoCo Warp ``Data``'s camera poses (``cam_xpos``, after
         ``kinematics`` and ``camlight``) of the model's camera ``camera_id``."""
         return self.render(data.cam_xpos, data.cam_xmat, world, camera=camera_id)
+
+
+def _tops_z_m(batch: Any, catalogue: Any, assets: Any) -> NDArray[np.float64]:
+    """(W,) a height above every world's terrain, rocks and assets (m)."""
+    nw = batch.count
+    top = batch.posts_z_m.reshape(nw, -1).max(axis=1) + np.array(
+        [_rock_top(batch, w) for w in range(nw)])
+    for w, rocks in enumerate(catalogue or ()):
+        rk = np.asarray(rocks, dtype=np.float64).reshape(-1, 6)
+        top[w] = max(top[w], float(np.max(rk[:, 3] + rk[:, 5], initial=-np.inf)) + 0.01)
+    for w, mesh in enumerate(assets or ()):
+        if mesh is not None and len(mesh.vertices_m):
+            top[w] = max(top[w], float(np.max(mesh.vertices_m[:, 2])) + 0.01)
+    return np.asarray(top, dtype=np.float64)
 
 
 def _rock_top(batch: Any, w: int) -> float:

@@ -1,5 +1,6 @@
 # mypy: ignore-errors
-"""Warp kernels of :mod:`marsscene.sim.batch.pursuit`: ``PurePursuit.command`` per thread."""
+"""Warp kernels of :mod:`marsscene.sim.batch`: ``PurePursuit.command`` per thread
+(:mod:`.pursuit`), the camera poses moved onto their scenes' tiles (:mod:`.loop`)."""
 
 from __future__ import annotations
 
@@ -25,14 +26,14 @@ def _command(i: int, x: wp.float64, y: wp.float64, yaw: wp.float64,
              rx: wp.array2d(dtype=wp.float64), ry: wp.array2d(dtype=wp.float64),
              s: wp.array2d(dtype=wp.float64), length: wp.array(dtype=int),
              index: wp.array(dtype=int), done: wp.array(dtype=int),
-             cfg: wp.array(dtype=wp.float64), v_out: wp.array(dtype=wp.float64),
+             cfg: wp.array2d(dtype=wp.float64), v_out: wp.array(dtype=wp.float64),
              w_out: wp.array(dtype=wp.float64)) -> None:
     zero = wp.float64(0.0)
     v_out[i] = zero
     w_out[i] = zero
     if done[i] != 0:
         return
-    look, v_max, w_max, tol, slow = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
+    look, v_max, w_max, tol, slow = cfg[i, 0], cfg[i, 1], cfg[i, 2], cfg[i, 3], cfg[i, 4]
     n = length[i]
     k = index[i]
     hi = _search(s, i, n, s[i, k] + wp.float64(3.0) * look + wp.float64(1.0))
@@ -83,7 +84,7 @@ def _from_poses(x: wp.array(dtype=wp.float64), y: wp.array(dtype=wp.float64),
                 yaw: wp.array(dtype=wp.float64), rx: wp.array2d(dtype=wp.float64),
                 ry: wp.array2d(dtype=wp.float64), s: wp.array2d(dtype=wp.float64),
                 length: wp.array(dtype=int), index: wp.array(dtype=int),
-                done: wp.array(dtype=int), cfg: wp.array(dtype=wp.float64),
+                done: wp.array(dtype=int), cfg: wp.array2d(dtype=wp.float64),
                 v_out: wp.array(dtype=wp.float64), w_out: wp.array(dtype=wp.float64)):
     i = wp.tid()
     _command(i, x[i], y[i], yaw[i], rx, ry, s, length, index, done, cfg, v_out, w_out)
@@ -94,7 +95,7 @@ def _from_qpos(qpos: wp.array2d(dtype=float), root: int, offset: wp.array2d(dtyp
                rx: wp.array2d(dtype=wp.float64), ry: wp.array2d(dtype=wp.float64),
                s: wp.array2d(dtype=wp.float64), length: wp.array(dtype=int),
                index: wp.array(dtype=int), done: wp.array(dtype=int),
-               cfg: wp.array(dtype=wp.float64), v_out: wp.array(dtype=wp.float64),
+               cfg: wp.array2d(dtype=wp.float64), v_out: wp.array(dtype=wp.float64),
                w_out: wp.array(dtype=wp.float64)):
     i = wp.tid()
     x = wp.float64(qpos[i, root]) - offset[i, 0]
@@ -106,3 +107,12 @@ def _from_qpos(qpos: wp.array2d(dtype=float), root: int, offset: wp.array2d(dtyp
     yaw = wp.atan2(wp.float64(2.0) * (qw * qz + qx * qy),
                    wp.float64(1.0) - wp.float64(2.0) * (qy * qy + qz * qz))
     _command(i, x, y, yaw, rx, ry, s, length, index, done, cfg, v_out, w_out)
+
+
+@wp.kernel
+def shift_cameras(cam_xpos: wp.array2d(dtype=wp.vec3), shift: wp.array(dtype=wp.vec2),
+                  out: wp.array2d(dtype=wp.vec3)):
+    """Camera ``c`` of drive ``i`` moved by ``shift[i]`` in x and y."""
+    i, c = wp.tid()
+    s = shift[i]
+    out[i, c] = cam_xpos[i, c] + wp.vec3(s[0], s[1], 0.0)

@@ -13,17 +13,18 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from marsscene._optional import quiet_warp
 from marsscene.errors import ConfigError
 from marsscene.rover.config import RunConfig
 from marsscene.rover.rates import PHYSICS_HZ
 from marsscene.sim.batch.spec import BatchDrive
 from marsscene.sim.mission import DriveOptions
 
-__all__ = ["BatchRun", "drive_batch"]
+__all__ = ["BatchRun", "check_batch_config", "drive_batch"]
 
 
 @dataclass(frozen=True)
@@ -53,8 +54,7 @@ def _warp(device: str | None) -> tuple[Any, str]:
     except ImportError:
         raise ConfigError('batched drives need MuJoCo Warp: pip install "marsscene[gpu]"'
                           ) from None
-    wp.config.quiet = True  # type: ignore[attr-defined]
-    wp.init()
+    quiet_warp(wp).init()
     name = device or ("cuda:0" if wp.is_cuda_available() else "cpu")
     if name.startswith("cuda") and not wp.is_cuda_available():
         raise ConfigError(f"device {name!r}: Warp sees no CUDA GPU here (use device='cpu')")
@@ -64,11 +64,10 @@ def _warp(device: str | None) -> tuple[Any, str]:
         raise ConfigError(f"device {name!r}: {err}") from None
 
 
-def _check(config: RunConfig) -> None:
+def check_batch_config(config: RunConfig) -> None:
+    """Raise :class:`~marsscene.errors.ConfigError` where a batch of drives cannot run
+    ``config`` (a stereo camera, deformable soil)."""
     cam = config.camera
-    if cam is not None and cam.trigger_distance_m is not None:
-        raise ConfigError("batched drives take the camera at its rate: trigger_distance_m "
-                          "is not supported")
     if cam is not None and cam.stereo:
         raise ConfigError("batched drives have no stereo camera yet")
     if config.soil not in (None, "rigid"):
@@ -87,7 +86,11 @@ def drive_batch(drives: Sequence[BatchDrive | dict[str, Any]], *,
         Scene, route or waypoints, run folder and noise seed of each drive.
     config : RunConfig, optional
         Sensors, rates and noise of every drive (default: no camera, no LiDAR, noise-free);
-        the camera renders depth (``camera/depth``).
+        the camera renders RGB and depth (``camera/rgb``, ``camera/depth``; no depth where the
+        camera config has ``depth=False``) by :class:`~marsscene.sensors.batch.BatchCamera`,
+        each drive under its scene's lighting (``BatchDrive.tau`` for its dust,
+        ``sun_elevation_deg``, ``sun_azimuth_deg`` and ``irradiance_scale`` for its sun,
+        ``exposure`` for its camera's).
     options : DriveOptions, optional
         Route authoring, settling and the follower (as :func:`marsscene.drive`).
     device : str, optional
@@ -95,7 +98,8 @@ def drive_batch(drives: Sequence[BatchDrive | dict[str, Any]], *,
     physics : WarpPhysics, optional
         MuJoCo Warp's solver limits and determinism.
     seed : int
-        Seed of the batch's LiDAR noise (each drive's slot draws its own stream).
+        Seed of the batch's LiDAR noise: each drive draws the stream of ``(seed,
+        drive.seed)``, whatever its slot in the batch.
     workers : int, optional
         Threads writing the run folders (default: the CPU cores, at most 16).
     progress : callable, optional
@@ -118,8 +122,10 @@ def drive_batch(drives: Sequence[BatchDrive | dict[str, Any]], *,
     config = config if config is not None else RunConfig()
     options = options if options is not None else DriveOptions()
     physics = physics if physics is not None else WarpPhysics()
-    _check(config)
+    check_batch_config(config)
     items = [d if isinstance(d, BatchDrive) else BatchDrive(**d) for d in drives]
+    if config.lidar is not None and not any(d.lidar for d in items):
+        config = replace(config, lidar=None)  # no drive logs it: none is cast
     prepared = prepare_drives(items, options)
     physics_hz = config.physics_hz if config.physics_hz is not None else PHYSICS_HZ
     tiled = batch_model(prepared, rover=BATCH_ROVER, physics_hz=physics_hz, physics=physics)
@@ -130,14 +136,16 @@ def drive_batch(drives: Sequence[BatchDrive | dict[str, Any]], *,
     sinks = []
     lidar = (loop.lidar.ring, loop.lidar.t_s) if loop.lidar is not None else None
     for i, p in enumerate(prepared):
-        sim = DriveSim(config, BATCH_ROVER, loop.dt_s, p.heightfield,
+        own = config if p.drive.lidar or config.lidar is None else replace(config, lidar=None)
+        sim = DriveSim(own, BATCH_ROVER, loop.dt_s, p.heightfield,
                        scene_dir=Path(p.drive.scene))
         out = Path(os.fspath(p.drive.out_dir))  # type: ignore[arg-type]
         write_route(out, sim, p.route, options)
         sinks.append(DriveSink(i, sim=sim, out=out,
                                meta=meta_of(options.pursuit, dev, i, len(prepared),
                                             BATCH_ROVER),
-                               lidar=lidar, camera=config.camera is not None, route=p.route))
+                               lidar=lidar if own.lidar is not None else None,
+                               camera=config.camera is not None, route=p.route))
     pool = SinkPool(sinks, workers if workers is not None else min(16, os.cpu_count() or 1))
     noise = BatchNoise(config.noise, config.imu_hz, [int(p.drive.seed) for p in prepared])
     host = BatchSink(pool, noise, ids=loop.ids, offsets_xy_m=tiled.offsets_xy_m,

@@ -50,7 +50,7 @@ class BatchLoop:
     settle_s : float
         The rovers settle braked this long at their starts.
     seed : int
-        Seed of the LiDAR's noise (each drive's slot its own stream).
+        Seed of the LiDAR's noise (each drive's stream under it keyed by the drive's seed).
     """
 
     def __init__(self, tiled: Any, prepared: list[Any], *, run: Any, backend: Any,
@@ -69,34 +69,69 @@ class BatchLoop:
             self.model = warp_model(m, physics)
             self.data = mjw.put_data(m, mujoco.MjData(m), nworld=self.n,
                                      nconmax=physics.nconmax, njmax=physics.njmax)
-            self.pursuit = DevicePursuit([p.route for p in prepared], pursuit, device=dev)
+            self.pursuit = DevicePursuit([p.route for p in prepared], pursuit, device=dev,
+                                         lookaheads_m=[p.drive.lookahead_m for p in prepared])
             self._offsets = wp.array(self.offsets, dtype=wp.float64)
             x0y0 = np.array([p.heightfield.bounds_xy_m for p in prepared])
             bounds = x0y0 + np.hstack([self.offsets, self.offsets])
             self.bounds = wp.array(bounds.astype(np.float32), dtype=float)
-            self.camera, self.lidar = self._sensors(m, seed)
+            self.camera, self.lidar = self._sensors(m, prepared, seed)
         self._place(m, prepared, rover, settle_s)
         self.limits = np.array([round(p.limit_s / self.dt_s) for p in prepared])
         self.periods = {"control": _period(run.control_hz, self.dt_s),
                         "imu": _period(run.imu_hz, self.dt_s)}
         if self.lidar is not None:
             self.periods["lidar"] = _period(run.lidar.spec.rate_hz, self.dt_s)
-        if self.camera is not None:
+        self.trigger_m = run.camera.trigger_distance_m if run.camera is not None else None
+        if self.camera is not None and self.trigger_m is None:
             self.periods["camera"] = _period(run.camera.rate_hz, self.dt_s)
+        self._travel_m, self._next_frame_m = np.zeros(self.n), np.zeros(self.n)
+        self._last_xy: np.ndarray | None = None
         self.tick = math.gcd(*self.periods.values())
         self._v = {k: backend.view(getattr(self.data, k)) for k in ("ctrl",)}
         self._graph: Any = None
         self.rover = rover
 
-    def _sensors(self, m: Any, seed: int) -> tuple[Any, Any]:
-        from marsscene.sensors.batch import BatchDepthCamera, BatchLidar
+    def _sensors(self, m: Any, prepared: list[Any], seed: int) -> tuple[Any, Any]:
+        from marsscene.sensors.batch import BatchLidar
 
-        cam = (BatchDepthCamera(m, self.model, self.n, self.run.camera)
-               if self.run.camera is not None else None)
         lidar = (BatchLidar(m, self.model, self.n, self.run.lidar, seed=seed,
-                            render_context=cam.rc if cam is not None else None)
+                            streams=[int(p.drive.seed) for p in prepared])
                  if self.run.lidar is not None else None)
-        return cam, lidar
+        return (self._camera(m, prepared, seed) if self.run.camera is not None else None), lidar
+
+    def _camera(self, m: Any, prepared: list[Any], seed: int) -> Any:
+        """The RGB-D camera of every drive, each on its scene's world with its lighting."""
+        from marsscene.sensors.batch import BatchCamera
+        from marsscene.sensors.batch.camera import NAVCAM
+        from marsscene.sensors.batch.lidar import world_seeds
+        from marsscene.sensors.batch.rgbd import scene_lights
+        from marsscene.sim.batch.setup import camera_worlds
+
+        cfg, wp = self.run.camera, self.bk.wp
+        self.views = views = camera_worlds(prepared, self.offsets,
+                                           reach_m=0.5 * cfg.terrain_window_m)
+        lights: dict[tuple[Any, ...], Any] = {}
+        per = []
+        fixed = []
+        for p in prepared:
+            c = p.drive.lighting_of(cfg)
+            key = (str(p.drive.scene), c.tau, c.sun_elevation_deg, c.sun_azimuth_deg,
+                   c.irradiance_scale)
+            if key not in lights:
+                lights[key] = scene_lights(c, p.drive.scene)
+            per.append(lights[key])
+            fixed.append(c.exposure == "fixed")
+        self.camera_id = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, NAVCAM)
+        self._world = wp.array(views.world, dtype=int)
+        self._shift = wp.array(views.shift_xy_m, dtype=wp.vec2)
+        self._cam_xpos = wp.zeros(self.data.cam_xpos.shape, dtype=wp.vec3)
+        return BatchCamera(views.batch, self.n, config=cfg, lighting=per,
+                           offsets_xy_m=views.offsets_xy_m, seeds=views.seeds,
+                           texture_seed=views.seeds[0], catalogue=views.catalogue,
+                           assets=views.assets, fixed_exposure=fixed,
+                           noise_seeds=world_seeds(seed, self.n, [int(p.drive.seed)
+                                                                  for p in prepared], sensor=1))
 
     def _place(self, m: Any, prepared: list[Any], rover: Any, settle_s: float) -> None:
         """Each rover on its tile at its start, settled braked for ``settle_s``."""
@@ -136,12 +171,22 @@ class BatchLoop:
         s = lid.scan(self.data, twist=twist, bounds_xy_m=self.bounds)
         return (s.range_m.numpy(), s.xyz_m.numpy(), s.intensity.numpy(), s.valid.numpy())
 
-    def _depth(self) -> np.ndarray:
+    def _frame(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """Every camera's RGB (N, 3, H, W) uint8 and planar depth (N, H, W) m (0: sky; None
+        for a camera config without depth, as a CPU drive writes none)."""
+        from marsscene.sim.batch._kernels import shift_cameras
+
         assert self.camera is not None
-        self.mjw.kinematics(self.model, self.data)
-        self.mjw.com_pos(self.model, self.data)
-        self.mjw.camlight(self.model, self.data)
-        return np.array(self.camera.depth(self.data, bounds_xy_m=self.bounds).numpy())
+        wp, d = self.bk.wp, self.data
+        self.mjw.kinematics(self.model, d)
+        self.mjw.com_pos(self.model, d)
+        self.mjw.camlight(self.model, d)
+        wp.launch(shift_cameras, dim=d.cam_xpos.shape, inputs=[d.cam_xpos, self._shift],
+                  outputs=[self._cam_xpos])
+        rgb = self.camera.render(self._cam_xpos, d.cam_xmat, self._world,
+                                 camera=self.camera_id)
+        assert self.run.camera is not None
+        return rgb.numpy(), self.camera.depth.numpy() if self.run.camera.depth else None
 
     def _physics(self) -> None:
         wp, mjw = self.bk.wp, self.mjw
@@ -181,15 +226,32 @@ class BatchLoop:
                     sd = self.data.sensordata.numpy().copy()
                 else:
                     qpos = qvel = sd = None
+                frame_due = None
+                if self.camera is not None and self.trigger_m is not None and control:
+                    frame_due = self._triggered(qpos, sense)
+                    due["camera"] = bool(frame_due.any())
                 put(Tick(k=k, t_s=t, flush=flush, control=active if control else None,
                          sense=sense, imu=imu, cmd=cmd, qpos=qpos, qvel=qvel, sensordata=sd,
                          lidar=self._scan() if due["lidar"] else None,
-                         depth=self._depth() if due["camera"] else None))
+                         frame=self._frame() if due["camera"] else None, frame_due=frame_due))
                 finished |= stop
                 self._physics()
                 k += self.tick
                 finished |= k > self.limits
                 self._halt(finished)
+
+    def _triggered(self, qpos: Any, sense: np.ndarray) -> np.ndarray:
+        """(N,) bool: the drives whose distance driven (their position at each control step,
+        as the CPU session sums it) reached their next multiple of ``trigger_distance_m``."""
+        assert self.trigger_m is not None
+        xy = np.asarray(qpos[:, self.root: self.root + 2], dtype=np.float64)
+        last = self._last_xy if self._last_xy is not None else xy
+        self._travel_m += np.hypot(xy[:, 0] - last[:, 0], xy[:, 1] - last[:, 1])
+        self._last_xy = xy
+        due = sense & (self._travel_m >= self._next_frame_m)
+        self._next_frame_m[due] = (np.floor(self._travel_m[due] / self.trigger_m) + 1.0
+                                   ) * self.trigger_m
+        return due
 
     def _halt(self, finished: np.ndarray) -> None:
         """Finished drives' followers stop (their rovers stand braked)."""

@@ -32,12 +32,14 @@ class DevicePursuit:
         One a drive (world frame).
     config : PursuitConfig, optional
         The followers' (one for the batch).
+    lookaheads_m : sequence of float or None, optional
+        A drive's own lookahead where given (None: the config's).
     device : str
         The Warp device.
     """
 
     def __init__(self, routes: list[Any], config: PursuitConfig | None = None, *,
-                 device: str = "cpu") -> None:
+                 lookaheads_m: Any = None, device: str = "cpu") -> None:
         self.config = cfg = config if config is not None else PursuitConfig()
         n, width = len(routes), max(len(r.s_m) for r in routes)
         rx, ry, s = (np.zeros((n, width)) for _ in range(3))
@@ -52,9 +54,12 @@ class DevicePursuit:
                                device=device)
         self.index: Any = wp.zeros(n, dtype=int, device=device)
         self.done: Any = wp.zeros(n, dtype=int, device=device)
-        self.cfg: Any = wp.array(np.array([cfg.lookahead_m, cfg.v_max_m_s, cfg.omega_max_rad_s,
-                                      cfg.goal_tolerance_m, cfg.slow_down_m]), dtype=f64,
-                            device=device)
+        rows = np.tile([cfg.lookahead_m, cfg.v_max_m_s, cfg.omega_max_rad_s,
+                        cfg.goal_tolerance_m, cfg.slow_down_m], (n, 1))
+        for i, look in enumerate(lookaheads_m if lookaheads_m is not None else ()):
+            if look is not None:
+                rows[i, 0] = float(look)
+        self.cfg: Any = wp.array(rows, dtype=f64, device=device)
         self.v: Any = wp.zeros(n, dtype=f64, device=device)
         self.w: Any = wp.zeros(n, dtype=f64, device=device)
 

@@ -8,7 +8,7 @@ A drive's folder is the CPU drive's (:class:`~marsscene.sim.run_writer.RunWriter
 turns the host copies of the batch's state into every drive's log rows in a few array
 operations and keeps them; once a simulated second it hands the second's rows to the workers
 as one :class:`Block` (each drive's rows formatted and written at once, then flushed), as it
-hands them each LiDAR scan and depth frame. Worker ``j`` of ``K`` owns the drives ``i % K == j``
+hands them each LiDAR scan and camera frame. Worker ``j`` of ``K`` owns the drives ``i % K == j``
 and takes every item in order from a bounded queue: the simulation waits for the slowest worker
 rather than piling items up, so memory stays flat over a long drive.
 """
@@ -23,7 +23,6 @@ from typing import Any
 
 import numpy as np
 
-from marsscene.runs.logs import depth_mm
 from marsscene.sensors.odometry import BatchWheelOdometry
 from marsscene.sim.cross_track import cross_track_m
 from marsscene.sim.driver import _goal_reached, _read_back
@@ -37,7 +36,10 @@ class Tick:
     """What the batch hands the sinks at one physics tick (host arrays, one row a drive).
 
     ``control``/``sense``: (N,) bool, the drives that log a control row / sample their sensors
-    at this tick (None: none do). ``lidar``: ``range_m, xyz_m, intensity, valid`` of a scan.
+    at this tick (None: none do). ``lidar``: ``range_m, xyz_m, intensity, valid`` of a scan;
+    ``frame``: the cameras' ``rgb`` (N, 3, H, W) uint8 and ``depth`` (N, H, W) m;
+    ``frame_due``: (N,) bool, the drives that keep it (None: every sensing drive; a
+    distance-triggered camera's).
     """
 
     k: int
@@ -51,7 +53,8 @@ class Tick:
     qvel: Any = None
     sensordata: Any = None
     lidar: Any = None
-    depth: Any = None
+    frame: Any = None
+    frame_due: Any = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,7 +105,7 @@ class BatchSink:
         sense = tick.sense is not None and bool(tick.sense.any())
         if sense and tick.imu:
             self._imu(tick)
-        if sense and (tick.lidar is not None or tick.depth is not None):
+        if sense and (tick.lidar is not None or tick.frame is not None):
             self.pool.put(tick)
         if tick.flush:
             self._hand(flush=True)
@@ -163,10 +166,10 @@ class DriveSink:
             return
         if not item.sense[self.slot]:
             return
-        if item.lidar is not None:
+        if item.lidar is not None and self.lidar is not None:
             self._scan(item)
-        if item.depth is not None:
-            self._depth(item)
+        if item.frame is not None and (item.frame_due is None or item.frame_due[self.slot]):
+            self._frame(item)
 
     def _block(self, block: Block) -> None:
         i, w = self.slot, self.writer
@@ -192,13 +195,12 @@ class DriveSink:
         self.writer.lidar(tick.t_s, self.n_lidar, scan)
         self.n_lidar += 1
 
-    def _depth(self, tick: Tick) -> None:
-        """A depth frame: ``camera/depth/NNNNNN.png`` in the run's millimetres (the batch's
-        camera renders no colour: the stamps' ``rgb`` column is empty)."""
-        w = self.writer
-        name = f"{self.n_cam:06d}.png"
-        w.images.submit(w._dir("camera", "depth") / name, depth_mm(tick.depth[self.slot]))
-        w.logs["camera"].row(tick.t_s, ("", "depth/" + name))
+    def _frame(self, tick: Tick) -> None:
+        """A camera frame: ``camera/rgb/NNNNNN.png`` and ``camera/depth/NNNNNN.png`` (the
+        run's millimetres), as a CPU drive writes them."""
+        rgb, depth = tick.frame
+        self.writer.camera(tick.t_s, self.n_cam, np.ascontiguousarray(
+            rgb[self.slot].transpose(1, 2, 0)), None if depth is None else depth[self.slot])
         self.n_cam += 1
 
     def finish(self, imu_bias: dict[str, Any], status: str = "complete") -> dict[str, Any]:

@@ -87,6 +87,11 @@ def test_a_tiny_cli_run_end_to_end_and_resume(tmp_path: Path) -> None:
     qdir = next((out / "cells").glob("*/queries/000"))
     assert sorted(p.name for p in (qdir / "query").iterdir()) == [
         "local", "orbital", "prior.tum", "query.json"]
+    lidar = json.loads((qdir / "query" / "query.json").read_text())["lidar"]
+    assert len(lidar["points_per_scan"]) == lidar["scans"] == 2  # local.scans
+    assert sum(lidar["points_per_scan"]) == lidar["points"] == len(
+        np.load(qdir / "query" / "local" / "points.npy"))
+    assert not (qdir / "query" / "local" / "camera").exists()  # no method reads an image
     stamps = {p: p.stat().st_mtime_ns for p in [qdir / "truth.json",
                                                 *(qdir / "methods").glob("*.json")]}
     again = CliRunner().invoke(main, ["benchmark", "loc", str(spec), str(out), "--serial"])

@@ -114,30 +114,32 @@ def test_live_wheel_soil_is_the_bags(gentle_scene: Path, tmp_path: Path):
     from rosbags.highlevel import AnyReader
 
     from marsscene.runs.export.bag import write_bag
-    from marsscene.runs.export.topic_table import WHEEL_SOIL_TOPIC
+    from marsscene.runs.export.topic_table import ROVER, WHEEL_SOIL
     from marsscene.seeding import stage_rng
     from marsscene.sim.driver import drive_sim
     from marsscene.sim.rover_sim import RoverSim
     from marsscene.sim.session import SessionOptions
 
+    wheel_soil_topic = ROVER.topic(WHEEL_SOIL)
+
     config = ms.RunConfig(physics_hz=100.0)
     sim = RoverSim(gentle_scene, run=config, soil="dry_sand")
     sm = SampleMessages(sim.rover, config.noise, imu_hz=config.imu_hz, soil=sim.wheel_soil)
-    assert WHEEL_SOIL_TOPIC in {t.name for t in sm.topics()}
+    assert wheel_soil_topic in {t.name for t in sm.topics()}
     col = Collect(sm)
     drive_sim(sim, command=(0.3, 0.0), seconds=1.0, out_dir=tmp_path / "run",
               rng=stage_rng(2, "sensors"), session=SessionOptions(listeners=(col,)))
     write_bag(tmp_path / "run", tmp_path / "run" / "bag")
     n = 0
     with AnyReader([tmp_path / "run" / "bag"]) as reader:
-        conns = [c for c in reader.connections if c.topic == WHEEL_SOIL_TOPIC]
+        conns = [c for c in reader.connections if c.topic == wheel_soil_topic]
         for conn, ns, raw in reader.messages(connections=conns):
-            a = sm.b.store.deserialize_cdr(col.got[(WHEEL_SOIL_TOPIC, ns)], conn.msgtype)
+            a = sm.b.store.deserialize_cdr(col.got[(wheel_soil_topic, ns)], conn.msgtype)
             b = reader.deserialize(raw, conn.msgtype)
             for f in ("position", "velocity", "effort"):
                 np.testing.assert_allclose(getattr(a, f), getattr(b, f), rtol=1e-6, atol=1e-9)
             n += 1
     assert n >= 50 and np.all(a.position > 0) and np.all(a.effort > 0)  # sunk, loaded
     # on rigid ground there is no such topic
-    assert WHEEL_SOIL_TOPIC not in {t.name for t in SampleMessages(
+    assert wheel_soil_topic not in {t.name for t in SampleMessages(
         sim.rover, config.noise, imu_hz=config.imu_hz).topics()}

@@ -12,9 +12,13 @@ from marsscene.sim.pursuit import PurePursuit, PursuitConfig
 from marsscene.sim.route import Route
 
 
-@pytest.mark.parametrize("config", [PursuitConfig(), PursuitConfig(lookahead_m=2.0,
-                                                                   slow_down_m=0.0)])
-def test_device_pursuit_matches_cpu(config: PursuitConfig) -> None:
+@pytest.mark.parametrize(("config", "lookaheads"), [
+    (PursuitConfig(), None), (PursuitConfig(lookahead_m=2.0, slow_down_m=0.0), None),
+    (PursuitConfig(), (1.2, None, 3.5)),  # each drive's own lookahead where given
+])
+def test_device_pursuit_matches_cpu(config: PursuitConfig, lookaheads: tuple | None) -> None:
+    import dataclasses
+
     import warp as wp
 
     from marsscene.sim.batch.pursuit import DevicePursuit
@@ -24,8 +28,11 @@ def test_device_pursuit_matches_cpu(config: PursuitConfig) -> None:
     routes = [Route(np.column_stack([20 * t, 3 * np.sin(4 * t)])),
               Route(np.column_stack([10 * np.cos(3 * t), 10 * np.sin(3 * t)])),
               Route(np.column_stack([5 * t[:50], 0 * t[:50]]))]  # a shorter route: padding
-    cpu = [PurePursuit(r, config) for r in routes]
-    dev = DevicePursuit(routes, config, device="cpu")
+    own = lookaheads or (None,) * len(routes)
+    cpu = [PurePursuit(r, config if look is None else dataclasses.replace(config,
+                                                                        lookahead_m=look))
+           for r, look in zip(routes, own, strict=True)]
+    dev = DevicePursuit(routes, config, lookaheads_m=lookaheads, device="cpu")
     rng = np.random.default_rng(0)
     turns = 0
     for step in range(420):
