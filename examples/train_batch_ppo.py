@@ -154,7 +154,8 @@ def _batch_env(batch: Path, envs: int, seed: int, wheels: str, iterations: tuple
     if obs == "scan":
         observe = ObsConfig(height_scan=SCAN, noise_profile="none")
     else:
-        observe = ObsConfig(height_scan=None, camera=DEPTH_PX, depth=True, noise_profile="none")
+        observe = ObsConfig(height_scan=None, camera=DEPTH_PX, depth=True, rgb=False,
+                            noise_profile="none")
     return BatchNavEnv(batch, num_envs=envs, task=TASK, seed=seed, reward=REWARD,
                        observations=observe, rover=RoverConfig(wheel_collision=wheels),
                        physics=WarpPhysics(iterations=iterations[0],

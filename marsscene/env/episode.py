@@ -200,7 +200,8 @@ class NavEpisode:
         if world.scanner is not None:
             out["height_scan"] = world.scanner(obs.gt_xyz_m, obs.gt_yaw_rad)
         if self.obs_config.camera is not None:
-            out["rgb"] = obs.camera.rgb
+            if self.obs_config.rgb:
+                out["rgb"] = obs.camera.rgb
             if self.obs_config.depth and obs.camera.depth_m is not None:
                 out["depth"] = np.nan_to_num(obs.camera.depth_m, nan=0.0,
                                              posinf=0.0).astype(np.float32)

@@ -70,8 +70,11 @@ class PurePursuit:
         self.done = False
 
     def _advance(self, x: float, y: float) -> None:
-        # nearest point in a forward window: progress is monotone, so closed loops work
-        hi = int(np.searchsorted(self.s, self.s[self.index] + 3 * self.config.lookahead_m + 1.0))
+        # nearest point in a forward window: progress is monotone, and the window reaches at
+        # most half the route ahead, so a closed route's end, beside its start, is not taken
+        # for the nearest point (and the goal) before the rover has driven half of it
+        ahead = min(3 * self.config.lookahead_m + 1.0, 0.5 * float(self.s[-1]))
+        hi = int(np.searchsorted(self.s, self.s[self.index] + ahead))
         win = self.route.xy_m[self.index : hi + 1]
         d = np.hypot(win[:, 0] - x, win[:, 1] - y)
         self.index += int(np.argmin(d))

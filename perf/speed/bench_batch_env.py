@@ -76,6 +76,8 @@ PARAMS = (
           quick=None, full=None),
     Param("final_sensors", bool, "run: also cast the sensors for info['final_observation']",
           quick=True, full=True),
+    Param("rgb", bool, "run: with --depth-px, observe the camera's RGB too (the shaded "
+          "frame; default depth alone)", quick=False, full=False),
     Param("episodes", int, "sim2sim: seeded episodes", quick=5, full=50),
     Param("workers", int, "sim2sim: processes the episodes are spread over (0: one a core)",
           quick=1, full=0),
@@ -231,12 +233,14 @@ def run(batch_path: Path, envs: tuple[int, ...], variants: tuple[str, ...],
     return out
 
 
-def _observations(depth_px: int = 0, lidar: str | None = None, **_: Any) -> Any:
+def _observations(depth_px: int = 0, lidar: str | None = None, rgb: bool = False,
+                  **_: Any) -> Any:
     """The batch's default observations, plus a depth camera and a LiDAR when asked."""
     from marsscene.env import ObsConfig
 
     camera = (depth_px, depth_px) if depth_px else None
-    return ObsConfig(noise_profile="none", camera=camera, depth=bool(depth_px), lidar=lidar)
+    return ObsConfig(noise_profile="none", camera=camera, depth=bool(depth_px),
+                     rgb=rgb or not depth_px, lidar=lidar)
 
 
 def _run_one(batch_path: Path, n: int, rover: RoverConfig, physics: WarpPhysics,
@@ -406,7 +410,7 @@ def main(what: str, path: Path | None, folders: Path | None, posts: tuple[float,
          device: str, envs: tuple[int, ...], variants: tuple[str, ...], steps: int,
          episodes: int, workers: int, out: Path, gpu: float | None, depth_px: int,
          lidar: str | None,
-         final_sensors: bool,
+         final_sensors: bool, rgb: bool,
          cpu: float | None, observes: str) -> dict[str, Any] | list[dict[str, Any]]:
     if what in ("sim2sim", "curve") and path is None:
         raise ConfigError(f"batch_env --what {what} needs --path (the "
@@ -423,7 +427,8 @@ def main(what: str, path: Path | None, folders: Path | None, posts: tuple[float,
         return agree(batch, posts, variants, device)
     if what == "run":
         return run(batch, envs, variants, folders, steps,
-                   {"depth_px": depth_px, "lidar": lidar, "final_sensors": final_sensors})
+                   {"depth_px": depth_px, "lidar": lidar, "final_sensors": final_sensors,
+                    "rgb": rgb})
     if what == "repro":
         return repro(batch, envs[0], variants, steps)
     if what == "curve":

@@ -17,7 +17,9 @@ mujoco-warp and warp-lang). Rover i stands on tile i mod W at a seeded pose. Eac
 ``repeat`` calls after one warm-up (the first call compiles and builds), the device synchronised
 before and after: a LiDAR scan is ray generation + ``mujoco_warp.rays`` (render-context BVH) +
 the returns' kernel; a depth frame is ``refit_bvh`` + ``render``. Building the render context
-(its heightfield mesh is built in Python) is timed apart.
+(its heightfield mesh is built in Python) is timed apart. Each RGB-D figure also renders its
+frame twice more, the exposure restarted, and says whether the bytes (RGB, depth,
+segmentation; the first 512 cameras') were the same: the device's determinism, measured.
 
 An RGB-D frame is :class:`~marsscene.sensors.batch.BatchCamera`'s ``render`` (terrain, rock
 meshes, albedo, sun shadow ray, sky, fog, auto exposure, sRGB): the same tiles as its worlds
@@ -41,6 +43,8 @@ from perf.suite import Param, ints, names, optional
 WORLDS, TILE_M, POST_M, GAP_M = 16, 60.0, 0.25, 2.0
 #: Rock meshes per world in the RGB-D figures (a ``rocks`` world of 60 m has about 300 MJCF rocks).
 ROCKS = 300
+#: Cameras whose frame bytes the determinism check compares.
+DIGEST_CAMERAS = 512
 
 
 def frame_sizes(text: str) -> tuple[str, ...]:
@@ -277,20 +281,36 @@ def bench_rgbd(t: Tiles, envs: tuple[int, ...], sizes: tuple[tuple[int, int], ..
             build_s = time.perf_counter() - t0
             s = timed(lambda cam=cam, data=data, world=world:
                       cam.render_data(data, world, cid), repeat)
+            frame = [frame_digest(cam, data, world, cid) for _ in range(2)]
             seg = cam.segmentation.numpy()
             rows.append({"sensor": f"rgbd {w_px}x{h_px}", "envs": n, "s_per_batch": s,
                          "frames_per_s": n / s, "gpixels_per_s": n * w_px * h_px / s / 1e9,
                          "seen": float((seg > 0).mean()), "rock_px": float((seg == 2).mean()),
-                         "build_s": build_s})
+                         "build_s": build_s, "digest": frame[0],
+                         "same_bytes_twice": frame[0] == frame[1]})
             print(f"rgbd  {w_px}x{h_px:<4d} N={n:5d}  {n / s:9.0f} frames/s  "
                   f"{n * w_px * h_px / s / 1e9:5.2f} G px/s  ({s * 1e3:7.1f} ms a batch; "
                   f"{100 * (seg > 0).mean():4.1f} % ground or rock, {100 * (seg == 2).mean():4.1f}"
-                  f" % rock; built in {build_s:.1f} s)", flush=True)
+                  f" % rock; built in {build_s:.1f} s; frame {frame[0][:12]}, the same bytes "
+                  f"twice: {frame[0] == frame[1]})", flush=True)
             del cam, seg
             gc.collect()
         del data
         gc.collect()
     return rows
+
+
+def frame_digest(cam: Any, data: Any, world: Any, cid: int) -> str:
+    """SHA-256 of one frame's RGB, depth and segmentation bytes (the first ``DIGEST_CAMERAS``
+    cameras'), the exposure restarted."""
+    import hashlib
+
+    cam.restart()
+    cam.render_data(data, world, cid)
+    h = hashlib.sha256()
+    for a in (cam.rgb, cam.depth, cam.segmentation):
+        h.update(a[:min(DIGEST_CAMERAS, a.shape[0])].numpy().tobytes())
+    return h.hexdigest()
 
 
 def tile_bounds(t: Tiles, n: int) -> Any:

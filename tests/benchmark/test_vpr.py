@@ -128,6 +128,17 @@ def test_offset_route_is_parallel() -> None:
     np.testing.assert_allclose(left[:, 0], xy[:, 0])
 
 
+def test_offset_of_a_closed_route_stays_closed() -> None:
+    """A loop's seam is shifted like any point: the offset loop ends where it starts, on the
+    circle ``offset_m`` inside (left of travel, counter-clockwise)."""
+    t = np.linspace(0.0, 2 * np.pi, 81)
+    loop = np.column_stack([3 * np.cos(t), 3 * np.sin(t)])
+    loop[-1] = loop[0]
+    inner = offset_route(loop, 0.4)
+    np.testing.assert_array_equal(inner[0], inner[-1])
+    np.testing.assert_allclose(np.hypot(*inner.T), 2.6, atol=2e-3)
+
+
 def test_recall_matches_brute_force() -> None:
     rng = np.random.default_rng(0)
     db_xy, q_xy = rng.uniform(0, 30, (200, 2)), rng.uniform(0, 30, (150, 2))

@@ -168,6 +168,26 @@ def test_same_seed_same_bytes_and_bad_input(batch: WorldBatch) -> None:
                     observations=ObsConfig(depth=True, noise_profile="none"))
 
 
+def test_depth_only_observes_the_same_depth_without_rgb(env: BatchNavEnv,
+                                                       batch: WorldBatch) -> None:
+    """``ObsConfig(rgb=False)``: no ``"rgb"`` key or space, the same depth as with it; and
+    ``rgb=False`` without depth is a one-line error."""
+    alone = BatchNavEnv(batch, num_envs=N, device="cpu", library="numpy", seed=1,
+                        observations=dataclasses.replace(SENSED, rgb=False))
+    depths = []
+    for e in (env, alone):
+        e.seed(6)
+        e.reset()
+        rng = np.random.default_rng(2)
+        obs = [e.step(rng.uniform(-1, 1, (N, 2)))[0] for _ in range(2)]
+        depths.append(b"".join(o["depth"].tobytes() for o in obs))
+        assert ("rgb" in obs[-1]) == (e is env)
+    assert depths[0] == depths[1]
+    assert "rgb" not in BatchVectorEnv(alone).single_observation_space.spaces
+    with pytest.raises(ConfigError, match="rgb = false needs depth"):
+        ObsConfig(camera=(PX, PX), rgb=False)
+
+
 def test_final_sensors_off_casts_once_a_step_and_changes_no_observation(
         env: BatchNavEnv, monkeypatch: Any) -> None:
     sensors = env.sensors

@@ -40,6 +40,25 @@ def test_pure_pursuit_20m_square(gentle_scene) -> None:
     assert np.linalg.norm(res.gt.xyz_m[-1, :2] - SQUARE[0]) < 0.5
 
 
+@pytest.mark.parametrize("start_m", [(0.0, 0.0), (-0.05, 0.0), (-0.1, 0.03)])
+def test_short_closed_loop_is_driven_round(start_m: tuple[float, float]) -> None:
+    """A closed loop shorter than the forward window (3 lookaheads + 1 m): the rover, started
+    at, or a little behind, the start (and so beside the end), drives it round before it stops
+    (a unicycle at 50 Hz)."""
+    t = np.linspace(0.0, 2 * math.pi, 121)
+    route = Route(np.column_stack([np.sin(t), 1.0 - np.cos(t)]))  # 6.28 m, heading +x at 0
+    pp = PurePursuit(route, PursuitConfig(lookahead_m=2.0))
+    x, y, yaw, path, dt = *start_m, 0.0, 0.0, 0.02
+    for _ in range(3000):
+        v, w = pp.command(x, y, yaw)
+        if pp.done:
+            break
+        x, y, yaw = x + v * math.cos(yaw) * dt, y + v * math.sin(yaw) * dt, yaw + w * dt
+        path += v * dt
+    assert pp.done and pp.index > 0.9 * len(route.s_m)
+    assert path > 0.8 * route.length_m  # round the loop, not stopped at its start
+
+
 def test_pursuit_commands_bounded_for_any_pose() -> None:
     rng = np.random.default_rng(5)
     t = np.linspace(0, 2 * math.pi, 400)

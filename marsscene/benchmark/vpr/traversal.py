@@ -27,8 +27,13 @@ def image_name(east_m: float, north_m: float, frame: int, yaw_deg: float, pitch_
 
 
 def offset_route(xy_m: NDArray[np.float64], offset_m: float) -> NDArray[np.float64]:
-    """The polyline shifted sideways by ``offset_m`` (positive: to the left of travel)."""
-    d = np.gradient(np.asarray(xy_m, dtype=np.float64), axis=0)
+    """The polyline shifted sideways by ``offset_m`` (positive: to the left of travel); a
+    closed one (its last point its first) stays closed, shifted at the seam along the mean of
+    its first and last legs' directions."""
+    xy = np.asarray(xy_m, dtype=np.float64)
+    d = np.gradient(xy, axis=0)
+    if len(xy) > 2 and np.array_equal(xy[0], xy[-1]):
+        d[0] = d[-1] = 0.5 * (xy[1] - xy[-2])
     n = np.column_stack([-d[:, 1], d[:, 0]]) / np.maximum(np.hypot(d[:, 0], d[:, 1]),
                                                           1e-12)[:, None]
     return xy_m + offset_m * n

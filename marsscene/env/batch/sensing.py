@@ -101,7 +101,8 @@ class BatchSensors:
         self.camera_id = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_CAMERA, NAVCAM)
         with backend.wp.ScopedDevice(backend.device):
             self.camera = (BatchCamera(batch, self.n, config=cam, offsets_xy_m=offsets_xy_m,
-                                       catalogue=batch.catalogues(), device=backend.device)
+                                       catalogue=batch.catalogues(), rgb=obs.rgb,
+                                       device=backend.device)
                            if cam is not None else None)
             self.lidar = (BatchLidar(mj_model, mjw_model, self.n, lidar, seed=seed)
                           if lidar is not None else None)
@@ -129,8 +130,9 @@ class BatchSensors:
             self._bounds = b = _warp_bounds(bk, bounds_xy_m)
             if self.camera is not None:
                 self._world = _warp_ints(bk, world)
-                out["rgb"] = xp.asarray(bk.view(self.camera.render_data(
-                    data, self._world, self.camera_id)), copy=True)
+                rgb = self.camera.render_data(data, self._world, self.camera_id)
+                if self.camera.shaded:
+                    out["rgb"] = xp.asarray(bk.view(rgb), copy=True)
                 if self.depth:
                     depth = bk.view(self.camera.depth)
                     out["depth"] = xp.asarray(xp.reshape(depth, (n, 1, *depth.shape[1:])),

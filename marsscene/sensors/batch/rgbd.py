@@ -19,13 +19,14 @@ for misses, fog; then exposure and sRGB (:mod:`._expose`). Each camera has its o
 
 What it draws (:mod:`.appearance`): the CPU camera's regolith detail tile (micro-relief shading
 baked in) times each world's large-scale albedo field, on the world's full-resolution posts
-(the CPU camera's near mesh; its far mesh, beyond 8 m or so, has every second post); the
-batch's rocks (the MJCF rocks its physics has, footprint radius and exposed height) as jittered
-80-face icospheres with the CPU camera's rock colours. What differs from the CPU camera
-(measured in :doc:`/batch_sensors`): the catalogue's small rocks below the scene's MJCF size
-are not in a :class:`~marsscene.env.batch.worlds.WorldBatch` and are not drawn; shadows are
-hard (the CPU's terrain shadows have the sun disc's penumbra); the rover itself is not drawn
-and casts no shadow; sensor noise is not modelled. Depth is planar, 0 where the pixel sees sky.
+(the CPU camera's near mesh; its far mesh, beyond 8 m or so, has every second post), marched
+an 8 x 8-cell block at a time past blocks wholly below the ray; the batch's rocks (the MJCF
+rocks its physics has) and, when given, the catalogue's smaller rocks and the scene's placed
+assets, as jittered 80-face icospheres (rocks) with the CPU camera's rock colours. With
+``sensor_noise`` each frame carries the CPU camera's shot and read noise. What differs from
+the CPU camera (measured in :doc:`/batch_sensors`): shadows are hard (the CPU's terrain
+shadows have the sun disc's penumbra); the rover itself is not drawn and casts no shadow.
+Depth is planar, 0 where the pixel sees sky.
 The same inputs give the same bytes (no atomics but the exposure's integer histograms).
 """
 
@@ -104,6 +105,9 @@ class BatchCamera:
         :func:`~marsscene.sensors.camera_rocks.read_rock_catalog` reads them (id, x, y, z,
         diameter, height + burial; world coordinates): the CPU camera's meshes and colours of
         them. Default: none (only the batch's rocks).
+    rgb : bool
+        False: depth and segmentation only (no shading, shadow rays, exposure or sRGB;
+        :attr:`rgb` and :attr:`linear` stay zero), what a depth-only observer needs.
     device : str, optional
         Warp device (default the current one).
     """
@@ -112,15 +116,17 @@ class BatchCamera:
                  lighting: Any = None, offsets_xy_m: Any = None, seeds: Any = None,
                  texture_seed: int | None = None, catalogue: Any = None,
                  noise_seeds: Any = None, assets: Any = None, fixed_exposure: Any = None,
-                 device: str | None = None) -> None:
+                 rgb: bool = True, device: str | None = None) -> None:
         import warp as wp
 
         from marsscene.rover.config import CameraConfig
+        from marsscene.sensors.batch._trace import BLOCK
 
         self.config = cfg = config if config is not None else CameraConfig()
         if cfg.exposure not in ("auto", "fixed"):
             raise ConfigError(f"exposure {cfg.exposure!r}; use 'auto' or 'fixed'")
         self.width, self.height, self.n = int(cfg.width_px), int(cfg.height_px), int(num_cameras)
+        self.shaded = bool(rgb)
         self.device = wp.get_device(device)
         lightings = (list(lighting) if isinstance(lighting, (list, tuple)) else
                      [lighting if lighting is not None else scene_lights(cfg)] * self.n)
@@ -153,6 +159,7 @@ class BatchCamera:
         self._static = dict(
             rays=arr(camera_rays(cfg), wp.vec3),
             posts=arr(batch.posts_z_m.astype(np.float32), float),
+            tops=arr(block_tops(batch.posts_z_m.astype(np.float32), int(BLOCK)), float),
             grid_origin=arr(np.asarray(batch.origins_xy_m) + off, wp.vec2),
             z_top=arr(_tops_z_m(batch, catalogue, assets), float),
             offset=arr(off, wp.vec2), vnormal=arr(vnormal, wp.vec3),
@@ -202,7 +209,8 @@ class BatchCamera:
         (mat33, MuJoCo's camera frame) in the tile frame, camera ``i`` on world ``world[i]``
         (int32 Warp array or array-like (N,)). Fills :attr:`rgb` (N, 3, H, W) uint8 sRGB,
         :attr:`depth` (N, H, W) float32 planar m (0: sky), :attr:`segmentation` (N, H, W)
-        uint8 (0 sky, 1 terrain, 2 rock) and :attr:`linear`; returns :attr:`rgb`. The
+        uint8 (0 sky, 1 terrain, 2 rock) and :attr:`linear` (a camera made with ``rgb=False``:
+        depth and segmentation only); returns :attr:`rgb`. The
         buffers are the camera's own, overwritten by the next call (``wp.to_torch`` views
         them); nothing is copied to the host. With ``config.sensor_noise`` each frame carries
         the CPU camera's shot and read noise, camera ``i``'s from its ``noise_seeds[i]`` and
@@ -219,12 +227,16 @@ class BatchCamera:
                                     device=self.device))
         s, n, hw, dev = self._static, self.n, self.width * self.height, self.device
         wp.launch(_trace.trace, dim=(n, hw), device=dev, inputs=[
-            cam_xpos, cam_xmat, int(camera), s["rays"], w, s["posts"], s["grid_origin"],
-            s["z_top"], self._cell_m, s["offset"], self.mesh.id, self._faces, s["vnormal"],
+            cam_xpos, cam_xmat, int(camera), s["rays"], w, s["posts"], s["tops"],
+            s["grid_origin"], s["z_top"], self._cell_m, s["offset"], self.mesh.id, self._faces,
+            s["vnormal"],
             s["face_albedo"], s["tile"], self._levels, self._tile_px, self._texel_m,
             1.0 / self.intrinsics()[0], s["gain"], s["gain_corner"],
             GAIN_STEP_M, s["sun_dir"], s["sun_rgb"], s["sky_rgb"], s["visibility_m"], NEAR_M,
-            self.far_m, SHADOW_LIFT_M], outputs=[self.linear, self._depth, self._seg])
+            self.far_m, SHADOW_LIFT_M, int(self.shaded)],
+            outputs=[self.linear, self._depth, self._seg])
+        if not self.shaded:
+            return self.rgb
         cfg = self.config
         if self._all_fixed:
             wp.copy(self.gain, self._static["fixed_gain"])
@@ -255,6 +267,19 @@ class BatchCamera:
         """:meth:`render` from a MuJoCo Warp ``Data``'s camera poses (``cam_xpos``, after
         ``kinematics`` and ``camlight``) of the model's camera ``camera_id``."""
         return self.render(data.cam_xpos, data.cam_xmat, world, camera=camera_id)
+
+
+def block_tops(posts_z_m: NDArray[np.float32], block: int) -> NDArray[np.float32]:
+    """(W, ceil((rows - 1) / block), ceil((cols - 1) / block)): the highest post of each block
+    of ``block`` x ``block`` cells of every world's posts (W, rows, cols), its edge posts
+    included."""
+    nw, rows, cols = posts_z_m.shape
+    nr, nc = -(-(rows - 1) // block), -(-(cols - 1) // block)
+    z = np.full((nw, nr * block + 1, nc * block + 1), -np.inf, dtype=np.float32)
+    z[:, :rows, :cols] = posts_z_m
+    z = np.maximum(z[:, :-1].reshape(nw, nr, block, -1).max(axis=2), z[:, block::block])
+    return np.maximum(z[:, :, :-1].reshape(nw, nr, nc, block).max(axis=3),
+                      z[:, :, block::block]).astype(np.float32)
 
 
 def _tops_z_m(batch: Any, catalogue: Any, assets: Any) -> NDArray[np.float64]:

@@ -36,7 +36,8 @@ def _command(i: int, x: wp.float64, y: wp.float64, yaw: wp.float64,
     look, v_max, w_max, tol, slow = cfg[i, 0], cfg[i, 1], cfg[i, 2], cfg[i, 3], cfg[i, 4]
     n = length[i]
     k = index[i]
-    hi = _search(s, i, n, s[i, k] + wp.float64(3.0) * look + wp.float64(1.0))
+    ahead = wp.min(wp.float64(3.0) * look + wp.float64(1.0), wp.float64(0.5) * s[i, n - 1])
+    hi = _search(s, i, n, s[i, k] + ahead)
     last = wp.min(hi, n - 1)
     best = k
     best_d = wp.float64(1.0e300)

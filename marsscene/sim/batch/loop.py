@@ -146,7 +146,7 @@ class BatchLoop:
             for _ in range(round(settle_s / self.dt_s)):
                 self.mjw.step(self.model, self.data)
             self.mjw.kinematics(self.model, self.data)
-        self.qpos0 = self.data.qpos.numpy()
+        self.qpos0 = self.data.qpos.numpy().copy()  # a view on the CPU device
 
     # ---- one tick ----------------------------------------------------------------------
     def _command(self) -> np.ndarray:
@@ -169,7 +169,7 @@ class BatchLoop:
             mjw.com_vel(self.model, self.data)
             twist = lid.site_twist(self.data)
         s = lid.scan(self.data, twist=twist, bounds_xy_m=self.bounds)
-        return (s.range_m.numpy(), s.xyz_m.numpy(), s.intensity.numpy(), s.valid.numpy())
+        return tuple(self._host(a) for a in (s.range_m, s.xyz_m, s.intensity, s.valid))
 
     def _frame(self) -> tuple[np.ndarray, np.ndarray | None]:
         """Every camera's RGB (N, 3, H, W) uint8 and planar depth (N, H, W) m (0: sky; None
@@ -186,7 +186,14 @@ class BatchLoop:
         rgb = self.camera.render(self._cam_xpos, d.cam_xmat, self._world,
                                  camera=self.camera_id)
         assert self.run.camera is not None
-        return rgb.numpy(), self.camera.depth.numpy() if self.run.camera.depth else None
+        return self._host(rgb), self._host(self.camera.depth) if self.run.camera.depth else None
+
+    def _host(self, a: Any) -> np.ndarray:
+        """A host array of ``a`` that the next tick does not overwrite: on Warp's CPU device
+        ``numpy()`` is a view of the sensor's buffer, which the writer threads would read after
+        the next render had changed it."""
+        h = a.numpy()
+        return h if self.bk.device.startswith("cuda") else h.copy()
 
     def _physics(self) -> None:
         wp, mjw = self.bk.wp, self.mjw

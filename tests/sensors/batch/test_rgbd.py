@@ -267,6 +267,18 @@ def test_same_inputs_same_bytes(frames: dict[str, Any]) -> None:
     np.testing.assert_array_equal(rgb[0], rgb[1])  # one camera's bytes, whatever the others
 
 
+def test_a_depth_only_camera_gives_the_same_depth_and_classes(world: Path,
+                                                             frames: dict[str, Any]) -> None:
+    """``rgb=False`` skips the shading, shadow rays and exposure: the depth and segmentation
+    bytes are the shaded camera's, the RGB stays zero."""
+    cam = BatchCamera(frames["batch"], 1, config=CAM, lighting=frames["cam"].lighting,
+                      seeds=[scene_seed(world)], rgb=False, device="cpu")
+    cam.render(*frames["pose"], [0])
+    np.testing.assert_array_equal(cam.depth.numpy()[0], frames["depth"])
+    np.testing.assert_array_equal(cam.segmentation.numpy()[0], frames["seg"])
+    assert (frames["seg"] == 1).mean() > 0.3 and not cam.rgb.numpy().any()
+
+
 def _flat_world() -> WorldBatch:
     z = np.zeros((1, 41, 41), np.float32)
     return WorldBatch(posts_z_m=z, cell_m=0.25, origins_xy_m=np.zeros((1, 2)),

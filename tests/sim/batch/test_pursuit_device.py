@@ -14,7 +14,7 @@ from marsscene.sim.route import Route
 
 @pytest.mark.parametrize(("config", "lookaheads"), [
     (PursuitConfig(), None), (PursuitConfig(lookahead_m=2.0, slow_down_m=0.0), None),
-    (PursuitConfig(), (1.2, None, 3.5)),  # each drive's own lookahead where given
+    (PursuitConfig(), (1.2, None, 3.5, 2.0)),  # each drive's own lookahead where given
 ])
 def test_device_pursuit_matches_cpu(config: PursuitConfig, lookaheads: tuple | None) -> None:
     import dataclasses
@@ -27,7 +27,9 @@ def test_device_pursuit_matches_cpu(config: PursuitConfig, lookaheads: tuple | N
     t = np.linspace(0.0, 1.0, 200)
     routes = [Route(np.column_stack([20 * t, 3 * np.sin(4 * t)])),
               Route(np.column_stack([10 * np.cos(3 * t), 10 * np.sin(3 * t)])),
-              Route(np.column_stack([5 * t[:50], 0 * t[:50]]))]  # a shorter route: padding
+              Route(np.column_stack([5 * t[:50], 0 * t[:50]])),  # a shorter route: padding
+              # a closed loop shorter than 3 lookaheads + 1 m: the window stops half way round
+              Route(np.column_stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)]))]
     own = lookaheads or (None,) * len(routes)
     cpu = [PurePursuit(r, config if look is None else dataclasses.replace(config,
                                                                         lookahead_m=look))
@@ -45,4 +47,4 @@ def test_device_pursuit_matches_cpu(config: PursuitConfig, lookaheads: tuple | N
         assert list(dev.index.numpy()) == [p.index for p in cpu]
         turns += int(np.sum((ref[:, 0] == 0) & (ref[:, 1] != 0)))
     assert turns > 10  # turns in place were exercised
-    assert list(dev.done.numpy()) == [1, 1, 1] == [int(p.done) for p in cpu]
+    assert list(dev.done.numpy()) == [1, 1, 1, 1] == [int(p.done) for p in cpu]
