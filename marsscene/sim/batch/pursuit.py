@@ -5,9 +5,10 @@ in float64.
 Each drive's route is a row of padded (N, L) arrays (its ``Route.xy_m`` and ``s_m``, ``length``
 points); the follower's progress index and ``done`` flag stay on the device. The steps are
 ``PurePursuit.command``'s: the nearest route point in the forward window (``3 * lookahead + 1``
-m ahead of the last one, at most half the route), the stop within ``goal_tolerance_m`` (:data:`~marsscene.sim.pursuit.
-STOP_RADIUS_M`) of the end by :func:`~marsscene.sim.goal.goal_reached`'s strict test, the
-lookahead point, the turn in place for a target behind, the slow-down, the bounded turn rate.
+m ahead of the last one, at most half the route), the stop within ``goal_tolerance_m``
+(:data:`~marsscene.sim.pursuit.STOP_RADIUS_M`) of the end by
+:func:`~marsscene.sim.goal.goal_reached`'s strict test, the lookahead point, the turn in place
+for a target behind, the slow-down, the bounded turn rate.
 """
 
 from __future__ import annotations
