@@ -74,6 +74,23 @@ BLOCK = wp.constant(8)
 
 
 @wp.func
+def _crossings(o: wp.vec3, d: wp.vec3, c: int, r: int, sc: int, sr: int,
+               size: float) -> wp.vec4:
+    """The grid walk's start in cell (r, c) of ``size``-unit cells, stepping (sr, sc): the
+    ray parameter at its first column and row crossings and between crossings, (nx, ny, dx,
+    dy); 1e30 along an axis the ray does not cross."""
+    big = wp.float32(1.0e30)
+    g = wp.vec4(big, big, big, big)
+    if wp.abs(d[0]) > 1.0e-12:
+        g[0] = (float(c + wp.max(sc, 0)) * size - o[0]) / d[0]
+        g[2] = size / wp.abs(d[0])
+    if wp.abs(d[1]) > 1.0e-12:
+        g[1] = (float(r + wp.max(sr, 0)) * size - o[1]) / d[1]
+        g[3] = size / wp.abs(d[1])
+    return g
+
+
+@wp.func
 def _cells(posts: wp.array3d[float], w: int, o: wp.vec3, d: wp.vec3, t: float, t_end: float,
            t_min: float, t_max: float) -> wp.vec4:
     """The first cell hit of the ray walked from ``t`` to ``t_end`` (at most one block's
@@ -84,23 +101,13 @@ def _cells(posts: wp.array3d[float], w: int, o: wp.vec3, d: wp.vec3, t: float, t
     p = o + t * d
     c = wp.clamp(int(wp.floor(p[0])), 0, cols - 2)
     r = wp.clamp(int(wp.floor(p[1])), 0, rows - 2)
-    sc = wp.int32(1)
-    sr = wp.int32(1)
-    if d[0] < 0.0:
-        sc = -1
-    if d[1] < 0.0:
-        sr = -1
-    big = wp.float32(1.0e30)
-    nx = big
-    ny = big
-    dx = big
-    dy = big
-    if wp.abs(d[0]) > 1.0e-12:
-        nx = (float(c + wp.max(sc, 0)) - o[0]) / d[0]
-        dx = 1.0 / wp.abs(d[0])
-    if wp.abs(d[1]) > 1.0e-12:
-        ny = (float(r + wp.max(sr, 0)) - o[1]) / d[1]
-        dy = 1.0 / wp.abs(d[1])
+    sc = wp.where(d[0] < 0.0, -1, 1)
+    sr = wp.where(d[1] < 0.0, -1, 1)
+    g = _crossings(o, d, c, r, sc, sr, 1.0)
+    nx = g[0]
+    ny = g[1]
+    dx = g[2]
+    dy = g[3]
     for _ in range(2 * BLOCK + 2):  # a block's cells along a ray, and the one it starts in
         t_out = wp.min(wp.min(nx, ny), t_end)
         z_lo = wp.min(o[2] + t * d[2], o[2] + t_out * d[2])
@@ -161,23 +168,13 @@ def march(posts: wp.array3d[float], tops: wp.array3d[float], w: int, o: wp.vec3,
     p = o + t * d
     c = wp.clamp(int(wp.floor(p[0] / size)), 0, bcols - 1)
     r = wp.clamp(int(wp.floor(p[1] / size)), 0, brows - 1)
-    sc = wp.int32(1)
-    sr = wp.int32(1)
-    if d[0] < 0.0:
-        sc = -1
-    if d[1] < 0.0:
-        sr = -1
-    big = wp.float32(1.0e30)
-    nx = big
-    ny = big
-    dx = big
-    dy = big
-    if wp.abs(d[0]) > 1.0e-12:
-        nx = (float(c + wp.max(sc, 0)) * size - o[0]) / d[0]
-        dx = size / wp.abs(d[0])
-    if wp.abs(d[1]) > 1.0e-12:
-        ny = (float(r + wp.max(sr, 0)) * size - o[1]) / d[1]
-        dy = size / wp.abs(d[1])
+    sc = wp.where(d[0] < 0.0, -1, 1)
+    sr = wp.where(d[1] < 0.0, -1, 1)
+    g = _crossings(o, d, c, r, sc, sr, size)
+    nx = g[0]
+    ny = g[1]
+    dx = g[2]
+    dy = g[3]
     for _ in range(brows + bcols):
         t_out = wp.min(wp.min(nx, ny), t_end)
         z_lo = wp.min(o[2] + t * d[2], o[2] + t_out * d[2])
